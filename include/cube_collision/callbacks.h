@@ -1,0 +1,51 @@
+#pragma once
+
+// Default callbacks: FCL's narrow phase (libccd GJK) on every candidate pair, stopping as FCL's
+// own DefaultCollisionFunction / DefaultDistanceFunction do.
+
+#include <fcl/narrowphase/collision_object.h>
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/collision_result.h>
+#include <fcl/narrowphase/distance_request.h>
+#include <fcl/narrowphase/distance_result.h>
+
+namespace cube {
+
+/// What defaultCollisionCallback reads and accumulates. The request defaults to FCL's (one
+/// contact, libccd GJK); `done` becomes true once the request's contact count is reached.
+template <typename S>
+struct CollisionData {
+  fcl::CollisionRequest<S> request;
+  fcl::CollisionResult<S> result;
+  bool done = false;
+};
+
+/// Runs fcl::collide on the pair and accumulates into CollisionData::result. Returns true (stop)
+/// once the result holds request.num_max_contacts contacts and costs are not requested.
+template <typename S>
+bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data);
+
+/// What defaultDistanceCallback reads and accumulates: the minimum distance over the pairs seen.
+template <typename S>
+struct DistanceData {
+  fcl::DistanceRequest<S> request;
+  fcl::DistanceResult<S> result;
+  bool done = false;
+};
+
+/// Runs fcl::distance on the pair, accumulates the minimum into DistanceData::result and writes
+/// it to `dist`. Returns true (stop) once the objects touch or penetrate (dist <= 0) or `done`.
+template <typename S>
+bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
+                             S& dist);
+
+extern template bool defaultCollisionCallback<double>(fcl::CollisionObject<double>*,
+                                                      fcl::CollisionObject<double>*, void*);
+extern template bool defaultCollisionCallback<float>(fcl::CollisionObject<float>*,
+                                                     fcl::CollisionObject<float>*, void*);
+extern template bool defaultDistanceCallback<double>(fcl::CollisionObject<double>*,
+                                                     fcl::CollisionObject<double>*, void*, double&);
+extern template bool defaultDistanceCallback<float>(fcl::CollisionObject<float>*,
+                                                    fcl::CollisionObject<float>*, void*, float&);
+
+}  // namespace cube

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <string>
+
+namespace cube {
+
+/// How `update()` and friends keep the hierarchy in shape after objects move.
+enum class UpdatePolicy {
+  /// Refit the cubes in place; rebuild from scratch when the tree quality degrades past
+  /// `Config::rebuild_threshold` or when many objects were added or removed since the last build.
+  automatic,
+  /// Only refit: cheapest per update, but queries slow down as objects wander from where the
+  /// hierarchy was built. The hierarchy is still rebuilt by `setup()` after registrations.
+  refit,
+  /// Rebuild from scratch on every update: right for scenes that are reshuffled each step.
+  rebuild,
+};
+
+/// Every knob of the cube hierarchy. A default-constructed Config is what most users want.
+struct Config {
+  /// The seed's Max Depth. 0 (automatic): split until every leaf holds at most `leaf_size`
+  /// objects. k > 0: at most k levels below the root; cubes at level k keep all their objects,
+  /// which are then tested pairwise. Trade-off: a small cap builds faster and uses less memory,
+  /// but leaves get crowded and queries turn quadratic within them.
+  int max_depth = 0;
+
+  /// The seed's split threshold: a cube with more than `leaf_size` objects is split (min 1).
+  /// Trade-off: small leaves prune more precisely but mean more cubes (memory, refit time);
+  /// large leaves test more object pairs exhaustively.
+  int leaf_size = 4;
+
+  /// See UpdatePolicy.
+  UpdatePolicy update_policy = UpdatePolicy::automatic;
+
+  /// With UpdatePolicy::automatic: rebuild when the total surface area of the cubes exceeds this
+  /// multiple of its value right after the last build (must be > 1). Trade-off: a low value
+  /// rebuilds often (a build costs about as much as 10 to 20 refits); a high value lets queries
+  /// slow down on a stale tree.
+  double rebuild_threshold = 1.5;
+
+  /// Objects whose AABB has a coordinate beyond +-unbounded_limit (or infinite: planes,
+  /// halfspaces) are kept out of the cubes in a separate list that every query tests. Trade-off:
+  /// a huge object inside the cubes would make every cube above it huge and useless for pruning;
+  /// in the list it costs one box test per query and per object in self-collide.
+  double unbounded_limit = 1e15;
+
+  /// Throws std::invalid_argument naming the first knob out of range.
+  void check() const;
+};
+
+}  // namespace cube

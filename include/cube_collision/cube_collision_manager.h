@@ -1,0 +1,112 @@
+#pragma once
+
+#include <fcl/broadphase/broadphase_collision_manager.h>
+
+#include <string>
+#include <vector>
+
+#include "cube_collision/config.h"
+#include "cube_collision/detail/hierarchy.h"
+
+namespace cube {
+
+/// An FCL broadphase manager backed by the cube hierarchy: a tree of axis-aligned cuboids built
+/// top-down by splitting every cube holding more than `Config::leaf_size` objects at the median
+/// object along its longest side. A drop-in replacement for any
+/// `fcl::BroadPhaseCollisionManager<S>`: the same callbacks are called for the same pairs.
+///
+/// Semantics (see the README for the full table):
+/// - Candidate pairs are those whose cached AABBs overlap, touching included; a pair of an object
+///   with itself is never reported.
+/// - A callback returning true stops the whole query at once.
+/// - collide(obj)/distance(obj) call callback(managed, obj); manager-vs-manager calls
+///   callback(object of this manager, object of the other).
+/// - Distance queries start with the largest value of S and prune with the `dist` the callback
+///   writes back; pairs whose AABBs overlap are visited even when `dist` <= 0.
+/// - Const queries change nothing: any number of threads may query one manager at once, as long
+///   as no thread mutates it meanwhile.
+///
+/// Bad input: a null object or one whose AABB has a NaN throws std::invalid_argument and changes
+/// nothing; registering a registered object, unregistering or updating an unknown one has no
+/// effect. Objects with an infinite or enormous AABB (planes, halfspaces) are kept in a separate
+/// list that every query tests, so they do not spoil the cubes.
+template <typename S>
+class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
+ public:
+  using Object = fcl::CollisionObject<S>;
+  using Base = fcl::BroadPhaseCollisionManager<S>;
+  using Base::collide;
+  using Base::distance;
+
+  /// Creates an empty manager. Throws std::invalid_argument if a Config knob is out of range.
+  explicit CubeCollisionManager(const Config& config = Config());
+  ~CubeCollisionManager() override;
+  CubeCollisionManager(const CubeCollisionManager&) = delete;
+  CubeCollisionManager& operator=(const CubeCollisionManager&) = delete;
+
+  /// Registers a batch. Throws std::invalid_argument (registering nothing of the batch) if an
+  /// entry is null or has a NaN AABB. Entries already registered, or repeated, are registered
+  /// once. A batch at least as large as the manager triggers one full build.
+  void registerObjects(const std::vector<Object*>& other_objs) override;
+  /// Registers one object; its AABB is read from getAABB() now (computeAABB() is the caller's
+  /// job). Throws std::invalid_argument for null or NaN; no effect if already registered.
+  void registerObject(Object* obj) override;
+  /// Removes an object; no effect if it is not registered.
+  void unregisterObject(Object* obj) override;
+  /// Builds the hierarchy from scratch if objects were added or removed since the last build.
+  /// Idempotent. Queries are correct without it: it only makes them faster.
+  void setup() override;
+  /// Re-reads every object's AABB and refits the cubes (rebuilds if the policy says so). Throws
+  /// std::invalid_argument if an AABB is NaN; that object keeps its previous AABB, all others
+  /// are updated.
+  void update() override;
+  /// Re-reads one object's AABB and refits the cubes above it. No effect if not registered.
+  /// Throws std::invalid_argument (object unchanged) if its AABB is NaN.
+  void update(Object* updated_obj) override;
+  /// Same as update(obj) for each object; throws after updating all the valid ones.
+  void update(const std::vector<Object*>& updated_objs) override;
+  /// Unregisters everything.
+  void clear() override;
+  /// The registered objects, in registration order.
+  void getObjects(std::vector<Object*>& objs) const override;
+
+  /// Calls callback(managed, obj, cdata) for every managed object (other than obj itself) whose
+  /// AABB overlaps obj's. Throws std::invalid_argument if obj is null or its AABB is NaN.
+  void collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback) const override;
+  /// Branch and bound: calls callback(managed, obj, cdata, dist) nearest first while the AABB
+  /// distance is below dist. Throws std::invalid_argument if obj is null or its AABB is NaN.
+  void distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback) const override;
+  /// Calls callback once for every unordered pair of managed objects whose AABBs overlap.
+  void collide(void* cdata, fcl::CollisionCallBack<S> callback) const override;
+  /// Branch and bound over every unordered pair of managed objects.
+  void distance(void* cdata, fcl::DistanceCallBack<S> callback) const override;
+  /// Pairs (object of this, object of other) whose AABBs overlap. Works with any manager type;
+  /// another cube manager is traversed tree against tree, others through getObjects().
+  void collide(Base* other_manager, void* cdata, fcl::CollisionCallBack<S> callback) const override;
+  /// Distance between the objects of this manager and those of another, as collide(other).
+  void distance(Base* other_manager, void* cdata, fcl::DistanceCallBack<S> callback) const override;
+
+  /// True if no object is registered.
+  bool empty() const override;
+  /// Number of registered objects.
+  size_t size() const override;
+
+  /// The configuration the manager was made with.
+  const Config& config() const { return tree_.config(); }
+  /// Checks every invariant of the hierarchy; on failure returns false and, if `why` is given,
+  /// says which.
+  bool validate(std::string* why = nullptr) const { return tree_.validate(why); }
+  /// Read-only access to the hierarchy, for inspection and export.
+  const detail::Hierarchy<S>& hierarchy() const { return tree_; }
+
+ private:
+  detail::Hierarchy<S> tree_;
+};
+
+using CubeCollisionManagerd = CubeCollisionManager<double>;
+using CubeCollisionManagerf = CubeCollisionManager<float>;
+
+extern template class CubeCollisionManager<double>;
+extern template class CubeCollisionManager<float>;
+
+}  // namespace cube

@@ -1,0 +1,231 @@
+#pragma once
+
+// The cube hierarchy itself: flat arrays, no FCL or Eigen types beyond a forward declaration, so
+// that this code could be built with any instruction set without touching Eigen's ABI.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cube_collision/config.h"
+
+namespace fcl {
+template <typename S>
+class CollisionObject;
+}  // namespace fcl
+
+namespace cube {
+namespace detail {
+
+/// Index meaning "no cube" / "no object".
+inline constexpr std::uint32_t kNone = 0xffffffffu;
+
+/// An axis-aligned box in the objects' scalar type.
+template <typename S>
+struct Box {
+  S lo[3];
+  S hi[3];
+};
+
+/// Where an object's AABB puts it.
+enum class BoxKind { finite, unbounded, invalid };
+
+/// Classifies a box: any NaN makes it invalid, any coordinate beyond +-limit unbounded.
+template <typename S>
+BoxKind classify(const Box<S>& b, double limit);
+
+/// One cube of the hierarchy. Its bounds are floats rounded outward, so that a cube always
+/// contains its objects' exact boxes and two cubes fit in a cache line; the exact boxes are
+/// tested at the leaves, so results do not depend on the rounding.
+struct Node {
+  float lo[3];
+  float hi[3];
+  /// Leaf: position of its first object in the object array. Internal: index of its first child
+  /// cube; the second child is first + 1. Dead (unreachable, awaiting compaction): kNone.
+  std::uint32_t first;
+  /// Leaf: number of objects (>= 1), the seed's children range [first, first + count).
+  /// Internal and dead cubes: 0.
+  std::uint32_t count;
+
+  bool isLeaf() const { return count != 0; }
+};
+static_assert(sizeof(Node) == 32, "two cubes per cache line");
+
+/// Surface area of a cube in double; an emptied cube (lo > hi) has none.
+inline double surfaceArea(const Node& n) {
+  if (n.lo[0] > n.hi[0]) return 0.0;
+  const double dx = double(n.hi[0]) - n.lo[0];
+  const double dy = double(n.hi[1]) - n.lo[1];
+  const double dz = double(n.hi[2]) - n.lo[2];
+  return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+
+/// One registered object as the hierarchy stores it: its cached AABB, where it lives, and its
+/// registration number (the tie-breaker that makes builds deterministic).
+template <typename S>
+struct Item {
+  Box<S> box;
+  fcl::CollisionObject<S>* obj;  ///< nullptr marks a dead slot (not in any leaf)
+  std::uint32_t leaf;            ///< the seed's parentOf: the leaf cube holding this object
+  std::uint32_t seq;             ///< registration order
+};
+static_assert(sizeof(Item<double>) == 64, "one object per cache line for double");
+
+/// A read-only window on a tree for the traversals: either the cubes, or the list of unbounded
+/// objects seen as one leaf, or a single query object seen as one leaf.
+template <typename S>
+struct View {
+  const Node* nodes = nullptr;
+  const Item<S>* items = nullptr;
+  std::uint32_t root = kNone;  ///< kNone: empty
+};
+
+/// Outward-rounded float copy of an exact box.
+template <typename S>
+void roundOut(const Box<S>& b, float lo[3], float hi[3]);
+
+/// The cube hierarchy plus the list of unbounded objects, with the object index.
+template <typename S>
+class Hierarchy {
+ public:
+  using Object = fcl::CollisionObject<S>;
+
+  explicit Hierarchy(const Config& config);
+
+  const Config& config() const { return config_; }
+
+  /// Live objects, in the cubes and in the unbounded list.
+  std::size_t size() const { return live_ + unbounded_.size(); }
+  bool contains(const Object* obj) const { return find(obj) != kNone; }
+
+  /// Adds one object (not yet registered, box already checked not invalid) incrementally.
+  void insert(Object* obj, const Box<S>& box);
+  /// Adds many objects (not yet registered, distinct, boxes checked) and rebuilds.
+  void insertAndRebuild(const std::vector<Object*>& objs, const std::vector<Box<S>>& boxes);
+  /// Removes an object; returns false if it was not registered.
+  bool remove(const Object* obj);
+  /// Sets a registered object's box and refits the cubes above it; false if not registered.
+  bool move(const Object* obj, const Box<S>& box);
+  /// Reads every object's box through `read` (which returns false for an invalid box, leaving
+  /// the old one) and refits all cubes in one bottom-up pass. Returns the earliest registered
+  /// object whose box was invalid, or nullptr.
+  template <class Read>
+  const Object* refitAll(Read&& read);
+  /// Rebuilds the cubes from scratch over the current objects.
+  void rebuild();
+  /// Rebuilds if objects were added or removed since the last build (or if never built).
+  void setup();
+  /// Rebuilds if the update policy says so; called after every update.
+  void maybeRebuildAfterUpdate();
+  void clear();
+
+  /// Objects in registration order.
+  void objects(std::vector<Object*>& out) const;
+
+  View<S> cubes() const { return View<S>{nodes_.data(), items_.data(), root_}; }
+  View<S> unbounded() const {
+    return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u};
+  }
+
+  // Inspection.
+  const std::vector<Node>& nodes() const { return nodes_; }
+  const std::vector<Item<S>>& items() const { return items_; }
+  const std::vector<Item<S>>& unboundedItems() const { return unbounded_; }
+  std::uint32_t root() const { return root_; }
+  std::uint32_t parent(std::uint32_t cube) const { return parent_[cube]; }
+  /// Total surface area of the live cubes, kept up to date by refits.
+  double area() const { return area_; }
+  /// Area right after the last build.
+  double builtArea() const { return built_area_; }
+  /// Objects added or removed since the last build.
+  std::size_t changesSinceBuild() const { return changes_; }
+  /// Number of builds so far (tests use it to see whether an update rebuilt).
+  std::size_t buildCount() const { return builds_; }
+  /// Bytes of heap memory owned.
+  std::size_t bytes() const;
+  /// Checks every invariant; on failure returns false and says why.
+  bool validate(std::string* why) const;
+
+ private:
+  // Object index: open addressing over 32-bit locations; the key is read from the item itself.
+  static constexpr std::uint32_t kUnboundedBit = 0x80000000u;
+  std::uint32_t find(const Object* obj) const;
+  void indexInsert(const Object* obj, std::uint32_t loc);
+  void indexSet(const Object* obj, std::uint32_t loc);
+  void indexErase(const Object* obj);
+  void indexRebuild();
+  const Object* objectAt(std::uint32_t loc) const;
+  std::size_t slotOf(const Object* obj) const;
+
+  std::uint32_t newSeq();
+  void place(Item<S> item);
+  void afterChange();
+  void growLeaf(std::uint32_t leaf, const Item<S>& item);
+  void splitLeaf(std::uint32_t leaf);
+  void removeFromTree(std::uint32_t pos);
+  void removeUnbounded(std::uint32_t pos);
+  std::uint32_t chooseLeaf(const Box<S>& box) const;
+  std::uint32_t depthOf(std::uint32_t cube) const;
+  bool canSplit(std::uint32_t depth) const;
+  /// Recomputes a cube's bounds from its objects or children; returns its area change.
+  double refitCube(std::uint32_t cube);
+  void refitUp(std::uint32_t cube);
+  void splitRange(std::uint32_t cube, std::uint32_t depth, std::vector<std::uint64_t>* stack);
+  void refitAllCubes();
+  void maybeCompact();
+  void trimTail();
+
+  Config config_;
+  std::vector<Node> nodes_;
+  std::vector<std::uint32_t> parent_;  // per cube; kNone for the root and dead cubes
+  std::uint32_t root_ = kNone;
+  std::vector<Item<S>> items_;  // leaf order; dead slots have obj == nullptr
+  std::vector<Item<S>> unbounded_;
+  Node unbounded_node_{};
+  std::vector<std::uint32_t> index_;  // 0 = empty slot, else location + 1
+  std::size_t index_used_ = 0;
+  std::size_t live_ = 0;        // live objects in the cubes
+  std::size_t dead_items_ = 0;  // dead slots in items_
+  std::size_t dead_nodes_ = 0;  // dead cubes in nodes_
+  std::uint32_t next_seq_ = 0;
+  double area_ = 0;
+  double built_area_ = 0;
+  std::size_t changes_ = 0;
+  std::size_t builds_ = 0;
+  bool built_ = false;
+};
+
+template <typename S>
+template <class Read>
+const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
+  std::uint32_t bad = kNone;
+  const Object* bad_obj = nullptr;
+  std::vector<std::pair<Object*, Box<S>>> movers;  // change of kind: rare, so allocation is fine
+  Box<S> b;
+  for (Item<S>& it : items_) {
+    if (it.obj == nullptr) continue;
+    if (!read(it.obj, b)) {
+      if (it.seq < bad) bad = it.seq, bad_obj = it.obj;
+    } else if (classify(b, config_.unbounded_limit) == BoxKind::finite) {
+      it.box = b;
+    } else {
+      movers.emplace_back(it.obj, b);
+    }
+  }
+  for (Item<S>& it : unbounded_) {
+    if (!read(it.obj, b)) {
+      if (it.seq < bad) bad = it.seq, bad_obj = it.obj;
+    } else if (classify(b, config_.unbounded_limit) == BoxKind::unbounded) {
+      it.box = b;
+    } else {
+      movers.emplace_back(it.obj, b);
+    }
+  }
+  refitAllCubes();
+  for (const auto& m : movers) move(m.first, m.second);
+  return bad_obj;
+}
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,39 @@
+#pragma once
+
+// The traversals over cube hierarchies: one descent engine serves self-collide, pair collide,
+// object queries and all distance queries (a query object is a one-leaf view).
+
+#include "cube_collision/detail/hierarchy.h"
+
+namespace cube {
+namespace detail {
+
+template <typename S>
+using CollideFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void*);
+template <typename S>
+using DistanceFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void*, S&);
+
+/// Calls fn(x, y, data) for every pair of distinct objects x of `a` and y of `b` whose boxes
+/// overlap (closed). With `self` (a and b are the same view) each unordered pair comes once.
+/// Returns true as soon as fn does (the query stops).
+template <typename S>
+bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn);
+
+/// Branch and bound over the same pairs: calls fn(x, y, data, best) for pairs whose box distance
+/// is below `best` (or whose boxes overlap), nearer cubes first; fn lowers `best`. Returns true
+/// as soon as fn does.
+template <typename S>
+bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
+                   S& best);
+
+/// A one-object view for queries: the caller owns the storage.
+template <typename S>
+struct SingleView {
+  Node node;
+  Item<S> item;
+  SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box);
+  View<S> view() const { return View<S>{&node, &item, 0}; }
+};
+
+}  // namespace detail
+}  // namespace cube

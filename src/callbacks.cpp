@@ -1,0 +1,39 @@
+#include "cube_collision/callbacks.h"
+
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+namespace cube {
+
+template <typename S>
+bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2,
+                              void* data) {
+  auto& d = *static_cast<CollisionData<S>*>(data);
+  if (d.done) return true;
+  fcl::collide(o1, o2, d.request, d.result);
+  // With costs requested every pair matters, so only a contact budget without costs stops.
+  if (!d.request.enable_cost && d.result.isCollision() &&
+      d.result.numContacts() >= d.request.num_max_contacts)
+    d.done = true;
+  return d.done;
+}
+
+template <typename S>
+bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
+                             S& dist) {
+  auto& d = *static_cast<DistanceData<S>*>(data);
+  if (!d.done) fcl::distance(o1, o2, d.request, d.result);
+  dist = d.result.min_distance;
+  return d.done || dist <= 0;
+}
+
+template bool defaultCollisionCallback<double>(fcl::CollisionObject<double>*,
+                                               fcl::CollisionObject<double>*, void*);
+template bool defaultCollisionCallback<float>(fcl::CollisionObject<float>*,
+                                              fcl::CollisionObject<float>*, void*);
+template bool defaultDistanceCallback<double>(fcl::CollisionObject<double>*,
+                                              fcl::CollisionObject<double>*, void*, double&);
+template bool defaultDistanceCallback<float>(fcl::CollisionObject<float>*,
+                                             fcl::CollisionObject<float>*, void*, float&);
+
+}  // namespace cube

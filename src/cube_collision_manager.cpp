@@ -1,0 +1,293 @@
+// The FCL adapter: checks input, reads AABBs from FCL objects, and maps every query onto the
+// traversals over the cubes and the unbounded list.
+
+#include "cube_collision/cube_collision_manager.h"
+
+#include <fcl/narrowphase/collision_object.h>
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_set>
+
+#include "cube_collision/detail/traversal.h"
+
+namespace cube {
+
+namespace {
+
+using detail::Box;
+using detail::BoxKind;
+using detail::View;
+
+template <typename S>
+Box<S> boxOf(const fcl::CollisionObject<S>& obj) {
+  const fcl::AABB<S>& a = obj.getAABB();
+  Box<S> b;
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = a.min_[k];
+    b.hi[k] = a.max_[k];
+  }
+  return b;
+}
+
+template <typename S>
+bool isValid(const Box<S>& b) {
+  return detail::classify(b, std::numeric_limits<double>::infinity()) != BoxKind::invalid;
+}
+
+[[noreturn]] void fail(const char* where, const std::string& what) {
+  throw std::invalid_argument(std::string("cube::CubeCollisionManager::") + where + ": " + what);
+}
+
+template <typename S>
+std::string indexName(const detail::Hierarchy<S>& tree, const fcl::CollisionObject<S>* obj) {
+  std::vector<fcl::CollisionObject<S>*> all;
+  tree.objects(all);
+  const auto it = std::find(all.begin(), all.end(), obj);
+  return "object #" + std::to_string(it - all.begin()) + " (in getObjects() order)";
+}
+
+template <typename S>
+Box<S> checkedQueryBox(const fcl::CollisionObject<S>* obj, const char* where) {
+  if (obj == nullptr) fail(where, "null query object");
+  const Box<S> b = boxOf(*obj);
+  if (!isValid(b)) fail(where, "the query object's AABB has a NaN coordinate");
+  return b;
+}
+
+// Re-reads one object's AABB; unknown objects are ignored, an invalid AABB is remembered.
+template <typename S>
+void moveOne(detail::Hierarchy<S>& tree, const fcl::CollisionObject<S>* obj,
+             const fcl::CollisionObject<S>*& bad) {
+  if (obj == nullptr || !tree.contains(obj)) return;
+  const Box<S> b = boxOf(*obj);
+  if (isValid(b)) {
+    tree.move(obj, b);
+  } else if (bad == nullptr) {
+    bad = obj;
+  }
+}
+
+// Every query is a set of view pairs; `run(a, b, self)` traverses one pair of views and returns
+// true when the callback stopped the query. These three functions say which pairs.
+
+template <typename S, class Run>
+void selfPairs(const detail::Hierarchy<S>& tree, Run&& run) {
+  const View<S> cubes = tree.cubes();
+  const View<S> unbounded = tree.unbounded();
+  if (run(cubes, cubes, true)) return;
+  if (run(cubes, unbounded, false)) return;
+  run(unbounded, unbounded, true);
+}
+
+template <typename S, class Run>
+void objectPairs(const detail::Hierarchy<S>& tree, fcl::CollisionObject<S>* obj, const Box<S>& box,
+                 Run&& run) {
+  const detail::SingleView<S> query(obj, box);
+  if (run(tree.cubes(), query.view(), false)) return;
+  run(tree.unbounded(), query.view(), false);
+}
+
+template <typename S, class Run>
+void managerPairs(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisionManager<S>* other,
+                  const char* where, Run&& run) {
+  if (other == nullptr) fail(where, "null manager");
+  if (other == &self) {
+    selfPairs(self.hierarchy(), run);
+    return;
+  }
+  const detail::Hierarchy<S>& mine = self.hierarchy();
+  if (const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(other)) {
+    const detail::Hierarchy<S>& theirs = cube->hierarchy();
+    for (const View<S>& a : {mine.cubes(), mine.unbounded()})
+      for (const View<S>& b : {theirs.cubes(), theirs.unbounded()})
+        if (run(a, b, false)) return;
+    return;
+  }
+  // Another kind of manager: its objects one by one, without looking at its internals.
+  std::vector<fcl::CollisionObject<S>*> objs;
+  other->getObjects(objs);
+  std::vector<Box<S>> boxes;
+  boxes.reserve(objs.size());
+  for (const auto* o : objs) boxes.push_back(checkedQueryBox(o, where));
+  bool stopped = false;
+  for (std::size_t i = 0; i < objs.size() && !stopped; ++i)
+    objectPairs(mine, objs[i], boxes[i],
+                [&](const View<S>& a, const View<S>& b, bool s) { return stopped = run(a, b, s); });
+}
+
+}  // namespace
+
+template <typename S>
+CubeCollisionManager<S>::CubeCollisionManager(const Config& config) : tree_(config) {}
+
+template <typename S>
+CubeCollisionManager<S>::~CubeCollisionManager() = default;
+
+template <typename S>
+void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_objs) {
+  std::vector<Box<S>> boxes;
+  boxes.reserve(other_objs.size());
+  for (std::size_t i = 0; i < other_objs.size(); ++i) {
+    if (other_objs[i] == nullptr)
+      fail("registerObjects", "entry #" + std::to_string(i) + " is null; nothing registered");
+    boxes.push_back(boxOf(*other_objs[i]));
+    if (!isValid(boxes.back()))
+      fail("registerObjects",
+           "entry #" + std::to_string(i) + " has a NaN AABB coordinate; nothing registered");
+  }
+  std::vector<Object*> fresh;
+  std::vector<Box<S>> fresh_boxes;
+  std::unordered_set<const Object*> seen;
+  for (std::size_t i = 0; i < other_objs.size(); ++i) {
+    if (tree_.contains(other_objs[i]) || !seen.insert(other_objs[i]).second) continue;
+    fresh.push_back(other_objs[i]);
+    fresh_boxes.push_back(boxes[i]);
+  }
+  if (fresh.size() >= tree_.size()) {
+    tree_.insertAndRebuild(fresh, fresh_boxes);
+  } else {
+    for (std::size_t i = 0; i < fresh.size(); ++i) tree_.insert(fresh[i], fresh_boxes[i]);
+  }
+}
+
+template <typename S>
+void CubeCollisionManager<S>::registerObject(Object* obj) {
+  if (obj == nullptr) fail("registerObject", "null object");
+  if (tree_.contains(obj)) return;
+  const Box<S> b = boxOf(*obj);
+  if (!isValid(b))
+    fail("registerObject", "object #" + std::to_string(tree_.size()) +
+                               " (the next registration) has a NaN AABB coordinate");
+  tree_.insert(obj, b);
+}
+
+template <typename S>
+void CubeCollisionManager<S>::unregisterObject(Object* obj) {
+  tree_.remove(obj);
+}
+
+template <typename S>
+void CubeCollisionManager<S>::setup() {
+  tree_.setup();
+}
+
+template <typename S>
+void CubeCollisionManager<S>::update() {
+  const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) {
+    b = boxOf(*o);
+    return isValid(b);
+  });
+  tree_.maybeRebuildAfterUpdate();
+  if (bad != nullptr)
+    fail("update", indexName(tree_, bad) +
+                       " has a NaN AABB coordinate; it keeps its previous "
+                       "AABB, every other object was updated");
+}
+
+template <typename S>
+void CubeCollisionManager<S>::update(Object* updated_obj) {
+  const Object* bad = nullptr;
+  moveOne(tree_, updated_obj, bad);
+  tree_.maybeRebuildAfterUpdate();
+  if (bad != nullptr)
+    fail("update", indexName(tree_, bad) +
+                       " has a NaN AABB coordinate; it keeps its previous "
+                       "AABB");
+}
+
+template <typename S>
+void CubeCollisionManager<S>::update(const std::vector<Object*>& updated_objs) {
+  const Object* bad = nullptr;
+  for (Object* obj : updated_objs) moveOne(tree_, obj, bad);
+  tree_.maybeRebuildAfterUpdate();
+  if (bad != nullptr)
+    fail("update", indexName(tree_, bad) +
+                       " has a NaN AABB coordinate; it keeps its previous "
+                       "AABB, every other object was updated");
+}
+
+template <typename S>
+void CubeCollisionManager<S>::clear() {
+  tree_.clear();
+}
+
+template <typename S>
+void CubeCollisionManager<S>::getObjects(std::vector<Object*>& objs) const {
+  tree_.objects(objs);
+}
+
+template <typename S>
+void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
+                                      fcl::CollisionCallBack<S> callback) const {
+  const Box<S> box = checkedQueryBox(obj, "collide");
+  if (callback == nullptr) fail("collide", "null callback");
+  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::collidePairs(a, b, self, cdata, callback);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
+                                       fcl::DistanceCallBack<S> callback) const {
+  const Box<S> box = checkedQueryBox(obj, "distance");
+  if (callback == nullptr) fail("distance", "null callback");
+  S best = std::numeric_limits<S>::max();
+  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::distancePairs(a, b, self, cdata, callback, best);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback) const {
+  if (callback == nullptr) fail("collide", "null callback");
+  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::collidePairs(a, b, self, cdata, callback);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback) const {
+  if (callback == nullptr) fail("distance", "null callback");
+  S best = std::numeric_limits<S>::max();
+  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::distancePairs(a, b, self, cdata, callback, best);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
+                                      fcl::CollisionCallBack<S> callback) const {
+  if (callback == nullptr) fail("collide", "null callback");
+  managerPairs(*this, other_manager, "collide", [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::collidePairs(a, b, self, cdata, callback);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
+                                       fcl::DistanceCallBack<S> callback) const {
+  if (callback == nullptr) fail("distance", "null callback");
+  S best = std::numeric_limits<S>::max();
+  managerPairs(*this, other_manager, "distance",
+               [&](const View<S>& a, const View<S>& b, bool self) {
+                 return detail::distancePairs(a, b, self, cdata, callback, best);
+               });
+}
+
+template <typename S>
+bool CubeCollisionManager<S>::empty() const {
+  return tree_.size() == 0;
+}
+
+template <typename S>
+size_t CubeCollisionManager<S>::size() const {
+  return tree_.size();
+}
+
+template class CubeCollisionManager<double>;
+template class CubeCollisionManager<float>;
+
+}  // namespace cube

@@ -1,0 +1,842 @@
+// The cube hierarchy: build (top-down median split, the seed's rule), refit, rebuild,
+// incremental insertion and removal, compaction, and the invariant check.
+
+#include "cube_collision/detail/hierarchy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace cube {
+
+void Config::check() const {
+  if (max_depth < 0) throw std::invalid_argument("cube::Config: max_depth must be >= 0");
+  if (leaf_size < 1) throw std::invalid_argument("cube::Config: leaf_size must be >= 1");
+  if (!(rebuild_threshold > 1.0))
+    throw std::invalid_argument("cube::Config: rebuild_threshold must be > 1");
+  if (!(unbounded_limit > 0.0))
+    throw std::invalid_argument("cube::Config: unbounded_limit must be > 0");
+}
+
+namespace detail {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+void setEmpty(Node& n) {
+  for (int k = 0; k < 3; ++k) {
+    n.lo[k] = kInf;
+    n.hi[k] = -kInf;
+  }
+}
+
+template <typename S>
+void grow(Box<S>& acc, const Box<S>& b) {
+  for (int k = 0; k < 3; ++k) {
+    acc.lo[k] = std::min(acc.lo[k], b.lo[k]);
+    acc.hi[k] = std::max(acc.hi[k], b.hi[k]);
+  }
+}
+
+template <typename S>
+Box<S> emptyBox() {
+  Box<S> b;
+  for (int k = 0; k < 3; ++k) {
+    b.lo[k] = std::numeric_limits<S>::infinity();
+    b.hi[k] = -std::numeric_limits<S>::infinity();
+  }
+  return b;
+}
+
+template <typename S>
+int longestAxis(const Box<S>& b) {
+  int axis = 0;
+  S best = b.hi[0] - b.lo[0];
+  for (int k = 1; k < 3; ++k) {
+    if (b.hi[k] - b.lo[k] > best) {
+      best = b.hi[k] - b.lo[k];
+      axis = k;
+    }
+  }
+  return axis;
+}
+
+bool sameBounds(const Node& a, const Node& b) {
+  for (int k = 0; k < 3; ++k)
+    if (a.lo[k] != b.lo[k] || a.hi[k] != b.hi[k]) return false;
+  return true;
+}
+
+std::size_t hashPtr(const void* p) {
+  std::uint64_t x = reinterpret_cast<std::uintptr_t>(p);
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdULL;
+  x ^= x >> 33;
+  return static_cast<std::size_t>(x);
+}
+
+bool isDead(const Node& n) {
+  return n.count == 0 && n.first == kNone;
+}
+
+}  // namespace
+
+template <typename S>
+BoxKind classify(const Box<S>& b, double limit) {
+  bool unbounded = false;
+  for (int k = 0; k < 3; ++k) {
+    if (std::isnan(b.lo[k]) || std::isnan(b.hi[k])) return BoxKind::invalid;
+    if (!(std::fabs(double(b.lo[k])) <= limit) || !(std::fabs(double(b.hi[k])) <= limit))
+      unbounded = true;
+  }
+  return unbounded ? BoxKind::unbounded : BoxKind::finite;
+}
+
+template <typename S>
+void roundOut(const Box<S>& b, float lo[3], float hi[3]) {
+  constexpr S kMax = S(std::numeric_limits<float>::max());
+  for (int k = 0; k < 3; ++k) {
+    // Beyond float's range the cast would be undefined: such bounds become infinite.
+    float l = b.lo[k] < -kMax ? -kInf : b.lo[k] > kMax ? kMax : static_cast<float>(b.lo[k]);
+    if (S(l) > b.lo[k]) l = std::nextafter(l, -kInf);
+    float h = b.hi[k] > kMax ? kInf : b.hi[k] < -kMax ? -kMax : static_cast<float>(b.hi[k]);
+    if (S(h) < b.hi[k]) h = std::nextafter(h, kInf);
+    lo[k] = l;
+    hi[k] = h;
+  }
+}
+
+template <typename S>
+Hierarchy<S>::Hierarchy(const Config& config) : config_(config) {
+  config_.check();
+  for (int k = 0; k < 3; ++k) {
+    unbounded_node_.lo[k] = -kInf;
+    unbounded_node_.hi[k] = kInf;
+  }
+  unbounded_node_.first = 0;
+  unbounded_node_.count = 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Object index
+
+template <typename S>
+const typename Hierarchy<S>::Object* Hierarchy<S>::objectAt(std::uint32_t loc) const {
+  if (loc & kUnboundedBit) return unbounded_[loc & ~kUnboundedBit].obj;
+  return items_[loc].obj;
+}
+
+template <typename S>
+std::uint32_t Hierarchy<S>::find(const Object* obj) const {
+  if (index_.empty()) return kNone;
+  const std::size_t mask = index_.size() - 1;
+  for (std::size_t i = hashPtr(obj) & mask;; i = (i + 1) & mask) {
+    const std::uint32_t e = index_[i];
+    if (e == 0) return kNone;
+    if (objectAt(e - 1) == obj) return e - 1;
+  }
+}
+
+template <typename S>
+std::size_t Hierarchy<S>::slotOf(const Object* obj) const {
+  const std::size_t mask = index_.size() - 1;
+  std::size_t i = hashPtr(obj) & mask;
+  while (objectAt(index_[i] - 1) != obj) i = (i + 1) & mask;
+  return i;
+}
+
+template <typename S>
+void Hierarchy<S>::indexInsert(const Object* obj, std::uint32_t loc) {
+  if ((index_used_ + 1) * 2 > index_.size()) {
+    std::vector<std::uint32_t> old;
+    old.swap(index_);
+    index_.assign(std::max<std::size_t>(16, old.size() * 2), 0);
+    const std::size_t mask = index_.size() - 1;
+    for (std::uint32_t e : old) {
+      if (e == 0) continue;
+      std::size_t i = hashPtr(objectAt(e - 1)) & mask;
+      while (index_[i] != 0) i = (i + 1) & mask;
+      index_[i] = e;
+    }
+  }
+  const std::size_t mask = index_.size() - 1;
+  std::size_t i = hashPtr(obj) & mask;
+  while (index_[i] != 0) i = (i + 1) & mask;
+  index_[i] = loc + 1;
+  ++index_used_;
+}
+
+template <typename S>
+void Hierarchy<S>::indexSet(const Object* obj, std::uint32_t loc) {
+  index_[slotOf(obj)] = loc + 1;
+}
+
+template <typename S>
+void Hierarchy<S>::indexErase(const Object* obj) {
+  // Backward-shift deletion keeps probe chains unbroken without tombstones.
+  const std::size_t mask = index_.size() - 1;
+  std::size_t hole = slotOf(obj);
+  for (std::size_t j = (hole + 1) & mask; index_[j] != 0; j = (j + 1) & mask) {
+    const std::size_t home = hashPtr(objectAt(index_[j] - 1)) & mask;
+    // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
+    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+    if (!stays) {
+      index_[hole] = index_[j];
+      hole = j;
+    }
+  }
+  index_[hole] = 0;
+  --index_used_;
+}
+
+template <typename S>
+void Hierarchy<S>::indexRebuild() {
+  std::size_t cap = 16;
+  while (cap < 2 * (size() + 1)) cap *= 2;
+  index_.assign(cap, 0);
+  index_used_ = 0;
+  for (std::size_t p = 0; p < items_.size(); ++p)
+    if (items_[p].obj) indexInsert(items_[p].obj, static_cast<std::uint32_t>(p));
+  for (std::size_t p = 0; p < unbounded_.size(); ++p)
+    indexInsert(unbounded_[p].obj, static_cast<std::uint32_t>(p) | kUnboundedBit);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Build
+
+template <typename S>
+std::uint32_t Hierarchy<S>::newSeq() {
+  if (next_seq_ == kNone) {
+    // Renumber in registration order; happens once every four billion registrations.
+    std::vector<std::pair<std::uint32_t, Item<S>*>> all;
+    for (auto& it : items_)
+      if (it.obj) all.emplace_back(it.seq, &it);
+    for (auto& it : unbounded_) all.emplace_back(it.seq, &it);
+    std::sort(all.begin(), all.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::size_t i = 0; i < all.size(); ++i) all[i].second->seq = std::uint32_t(i);
+    next_seq_ = static_cast<std::uint32_t>(all.size());
+  }
+  return next_seq_++;
+}
+
+template <typename S>
+bool Hierarchy<S>::canSplit(std::uint32_t depth) const {
+  return config_.max_depth == 0 || depth < static_cast<std::uint32_t>(config_.max_depth);
+}
+
+template <typename S>
+void Hierarchy<S>::splitRange(std::uint32_t cube, std::uint32_t depth,
+                              std::vector<std::uint64_t>* stack) {
+  const std::uint32_t b = nodes_[cube].first;
+  const std::uint32_t e = b + nodes_[cube].count;
+  Box<S> box = emptyBox<S>();
+  for (std::uint32_t p = b; p < e; ++p) grow(box, items_[p].box);
+  roundOut(box, nodes_[cube].lo, nodes_[cube].hi);
+  const std::uint32_t count = e - b;
+  if (count > static_cast<std::uint32_t>(config_.leaf_size) && canSplit(depth)) {
+    const int axis = longestAxis(box);
+    const std::uint32_t m = b + count / 2;
+    // Median by AABB centre, ties by registration order: the seed's stable sort, in O(n).
+    std::nth_element(items_.begin() + b, items_.begin() + m, items_.begin() + e,
+                     [axis](const Item<S>& x, const Item<S>& y) {
+                       const S cx = x.box.lo[axis] + x.box.hi[axis];
+                       const S cy = y.box.lo[axis] + y.box.hi[axis];
+                       return cx < cy || (cx == cy && x.seq < y.seq);
+                     });
+    const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
+    Node left{}, right{};
+    left.first = b;
+    left.count = m - b;
+    right.first = m;
+    right.count = e - m;
+    nodes_.push_back(left);
+    nodes_.push_back(right);
+    parent_.push_back(cube);
+    parent_.push_back(cube);
+    nodes_[cube].first = c;
+    nodes_[cube].count = 0;
+    stack->push_back((std::uint64_t(depth + 1) << 32) | (c + 1));
+    stack->push_back((std::uint64_t(depth + 1) << 32) | c);
+  } else {
+    // Within a leaf, registration order: the callback order does not depend on history.
+    std::sort(items_.begin() + b, items_.begin() + e,
+              [](const Item<S>& x, const Item<S>& y) { return x.seq < y.seq; });
+    for (std::uint32_t p = b; p < e; ++p) items_[p].leaf = cube;
+  }
+}
+
+template <typename S>
+void Hierarchy<S>::rebuild() {
+  std::vector<Item<S>> fresh;
+  fresh.reserve(live_);
+  for (const Item<S>& it : items_)
+    if (it.obj) fresh.push_back(it);
+  items_.swap(fresh);
+  dead_items_ = 0;
+  nodes_.clear();
+  parent_.clear();
+  dead_nodes_ = 0;
+  root_ = kNone;
+  if (live_ > 0) {
+    nodes_.reserve(4 * live_ / std::max(1, config_.leaf_size) + 2);
+    parent_.reserve(nodes_.capacity());
+    Node root{};
+    root.first = 0;
+    root.count = static_cast<std::uint32_t>(live_);
+    nodes_.push_back(root);
+    parent_.push_back(kNone);
+    root_ = 0;
+    std::vector<std::uint64_t> stack{0};
+    while (!stack.empty()) {
+      const std::uint64_t top = stack.back();
+      stack.pop_back();
+      splitRange(static_cast<std::uint32_t>(top), static_cast<std::uint32_t>(top >> 32), &stack);
+    }
+    // The bounds were set on the way down; internal ones are recomputed from the children so
+    // that a refit of an unmoved scene reproduces them exactly.
+    refitAllCubes();
+  } else {
+    area_ = 0;
+  }
+  indexRebuild();
+  built_area_ = area_;
+  changes_ = 0;
+  ++builds_;
+  built_ = true;
+}
+
+template <typename S>
+void Hierarchy<S>::setup() {
+  if (!built_ || changes_ > 0) rebuild();
+}
+
+template <typename S>
+void Hierarchy<S>::maybeRebuildAfterUpdate() {
+  switch (config_.update_policy) {
+    case UpdatePolicy::rebuild:
+      rebuild();
+      return;
+    case UpdatePolicy::refit:
+      return;
+    case UpdatePolicy::automatic:
+      break;
+  }
+  const bool degraded =
+      built_area_ > 0 ? area_ > config_.rebuild_threshold * built_area_ : area_ > 0;
+  const bool churned = changes_ > std::max<std::size_t>(64, live_);
+  if (degraded || churned) rebuild();
+}
+
+template <typename S>
+void Hierarchy<S>::clear() {
+  nodes_.clear();
+  parent_.clear();
+  items_.clear();
+  unbounded_.clear();
+  unbounded_node_.count = 0;
+  index_.clear();
+  index_used_ = 0;
+  root_ = kNone;
+  live_ = dead_items_ = dead_nodes_ = 0;
+  next_seq_ = 0;
+  area_ = built_area_ = 0;
+  changes_ = 0;
+  built_ = false;
+}
+
+template <typename S>
+void Hierarchy<S>::insertAndRebuild(const std::vector<Object*>& objs,
+                                    const std::vector<Box<S>>& boxes) {
+  items_.reserve(items_.size() + objs.size());
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    Item<S> it{boxes[i], objs[i], kNone, newSeq()};
+    if (classify(boxes[i], config_.unbounded_limit) == BoxKind::unbounded) {
+      unbounded_.push_back(it);
+    } else {
+      items_.push_back(it);
+      ++live_;
+    }
+  }
+  unbounded_node_.count = static_cast<std::uint32_t>(unbounded_.size());
+  rebuild();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Refit
+
+template <typename S>
+double Hierarchy<S>::refitCube(std::uint32_t cube) {
+  Node& n = nodes_[cube];
+  const double before = surfaceArea(n);
+  if (n.isLeaf()) {
+    Box<S> box = emptyBox<S>();
+    for (std::uint32_t p = n.first; p < n.first + n.count; ++p) grow(box, items_[p].box);
+    roundOut(box, n.lo, n.hi);
+  } else {
+    const Node& a = nodes_[n.first];
+    const Node& b = nodes_[n.first + 1];
+    for (int k = 0; k < 3; ++k) {
+      n.lo[k] = std::min(a.lo[k], b.lo[k]);
+      n.hi[k] = std::max(a.hi[k], b.hi[k]);
+    }
+  }
+  return surfaceArea(n) - before;
+}
+
+template <typename S>
+void Hierarchy<S>::refitUp(std::uint32_t cube) {
+  while (cube != kNone) {
+    const Node before = nodes_[cube];
+    area_ += refitCube(cube);
+    if (sameBounds(before, nodes_[cube])) return;  // nothing above can change
+    cube = parent_[cube];
+  }
+}
+
+template <typename S>
+void Hierarchy<S>::refitAllCubes() {
+  // Children always have larger indices than their parent, so one backward pass is bottom-up.
+  double total = 0;
+  for (std::size_t i = nodes_.size(); i-- > 0;) {
+    if (isDead(nodes_[i])) continue;
+    refitCube(static_cast<std::uint32_t>(i));
+    total += surfaceArea(nodes_[i]);
+  }
+  area_ = total;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Incremental changes
+
+template <typename S>
+std::uint32_t Hierarchy<S>::chooseLeaf(const Box<S>& box) const {
+  float lo[3], hi[3];
+  roundOut(box, lo, hi);
+  std::uint32_t cube = root_;
+  while (!nodes_[cube].isLeaf()) {
+    const std::uint32_t c = nodes_[cube].first;
+    double growth[2];
+    for (int i = 0; i < 2; ++i) {
+      Node u = nodes_[c + i];
+      const double before = surfaceArea(u);
+      for (int k = 0; k < 3; ++k) {
+        u.lo[k] = std::min(u.lo[k], lo[k]);
+        u.hi[k] = std::max(u.hi[k], hi[k]);
+      }
+      growth[i] = surfaceArea(u) - before;
+    }
+    cube = growth[1] < growth[0] ? c + 1 : c;
+  }
+  return cube;
+}
+
+template <typename S>
+std::uint32_t Hierarchy<S>::depthOf(std::uint32_t cube) const {
+  std::uint32_t depth = 0;
+  while (parent_[cube] != kNone) {
+    cube = parent_[cube];
+    ++depth;
+  }
+  return depth;
+}
+
+template <typename S>
+void Hierarchy<S>::growLeaf(std::uint32_t leaf, const Item<S>& item) {
+  const std::uint32_t first = nodes_[leaf].first;
+  const std::uint32_t end = first + nodes_[leaf].count;
+  std::uint32_t pos;
+  if (end == items_.size()) {
+    pos = end;
+    items_.push_back(item);
+  } else if (items_[end].obj == nullptr) {
+    pos = end;
+    items_[end] = item;
+    --dead_items_;
+  } else {
+    // No room behind the leaf: move its range to the end of the array. The old slots die and
+    // are reclaimed by the next compaction or build.
+    const std::uint32_t moved_to = static_cast<std::uint32_t>(items_.size());
+    for (std::uint32_t p = first; p < end; ++p) {
+      const std::size_t slot = slotOf(items_[p].obj);
+      items_.push_back(items_[p]);
+      items_[p].obj = nullptr;
+      index_[slot] = moved_to + (p - first) + 1;
+    }
+    dead_items_ += end - first;
+    nodes_[leaf].first = moved_to;
+    pos = static_cast<std::uint32_t>(items_.size());
+    items_.push_back(item);
+  }
+  items_[pos].leaf = leaf;
+  ++nodes_[leaf].count;
+  indexInsert(item.obj, pos);
+}
+
+template <typename S>
+void Hierarchy<S>::splitLeaf(std::uint32_t leaf) {
+  const std::uint32_t b = nodes_[leaf].first;
+  const std::uint32_t e = b + nodes_[leaf].count;
+  // Remember each object's index slot before the range is permuted.
+  std::vector<std::pair<Item<S>, std::size_t>> range;
+  range.reserve(e - b);
+  Box<S> box = emptyBox<S>();
+  for (std::uint32_t p = b; p < e; ++p) {
+    range.emplace_back(items_[p], slotOf(items_[p].obj));
+    grow(box, items_[p].box);
+  }
+  const int axis = longestAxis(box);
+  const std::uint32_t half = (e - b) / 2;
+  std::nth_element(range.begin(), range.begin() + half, range.end(),
+                   [axis](const auto& x, const auto& y) {
+                     const S cx = x.first.box.lo[axis] + x.first.box.hi[axis];
+                     const S cy = y.first.box.lo[axis] + y.first.box.hi[axis];
+                     return cx < cy || (cx == cy && x.first.seq < y.first.seq);
+                   });
+  const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
+  for (std::uint32_t i = 0; i < e - b; ++i) {
+    items_[b + i] = range[i].first;
+    items_[b + i].leaf = i < half ? c : c + 1;
+    index_[range[i].second] = b + i + 1;
+  }
+  Node left{}, right{};
+  setEmpty(left);
+  setEmpty(right);
+  left.first = b;
+  left.count = half;
+  right.first = b + half;
+  right.count = e - b - half;
+  nodes_.push_back(left);
+  nodes_.push_back(right);
+  parent_.push_back(leaf);
+  parent_.push_back(leaf);
+  nodes_[leaf].first = c;
+  nodes_[leaf].count = 0;
+  area_ += refitCube(c);
+  area_ += refitCube(c + 1);
+}
+
+template <typename S>
+void Hierarchy<S>::place(Item<S> item) {
+  if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded) {
+    unbounded_.push_back(item);
+    unbounded_node_.count = static_cast<std::uint32_t>(unbounded_.size());
+    indexInsert(item.obj, static_cast<std::uint32_t>(unbounded_.size() - 1) | kUnboundedBit);
+    return;
+  }
+  ++live_;
+  if (root_ == kNone) {
+    nodes_.clear();
+    parent_.clear();
+    items_.clear();
+    dead_items_ = dead_nodes_ = 0;
+    Node root{};
+    setEmpty(root);
+    root.first = 0;
+    root.count = 1;
+    nodes_.push_back(root);
+    parent_.push_back(kNone);
+    root_ = 0;
+    item.leaf = 0;
+    items_.push_back(item);
+    indexInsert(item.obj, 0);
+    area_ = refitCube(0);
+    return;
+  }
+  const std::uint32_t leaf = chooseLeaf(item.box);
+  growLeaf(leaf, item);
+  if (nodes_[leaf].count > static_cast<std::uint32_t>(config_.leaf_size) && canSplit(depthOf(leaf)))
+    splitLeaf(leaf);
+  refitUp(leaf);
+}
+
+template <typename S>
+void Hierarchy<S>::afterChange() {
+  ++changes_;
+  if (config_.update_policy == UpdatePolicy::automatic &&
+      changes_ > std::max<std::size_t>(64, live_)) {
+    rebuild();
+  } else {
+    maybeCompact();
+  }
+}
+
+template <typename S>
+void Hierarchy<S>::insert(Object* obj, const Box<S>& box) {
+  place(Item<S>{box, obj, kNone, newSeq()});
+  afterChange();
+}
+
+template <typename S>
+void Hierarchy<S>::removeFromTree(std::uint32_t pos) {
+  const std::uint32_t leaf = items_[pos].leaf;
+  indexErase(items_[pos].obj);
+  const std::uint32_t last = nodes_[leaf].first + nodes_[leaf].count - 1;
+  if (pos != last) {
+    const std::size_t slot = slotOf(items_[last].obj);
+    items_[pos] = items_[last];
+    index_[slot] = pos + 1;
+  }
+  items_[last].obj = nullptr;
+  ++dead_items_;
+  --live_;
+  if (--nodes_[leaf].count > 0) {
+    refitUp(leaf);
+    return;
+  }
+  // The leaf is empty: it and its sibling die, the sibling's content moves up into the parent.
+  area_ -= surfaceArea(nodes_[leaf]);
+  if (leaf == root_) {
+    nodes_.clear();
+    parent_.clear();
+    items_.clear();
+    root_ = kNone;
+    dead_items_ = dead_nodes_ = 0;
+    area_ = 0;
+    return;
+  }
+  const std::uint32_t up = parent_[leaf];
+  const std::uint32_t c = nodes_[up].first;
+  const std::uint32_t sibling = leaf == c ? c + 1 : c;
+  area_ -= surfaceArea(nodes_[up]);
+  nodes_[up] = nodes_[sibling];
+  const Node& moved = nodes_[up];
+  if (moved.isLeaf()) {
+    for (std::uint32_t p = moved.first; p < moved.first + moved.count; ++p) items_[p].leaf = up;
+  } else {
+    parent_[moved.first] = up;
+    parent_[moved.first + 1] = up;
+  }
+  for (std::uint32_t dead : {c, c + 1}) {
+    nodes_[dead].first = kNone;
+    nodes_[dead].count = 0;
+    setEmpty(nodes_[dead]);
+    parent_[dead] = kNone;
+  }
+  dead_nodes_ += 2;
+  if (parent_[up] != kNone) refitUp(parent_[up]);
+}
+
+template <typename S>
+void Hierarchy<S>::removeUnbounded(std::uint32_t pos) {
+  indexErase(unbounded_[pos].obj);
+  const std::uint32_t last = static_cast<std::uint32_t>(unbounded_.size() - 1);
+  if (pos != last) {
+    const std::size_t slot = slotOf(unbounded_[last].obj);
+    unbounded_[pos] = unbounded_[last];
+    index_[slot] = (pos | kUnboundedBit) + 1;
+  }
+  unbounded_.pop_back();
+  unbounded_node_.count = static_cast<std::uint32_t>(unbounded_.size());
+}
+
+template <typename S>
+bool Hierarchy<S>::remove(const Object* obj) {
+  const std::uint32_t loc = find(obj);
+  if (loc == kNone) return false;
+  if (loc & kUnboundedBit) {
+    removeUnbounded(loc & ~kUnboundedBit);
+  } else {
+    removeFromTree(loc);
+  }
+  afterChange();
+  return true;
+}
+
+template <typename S>
+bool Hierarchy<S>::move(const Object* obj, const Box<S>& box) {
+  const std::uint32_t loc = find(obj);
+  if (loc == kNone) return false;
+  const bool was_unbounded = (loc & kUnboundedBit) != 0;
+  const bool is_unbounded = classify(box, config_.unbounded_limit) == BoxKind::unbounded;
+  if (was_unbounded && is_unbounded) {
+    unbounded_[loc & ~kUnboundedBit].box = box;
+  } else if (!was_unbounded && !is_unbounded) {
+    items_[loc].box = box;
+    refitUp(items_[loc].leaf);
+  } else {
+    // Crossing between the cubes and the unbounded list: remove and insert, keeping the
+    // registration number so that getObjects() order is unchanged.
+    Item<S> item = was_unbounded ? unbounded_[loc & ~kUnboundedBit] : items_[loc];
+    item.box = box;
+    if (was_unbounded) {
+      removeUnbounded(loc & ~kUnboundedBit);
+    } else {
+      removeFromTree(loc);
+    }
+    place(item);
+    afterChange();
+  }
+  return true;
+}
+
+template <typename S>
+void Hierarchy<S>::maybeCompact() {
+  const std::size_t live_nodes = nodes_.size() - dead_nodes_;
+  if (!(dead_items_ > 64 && dead_items_ > live_) && !(dead_nodes_ > 64 && dead_nodes_ > live_nodes))
+    return;
+  // Re-lay the same tree depth-first: same cubes, same leaves, no dead slots.
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> parents;
+  std::vector<Item<S>> items;
+  nodes.reserve(live_nodes);
+  parents.reserve(live_nodes);
+  items.reserve(live_);
+  nodes.push_back(nodes_[root_]);
+  parents.push_back(kNone);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root_, 0}};
+  while (!stack.empty()) {
+    const auto [from, to] = stack.back();
+    stack.pop_back();
+    const Node n = nodes_[from];
+    if (n.isLeaf()) {
+      nodes[to].first = static_cast<std::uint32_t>(items.size());
+      for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+        items.push_back(items_[p]);
+        items.back().leaf = to;
+      }
+    } else {
+      const std::uint32_t c = static_cast<std::uint32_t>(nodes.size());
+      nodes.push_back(nodes_[n.first]);
+      nodes.push_back(nodes_[n.first + 1]);
+      parents.push_back(to);
+      parents.push_back(to);
+      nodes[to].first = c;
+      stack.emplace_back(n.first + 1, c + 1);
+      stack.emplace_back(n.first, c);
+    }
+  }
+  nodes_.swap(nodes);
+  parent_.swap(parents);
+  items_.swap(items);
+  root_ = 0;
+  dead_items_ = dead_nodes_ = 0;
+  indexRebuild();
+}
+
+template <typename S>
+void Hierarchy<S>::objects(std::vector<Object*>& out) const {
+  std::vector<std::pair<std::uint32_t, Object*>> all;
+  all.reserve(size());
+  for (const Item<S>& it : items_)
+    if (it.obj) all.emplace_back(it.seq, it.obj);
+  for (const Item<S>& it : unbounded_) all.emplace_back(it.seq, it.obj);
+  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  out.resize(all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) out[i] = all[i].second;
+}
+
+template <typename S>
+std::size_t Hierarchy<S>::bytes() const {
+  return nodes_.capacity() * sizeof(Node) + parent_.capacity() * sizeof(std::uint32_t) +
+         items_.capacity() * sizeof(Item<S>) + unbounded_.capacity() * sizeof(Item<S>) +
+         index_.capacity() * sizeof(std::uint32_t);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Invariants
+
+template <typename S>
+bool Hierarchy<S>::validate(std::string* why) const {
+  std::ostringstream msg;
+  auto fail = [&]() {
+    if (why) *why = msg.str();
+    return false;
+  };
+  auto contains = [](const Node& outer, const float lo[3], const float hi[3]) {
+    for (int k = 0; k < 3; ++k)
+      if (outer.lo[k] > lo[k] || outer.hi[k] < hi[k]) return false;
+    return true;
+  };
+  if (parent_.size() != nodes_.size()) return msg << "parent array size differs", fail();
+  if ((root_ == kNone) != (live_ == 0)) return msg << "root/live mismatch", fail();
+  std::vector<char> seen_item(items_.size(), 0);
+  std::vector<char> seen_node(nodes_.size(), 0);
+  std::size_t reached_items = 0, reached_nodes = 0;
+  double total_area = 0;
+  if (root_ != kNone) {
+    if (root_ >= nodes_.size() || parent_[root_] != kNone) return msg << "bad root", fail();
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root_, 0}};
+    while (!stack.empty()) {
+      const auto [i, depth] = stack.back();
+      stack.pop_back();
+      if (seen_node[i]) return msg << "cube " << i << " reached twice", fail();
+      seen_node[i] = 1;
+      ++reached_nodes;
+      const Node& n = nodes_[i];
+      total_area += surfaceArea(n);
+      if (config_.max_depth > 0 && depth > std::uint32_t(config_.max_depth))
+        return msg << "cube " << i << " deeper than max_depth", fail();
+      if (n.isLeaf()) {
+        if (n.first > items_.size() || n.count > items_.size() - n.first)
+          return msg << "leaf " << i << " range out of bounds", fail();
+        if (n.count > std::uint32_t(config_.leaf_size) && canSplit(depth))
+          return msg << "leaf " << i << " holds " << n.count << " > leaf_size objects", fail();
+        for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+          const Item<S>& it = items_[p];
+          if (!it.obj) return msg << "leaf " << i << " holds dead slot " << p, fail();
+          if (seen_item[p]) return msg << "object slot " << p << " in two leaves", fail();
+          seen_item[p] = 1;
+          ++reached_items;
+          if (it.leaf != i) return msg << "object " << p << " has wrong leaf", fail();
+          float lo[3], hi[3];
+          roundOut(it.box, lo, hi);
+          if (!contains(n, lo, hi)) return msg << "leaf " << i << " misses object " << p, fail();
+          if (classify(it.box, config_.unbounded_limit) != BoxKind::finite)
+            return msg << "object " << p << " should not be in the cubes", fail();
+          if (find(it.obj) != p) return msg << "index wrong for object " << p, fail();
+        }
+      } else {
+        const std::uint32_t c = n.first;
+        if (c == kNone || c + 1 >= nodes_.size() || c <= i)
+          return msg << "cube " << i << " has bad children " << c, fail();
+        for (std::uint32_t ch : {c, c + 1}) {
+          if (parent_[ch] != i) return msg << "parent of " << ch << " is not " << i, fail();
+          if (!contains(n, nodes_[ch].lo, nodes_[ch].hi))
+            return msg << "cube " << i << " does not contain child " << ch, fail();
+          stack.emplace_back(ch, depth + 1);
+        }
+      }
+    }
+  }
+  if (reached_items != live_)
+    return msg << "leaves hold " << reached_items << " objects, expected " << live_, fail();
+  std::size_t dead_items = 0;
+  for (std::size_t p = 0; p < items_.size(); ++p) {
+    if (items_[p].obj == nullptr)
+      ++dead_items;
+    else if (!seen_item[p])
+      return msg << "live object slot " << p << " in no leaf", fail();
+  }
+  if (dead_items != dead_items_) return msg << "dead slot count wrong", fail();
+  if (nodes_.size() - reached_nodes != dead_nodes_) return msg << "dead cube count wrong", fail();
+  for (std::size_t i = 0; i < nodes_.size(); ++i)
+    if (!seen_node[i] && !isDead(nodes_[i]))
+      return msg << "unreachable cube " << i << " not marked dead", fail();
+  if (unbounded_node_.count != unbounded_.size()) return msg << "unbounded count wrong", fail();
+  for (std::size_t p = 0; p < unbounded_.size(); ++p) {
+    if (classify(unbounded_[p].box, config_.unbounded_limit) != BoxKind::unbounded)
+      return msg << "bounded object in the unbounded list", fail();
+    if (find(unbounded_[p].obj) != (std::uint32_t(p) | kUnboundedBit))
+      return msg << "index wrong for unbounded object " << p, fail();
+  }
+  if (index_used_ != size())
+    return msg << "index holds " << index_used_ << " entries, expected " << size(), fail();
+  if (std::fabs(total_area - area_) > 1e-6 * std::max(1.0, total_area))
+    return msg << "tracked area " << area_ << " differs from " << total_area, fail();
+  return true;
+}
+
+template BoxKind classify<float>(const Box<float>&, double);
+template BoxKind classify<double>(const Box<double>&, double);
+template void roundOut<float>(const Box<float>&, float*, float*);
+template void roundOut<double>(const Box<double>&, float*, float*);
+template class Hierarchy<float>;
+template class Hierarchy<double>;
+
+}  // namespace detail
+}  // namespace cube
