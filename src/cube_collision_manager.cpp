@@ -222,58 +222,99 @@ void CubeCollisionManager<S>::getObjects(std::vector<Object*>& objs) const {
 template <typename S>
 void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
                                       fcl::CollisionCallBack<S> callback) const {
-  const Box<S> box = checkedQueryBox(obj, "collide");
-  if (callback == nullptr) fail("collide", "null callback");
-  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::collidePairs(a, b, self, cdata, callback);
-  });
+  collide(obj, cdata, callback, nullptr);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
                                        fcl::DistanceCallBack<S> callback) const {
-  const Box<S> box = checkedQueryBox(obj, "distance");
-  if (callback == nullptr) fail("distance", "null callback");
-  S best = std::numeric_limits<S>::max();
-  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::distancePairs(a, b, self, cdata, callback, best);
-  });
+  distance(obj, cdata, callback, nullptr);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback) const {
-  if (callback == nullptr) fail("collide", "null callback");
-  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::collidePairs(a, b, self, cdata, callback);
-  });
+  collide(cdata, callback, nullptr);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback) const {
-  if (callback == nullptr) fail("distance", "null callback");
-  S best = std::numeric_limits<S>::max();
-  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::distancePairs(a, b, self, cdata, callback, best);
-  });
+  distance(cdata, callback, nullptr);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback) const {
-  if (callback == nullptr) fail("collide", "null callback");
-  managerPairs(*this, other_manager, "collide", [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::collidePairs(a, b, self, cdata, callback);
-  });
+  collide(other_manager, cdata, callback, nullptr);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
                                        fcl::DistanceCallBack<S> callback) const {
+  distance(other_manager, cdata, callback, nullptr);
+}
+
+template <typename S>
+void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
+                                      fcl::CollisionCallBack<S> callback,
+                                      QueryStats* stats) const {
+  const Box<S> box = checkedQueryBox(obj, "collide");
+  if (callback == nullptr) fail("collide", "null callback");
+  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::collidePairs(a, b, self, cdata, callback, stats);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
+                                       fcl::DistanceCallBack<S> callback,
+                                       QueryStats* stats) const {
+  const Box<S> box = checkedQueryBox(obj, "distance");
+  if (callback == nullptr) fail("distance", "null callback");
+  S best = std::numeric_limits<S>::max();
+  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::distancePairs(a, b, self, cdata, callback, best, stats);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
+                                      QueryStats* stats) const {
+  if (callback == nullptr) fail("collide", "null callback");
+  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::collidePairs(a, b, self, cdata, callback, stats);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback,
+                                       QueryStats* stats) const {
+  if (callback == nullptr) fail("distance", "null callback");
+  S best = std::numeric_limits<S>::max();
+  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::distancePairs(a, b, self, cdata, callback, best, stats);
+  });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
+                                      fcl::CollisionCallBack<S> callback,
+                                      QueryStats* stats) const {
+  if (callback == nullptr) fail("collide", "null callback");
+  managerPairs(*this, other_manager, "collide",
+               [&](const View<S>& a, const View<S>& b, bool self) {
+                 return detail::collidePairs(a, b, self, cdata, callback, stats);
+               });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
+                                       fcl::DistanceCallBack<S> callback,
+                                       QueryStats* stats) const {
   if (callback == nullptr) fail("distance", "null callback");
   S best = std::numeric_limits<S>::max();
   managerPairs(*this, other_manager, "distance",
                [&](const View<S>& a, const View<S>& b, bool self) {
-                 return detail::distancePairs(a, b, self, cdata, callback, best);
+                 return detail::distancePairs(a, b, self, cdata, callback, best, stats);
                });
 }
 

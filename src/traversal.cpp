@@ -70,36 +70,59 @@ inline float extent(const Node& n) {
   return (n.hi[0] - n.lo[0]) + (n.hi[1] - n.lo[1]) + (n.hi[2] - n.lo[2]);
 }
 
-template <typename S>
+// Work counters for QueryStats; the empty one compiles away on the ordinary path.
+struct NoCount {
+  void visit() const {}
+  void test() const {}
+  void call() const {}
+};
+struct Count {
+  QueryStats* stats;
+  void visit() const { ++stats->cubes_visited; }
+  void test() const { ++stats->box_tests; }
+  void call() const { ++stats->callbacks; }
+};
+
+template <typename S, class Counter>
 struct CollidePolicy {
   static constexpr bool kOrdered = false;
   void* data;
   CollideFn<S> fn;
+  Counter count;
   bool enter(const Node& a, const Node& b, S& key) const {
+    count.test();
     key = 0;
     return overlap(a, b);
   }
   bool keep(S) const { return true; }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
-    return overlap(x.box, y.box) && fn(x.obj, y.obj, data);
+    count.test();
+    if (!overlap(x.box, y.box)) return false;
+    count.call();
+    return fn(x.obj, y.obj, data);
   }
 };
 
-template <typename S>
+template <typename S, class Counter>
 struct DistancePolicy {
   static constexpr bool kOrdered = true;
   void* data;
   DistanceFn<S> fn;
   S& best;
+  Counter count;
   // Boxes that overlap are always worth a visit: with a signed-distance callback the best may
   // already be <= 0 and a pair may still penetrate deeper.
   bool keep(S key) const { return key < best || key <= 0; }
   bool enter(const Node& a, const Node& b, S& key) const {
+    count.test();
     key = gap<S>(a, b);
     return keep(key);
   }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
-    return keep(gap<S>(x.box, y.box)) && fn(x.obj, y.obj, data, best);
+    count.test();
+    if (!keep(gap<S>(x.box, y.box))) return false;
+    count.call();
+    return fn(x.obj, y.obj, data, best);
   }
 };
 
@@ -155,6 +178,7 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
   while (!stack.empty()) {
     const Entry<S> e = stack.pop();
     if (!p.keep(e.key)) continue;  // the best distance may have dropped since the push
+    p.count.visit();
     const Node& na = va.nodes[e.a];
     const Node& nb = vb.nodes[e.b];
     if (self && e.a == e.b) {
@@ -194,14 +218,17 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
 }  // namespace
 
 template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn) {
-  return descend(a, b, self, CollidePolicy<S>{data, fn});
+bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+                  QueryStats* stats) {
+  if (stats) return descend(a, b, self, CollidePolicy<S, Count>{data, fn, Count{stats}});
+  return descend(a, b, self, CollidePolicy<S, NoCount>{data, fn, NoCount{}});
 }
 
 template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
-                   S& best) {
-  return descend(a, b, self, DistancePolicy<S>{data, fn, best});
+                   S& best, QueryStats* stats) {
+  if (stats) return descend(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}});
+  return descend(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}});
 }
 
 template <typename S>
@@ -213,13 +240,13 @@ SingleView<S>::SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box) {
 }
 
 template bool collidePairs<float>(const View<float>&, const View<float>&, bool, void*,
-                                  CollideFn<float>);
+                                  CollideFn<float>, QueryStats*);
 template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
-                                   CollideFn<double>);
+                                   CollideFn<double>, QueryStats*);
 template bool distancePairs<float>(const View<float>&, const View<float>&, bool, void*,
-                                   DistanceFn<float>, float&);
+                                   DistanceFn<float>, float&, QueryStats*);
 template bool distancePairs<double>(const View<double>&, const View<double>&, bool, void*,
-                                    DistanceFn<double>, double&);
+                                    DistanceFn<double>, double&, QueryStats*);
 template struct SingleView<float>;
 template struct SingleView<double>;
 

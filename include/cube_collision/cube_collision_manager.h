@@ -2,11 +2,14 @@
 
 #include <fcl/broadphase/broadphase_collision_manager.h>
 
+#include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "cube_collision/config.h"
 #include "cube_collision/detail/hierarchy.h"
+#include "cube_collision/query_stats.h"
 
 namespace cube {
 
@@ -86,6 +89,53 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// Distance between the objects of this manager and those of another, as collide(other).
   void distance(Base* other_manager, void* cdata, fcl::DistanceCallBack<S> callback) const override;
 
+  /// The six queries above, adding the work they do to `stats` (when not null). Same results and
+  /// callbacks as without; for tuning and for the benchmark's "box tests per object".
+  void collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
+               QueryStats* stats) const;
+  void distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback,
+                QueryStats* stats) const;
+  void collide(void* cdata, fcl::CollisionCallBack<S> callback, QueryStats* stats) const;
+  void distance(void* cdata, fcl::DistanceCallBack<S> callback, QueryStats* stats) const;
+  void collide(Base* other_manager, void* cdata, fcl::CollisionCallBack<S> callback,
+               QueryStats* stats) const;
+  void distance(Base* other_manager, void* cdata, fcl::DistanceCallBack<S> callback,
+                QueryStats* stats) const;
+
+  /// Self-collide with any callable `bool f(Object* a, Object* b)` (a lambda with captures, say);
+  /// returning true stops the query, a callable returning void never stops. No std::function:
+  /// the callable is called through one function pointer, like FCL's callbacks.
+  template <class F, class = std::enable_if_t<std::is_invocable_v<F&, Object*, Object*>>>
+  void collide(F&& f) const {
+    collide(erase(f), &collideThunk<std::remove_reference_t<F>>);
+  }
+  /// collide(obj, ...) with a callable f(managed, obj).
+  template <class F, class = std::enable_if_t<std::is_invocable_v<F&, Object*, Object*>>>
+  void collide(Object* obj, F&& f) const {
+    collide(obj, erase(f), &collideThunk<std::remove_reference_t<F>>);
+  }
+  /// collide(other, ...) with a callable f(object of this, object of other).
+  template <class F, class = std::enable_if_t<std::is_invocable_v<F&, Object*, Object*>>>
+  void collide(Base* other_manager, F&& f) const {
+    collide(other_manager, erase(f), &collideThunk<std::remove_reference_t<F>>);
+  }
+  /// Self distance with a callable `bool f(Object* a, Object* b, S& dist)` that lowers dist to
+  /// the pair's distance; returning true stops.
+  template <class F, class = std::enable_if_t<std::is_invocable_v<F&, Object*, Object*, S&>>>
+  void distance(F&& f) const {
+    distance(erase(f), &distanceThunk<std::remove_reference_t<F>>);
+  }
+  /// distance(obj, ...) with a callable f(managed, obj, dist).
+  template <class F, class = std::enable_if_t<std::is_invocable_v<F&, Object*, Object*, S&>>>
+  void distance(Object* obj, F&& f) const {
+    distance(obj, erase(f), &distanceThunk<std::remove_reference_t<F>>);
+  }
+  /// distance(other, ...) with a callable f(object of this, object of other, dist).
+  template <class F, class = std::enable_if_t<std::is_invocable_v<F&, Object*, Object*, S&>>>
+  void distance(Base* other_manager, F&& f) const {
+    distance(other_manager, erase(f), &distanceThunk<std::remove_reference_t<F>>);
+  }
+
   /// True if no object is registered.
   bool empty() const override;
   /// Number of registered objects.
@@ -100,6 +150,29 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   const detail::Hierarchy<S>& hierarchy() const { return tree_; }
 
  private:
+  template <class F>
+  static void* erase(F& f) {
+    return const_cast<void*>(static_cast<const void*>(std::addressof(f)));
+  }
+  template <class F>
+  static bool collideThunk(Object* a, Object* b, void* f) {
+    if constexpr (std::is_void_v<std::invoke_result_t<F&, Object*, Object*>>) {
+      (*static_cast<F*>(f))(a, b);
+      return false;
+    } else {
+      return static_cast<bool>((*static_cast<F*>(f))(a, b));
+    }
+  }
+  template <class F>
+  static bool distanceThunk(Object* a, Object* b, void* f, S& dist) {
+    if constexpr (std::is_void_v<std::invoke_result_t<F&, Object*, Object*, S&>>) {
+      (*static_cast<F*>(f))(a, b, dist);
+      return false;
+    } else {
+      return static_cast<bool>((*static_cast<F*>(f))(a, b, dist));
+    }
+  }
+
   detail::Hierarchy<S> tree_;
 };
 

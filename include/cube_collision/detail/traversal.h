@@ -4,6 +4,7 @@
 // object queries and all distance queries (a query object is a one-leaf view).
 
 #include "cube_collision/detail/hierarchy.h"
+#include "cube_collision/query_stats.h"
 
 namespace cube {
 namespace detail {
@@ -17,14 +18,15 @@ using DistanceFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, 
 /// overlap (closed). With `self` (a and b are the same view) each unordered pair comes once.
 /// Returns true as soon as fn does (the query stops).
 template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn);
+bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+                  QueryStats* stats = nullptr);
 
 /// Branch and bound over the same pairs: calls fn(x, y, data, best) for pairs whose box distance
 /// is below `best` (or whose boxes overlap), nearer cubes first; fn lowers `best`. Returns true
-/// as soon as fn does.
+/// as soon as fn does. `stats`, if given, counts the work done.
 template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
-                   S& best);
+                   S& best, QueryStats* stats = nullptr);
 
 /// A one-object view for queries: the caller owns the storage.
 template <typename S>

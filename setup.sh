@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# One-stop set-up on Debian 12 as root (or with sudo): installs the missing packages, builds,
+# then runs the demo (`bash setup.sh demo`) or every test (`bash setup.sh test`).
+set -euo pipefail
+cd "$(dirname "$0")"
+
+mode=${1:-demo}
+packages=(build-essential cmake pkg-config libfcl-dev libccd-dev libeigen3-dev liboctomap-dev
+          libgtest-dev libgmock-dev libbenchmark-dev libcairo2-dev)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "Installing: ${missing[*]}"
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+build=${BUILD_DIR:-build}
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release
+cmake --build "$build" -j2
+
+case "$mode" in
+  demo) "$build/examples/demo" ;;
+  test) ctest --test-dir "$build" --output-on-failure -j2 ;;
+  *) echo "usage: bash setup.sh [demo|test]" >&2; exit 2 ;;
+esac
