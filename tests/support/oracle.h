@@ -1,0 +1,91 @@
+#pragma once
+
+// Comparison helpers for the tests: what a manager reports, in a form that can be compared with
+// what fcl::NaiveCollisionManager reports on the same objects.
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include <fcl/broadphase/broadphase_bruteforce.h>
+#include <fcl/broadphase/broadphase_collision_manager.h>
+#include <fcl/broadphase/default_broadphase_callbacks.h>
+
+namespace cube {
+namespace oracle {
+
+/// An unordered pair of objects, smaller pointer first.
+template <typename S>
+using Pair = std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>;
+
+template <typename S>
+Pair<S> unordered(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+  return a < b ? Pair<S>(a, b) : Pair<S>(b, a);
+}
+
+/// Every callback of a collide query, in call order, as given (first, second argument).
+template <typename S>
+struct Calls {
+  std::vector<Pair<S>> calls;
+  static bool record(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* d) {
+    static_cast<Calls*>(d)->calls.emplace_back(a, b);
+    return false;
+  }
+  /// The calls as a sorted multiset of unordered pairs (duplicates kept, so they show).
+  std::vector<Pair<S>> unorderedSorted() const {
+    std::vector<Pair<S>> out;
+    for (const auto& c : calls) out.push_back(unordered(c.first, c.second));
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+};
+
+/// Pairs whose AABBs overlap among `objs` (brute force), as a sorted list of unordered pairs.
+template <typename S>
+std::vector<Pair<S>> bruteSelfPairs(const std::vector<fcl::CollisionObject<S>*>& objs) {
+  std::vector<Pair<S>> out;
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j)
+      if (objs[i] != objs[j] && objs[i]->getAABB().overlap(objs[j]->getAABB()))
+        out.push_back(unordered(objs[i], objs[j]));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// Self-collide candidate pairs reported by a manager (sorted unordered pairs, duplicates kept).
+template <typename S>
+std::vector<Pair<S>> selfPairs(const fcl::BroadPhaseCollisionManager<S>& m) {
+  Calls<S> c;
+  m.collide(&c, &Calls<S>::record);
+  return c.unorderedSorted();
+}
+
+/// Pairs whose narrow phase says "colliding" for a self-collide with an exhaustive callback.
+template <typename S>
+std::vector<Pair<S>> collidingPairs(const fcl::BroadPhaseCollisionManager<S>& m) {
+  struct Data {
+    std::vector<Pair<S>> hits;
+  } data;
+  auto fn = [](fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* d) {
+    fcl::CollisionRequest<S> req;
+    fcl::CollisionResult<S> res;
+    if (fcl::collide(a, b, req, res) > 0) static_cast<Data*>(d)->hits.push_back(unordered(a, b));
+    return false;
+  };
+  m.collide(&data, fn);
+  std::sort(data.hits.begin(), data.hits.end());
+  return data.hits;
+}
+
+/// Naive manager over the same objects (excluding `skip`, e.g. a registered query object).
+template <typename S>
+fcl::NaiveCollisionManager<S> naiveOf(const std::vector<fcl::CollisionObject<S>*>& objs) {
+  fcl::NaiveCollisionManager<S> naive;
+  for (auto* o : objs) naive.registerObject(o);
+  return naive;
+}
+
+}  // namespace oracle
+}  // namespace cube
