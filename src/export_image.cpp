@@ -67,14 +67,14 @@ const char* viewName(ViewDirection v) {
 
 // Distinct colours that stay readable on white when faded (Tableau 10, grey left out).
 constexpr std::array<std::array<double, 3>, 9> kPalette{{{0.122, 0.467, 0.706},
-                                                        {0.839, 0.153, 0.157},
-                                                        {0.173, 0.627, 0.173},
-                                                        {1.000, 0.498, 0.055},
-                                                        {0.580, 0.404, 0.741},
-                                                        {0.090, 0.745, 0.812},
-                                                        {0.549, 0.337, 0.294},
-                                                        {0.890, 0.467, 0.761},
-                                                        {0.737, 0.741, 0.133}}};
+                                                         {0.839, 0.153, 0.157},
+                                                         {0.173, 0.627, 0.173},
+                                                         {1.000, 0.498, 0.055},
+                                                         {0.580, 0.404, 0.741},
+                                                         {0.090, 0.745, 0.812},
+                                                         {0.549, 0.337, 0.294},
+                                                         {0.890, 0.467, 0.761},
+                                                         {0.737, 0.741, 0.133}}};
 
 struct Style {
   std::array<double, 3> rgb;
@@ -96,8 +96,8 @@ struct Fit {
 void corners(const std::array<double, 3>& lo, const std::array<double, 3>& hi, const Camera& cam,
              const Fit& fit, Point out[8]) {
   for (int k = 0; k < 8; ++k)
-    out[k] = fit.toImage(cam.project(k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1],
-                                     k & 4 ? hi[2] : lo[2]));
+    out[k] = fit.toImage(
+        cam.project(k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]));
 }
 
 double cross(const Point& o, const Point& a, const Point& b) {
@@ -106,9 +106,8 @@ double cross(const Point& o, const Point& a, const Point& b) {
 
 // Outline of a projected box: convex hull of its corners (monotone chain).
 int hull(Point p[8], Point out[16]) {
-  std::sort(p, p + 8, [](const Point& a, const Point& b) {
-    return a.x < b.x || (a.x == b.x && a.y < b.y);
-  });
+  std::sort(p, p + 8,
+            [](const Point& a, const Point& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
   int n = 0;
   for (int i = 0; i < 8; ++i) {
     while (n >= 2 && cross(out[n - 2], out[n - 1], p[i]) <= 0) --n;
@@ -136,7 +135,8 @@ void checkOptions(const ImageOptions& o) {
 template <typename S>
 void draw(const HierarchyView<S>& view, const ImageOptions& o, cairo_t* cr) {
   const Camera cam = cameraFor(o.view);
-  const int levels = o.max_level < 0 ? view.levelCount() : std::min(view.levelCount(), o.max_level + 1);
+  const int levels =
+      o.max_level < 0 ? view.levelCount() : std::min(view.levelCount(), o.max_level + 1);
   const double legend_h = o.legend ? 30.0 : 0.0;
 
   if (o.background) {
@@ -150,10 +150,11 @@ void draw(const HierarchyView<S>& view, const ImageOptions& o, cairo_t* cr) {
     const CubeData& root = view.getCubeData(0);
     double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
     for (int k = 0; k < 8; ++k) {
-      const Point p = cam.project(k & 1 ? root.max[0] : root.min[0],
-                                  k & 2 ? root.max[1] : root.min[1],
-                                  k & 4 ? root.max[2] : root.min[2]);
-      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+      const Point p =
+          cam.project(k & 1 ? root.max[0] : root.min[0], k & 2 ? root.max[1] : root.min[1],
+                      k & 4 ? root.max[2] : root.min[2]);
+      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y),
+      y1 = std::max(y1, p.y);
     }
     const double aw = o.width - 2.0 * o.margin, ah = o.height - 2.0 * o.margin - legend_h;
     const double span = std::max({x1 - x0, y1 - y0, 1e-30});
@@ -272,12 +273,10 @@ void writePng(const HierarchyView<S>& view, const std::string& path, const Image
   check(cairo_surface_write_to_png(surface.get(), path.c_str()), "writePng", path);
 }
 
-template void writeSvg<float>(const HierarchyView<float>&, const std::string&,
-                              const ImageOptions&);
+template void writeSvg<float>(const HierarchyView<float>&, const std::string&, const ImageOptions&);
 template void writeSvg<double>(const HierarchyView<double>&, const std::string&,
                                const ImageOptions&);
-template void writePng<float>(const HierarchyView<float>&, const std::string&,
-                              const ImageOptions&);
+template void writePng<float>(const HierarchyView<float>&, const std::string&, const ImageOptions&);
 template void writePng<double>(const HierarchyView<double>&, const std::string&,
                                const ImageOptions&);
 

@@ -12,8 +12,8 @@ namespace cube {
 template <typename S>
 void writeObj(const HierarchyView<S>& view, std::ostream& out) {
   const int cubes = view.getNumberCells();
-  out << "# cube_collision hierarchy: " << cubes << " cubes, " << view.levelCount()
-      << " levels, " << view.objects().size() << " objects\n";
+  out << "# cube_collision hierarchy: " << cubes << " cubes, " << view.levelCount() << " levels, "
+      << view.objects().size() << " objects\n";
   out << "# each cube: 8 vertices and 12 edges; group level_<l> holds the cubes of level l\n";
   // Round-trip precision: the corners are the exact float bounds the queries use.
   const std::streamsize precision = out.precision(std::numeric_limits<float>::max_digits10);
@@ -25,8 +25,8 @@ void writeObj(const HierarchyView<S>& view, std::ostream& out) {
       const CubeData& c = view.getCubeData(i);
       // Corner k has x from bit 0, y from bit 1, z from bit 2.
       for (int k = 0; k < 8; ++k)
-        out << "v " << (k & 1 ? c.max[0] : c.min[0]) << ' ' << (k & 2 ? c.max[1] : c.min[1])
-            << ' ' << (k & 4 ? c.max[2] : c.min[2]) << "\n";
+        out << "v " << (k & 1 ? c.max[0] : c.min[0]) << ' ' << (k & 2 ? c.max[1] : c.min[1]) << ' '
+            << (k & 4 ? c.max[2] : c.min[2]) << "\n";
       // An edge joins two corners that differ in exactly one bit.
       for (int k = 0; k < 8; ++k)
         for (int bit = 1; bit < 8; bit <<= 1)

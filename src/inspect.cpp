@@ -201,8 +201,8 @@ std::ostream& operator<<(std::ostream& os, const HierarchyStats& s) {
     if (s.leaf_size_histogram[k]) os << ' ' << k << ": " << s.leaf_size_histogram[k];
   os << "\nmean leaf size " << s.mean_leaf_size << ", max " << s.max_leaf_size << "\n";
   os << "total cube surface area " << s.surface_area << ", volume " << s.volume << "\n";
-  os << "quality ratio (area / area at last build) " << s.quality_ratio
-     << ", rebuild threshold " << s.rebuild_threshold << ", builds " << s.builds << "\n";
+  os << "quality ratio (area / area at last build) " << s.quality_ratio << ", rebuild threshold "
+     << s.rebuild_threshold << ", builds " << s.builds << "\n";
   os << "garbage: " << s.dead_cubes << " dead cubes, " << s.dead_object_slots
      << " dead object slots\n";
   os << "memory: " << s.bytes << " bytes, " << s.bytes_per_object << " per object\n";

@@ -3,72 +3,104 @@
 
 #include "cube_collision/detail/traversal.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>  // baseline on x86-64: no -m flag, so no effect on Eigen's ABI
+#endif
 
 namespace cube {
 namespace detail {
 
 namespace {
 
-// A stack that lives in the frame up to N entries and spills to the heap beyond, so that queries
+// A stack that lives in the frame up to N entries and moves to the heap beyond, so that queries
 // allocate nothing on ordinary trees and still cope with degenerate deep ones.
 template <class T, std::size_t N>
 class SmallStack {
  public:
-  bool empty() const { return n_ == 0 && spill_.empty(); }
+  SmallStack() = default;
+  SmallStack(const SmallStack&) = delete;
+  SmallStack& operator=(const SmallStack&) = delete;
+  bool empty() const { return n_ == 0; }
   void push(const T& t) {
-    if (n_ < N) {
-      local_[n_++] = t;
-    } else {
-      spill_.push_back(t);
-    }
+    if (n_ == cap_) grow();
+    data_[n_++] = t;
   }
-  T pop() {
-    if (!spill_.empty()) {
-      T t = spill_.back();
-      spill_.pop_back();
-      return t;
-    }
-    return local_[--n_];
-  }
+  T pop() { return data_[--n_]; }
 
  private:
+  void grow() {
+    std::vector<T> bigger(cap_ * 2);
+    std::copy(data_, data_ + n_, bigger.begin());
+    heap_.swap(bigger);
+    data_ = heap_.data();
+    cap_ = heap_.size();
+  }
   T local_[N];
+  T* data_ = local_;
   std::size_t n_ = 0;
-  std::vector<T> spill_;
+  std::size_t cap_ = N;
+  std::vector<T> heap_;
 };
 
+// Overlap tests are branch-free: their outcome is close to random in a traversal, so a
+// mispredicted branch per axis would cost more than the test itself.
 inline bool overlap(const Node& a, const Node& b) {
-  return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] && b.lo[1] <= a.hi[1] &&
-         a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
+#if defined(__SSE2__)
+  // The fourth lane holds first/count; the mask ignores it.
+  const __m128 le = _mm_cmple_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.hi));
+  const __m128 ge = _mm_cmple_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
+  return (_mm_movemask_ps(_mm_and_ps(le, ge)) & 7) == 7;
+#else
+  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) &
+         (b.lo[1] <= a.hi[1]) & (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+#endif
 }
 
-template <typename S>
-inline bool overlap(const Box<S>& a, const Box<S>& b) {
-  return a.lo[0] <= b.hi[0] && b.lo[0] <= a.hi[0] && a.lo[1] <= b.hi[1] && b.lo[1] <= a.hi[1] &&
-         a.lo[2] <= b.hi[2] && b.lo[2] <= a.hi[2];
+inline bool overlap(const Box<double>& a, const Box<double>& b) {
+#if defined(__SSE2__)
+  // lo and hi are six contiguous doubles; axes (0,1) and (1,2) cover all three.
+  const double* x = a.lo;
+  const double* y = b.lo;
+  const __m128d m0 = _mm_and_pd(_mm_cmple_pd(_mm_loadu_pd(x), _mm_loadu_pd(y + 3)),
+                                _mm_cmple_pd(_mm_loadu_pd(y), _mm_loadu_pd(x + 3)));
+  const __m128d m1 = _mm_and_pd(_mm_cmple_pd(_mm_loadu_pd(x + 1), _mm_loadu_pd(y + 4)),
+                                _mm_cmple_pd(_mm_loadu_pd(y + 1), _mm_loadu_pd(x + 4)));
+  return _mm_movemask_pd(_mm_and_pd(m0, m1)) == 3;
+#else
+  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) &
+         (b.lo[1] <= a.hi[1]) & (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+#endif
 }
 
-// Euclidean gap between two boxes, as fcl::AABB::distance computes it.
+inline bool overlap(const Box<float>& a, const Box<float>& b) {
+  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) &
+         (b.lo[1] <= a.hi[1]) & (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+}
+
+// Squared Euclidean gap between two boxes (fcl::AABB::distance squared); square roots are left
+// out of the traversal, only the order and the pruning need the distance.
 template <typename S, typename B>
-inline S gap(const B& a, const B& b) {
+inline S gap2(const B& a, const B& b) {
   S sum = 0;
   for (int k = 0; k < 3; ++k) {
-    if (a.lo[k] > b.hi[k]) {
-      const S d = S(a.lo[k]) - S(b.hi[k]);
-      sum += d * d;
-    } else if (b.lo[k] > a.hi[k]) {
-      const S d = S(b.lo[k]) - S(a.hi[k]);
-      sum += d * d;
-    }
+    const S d = std::max(S(a.lo[k]) - S(b.hi[k]), S(b.lo[k]) - S(a.hi[k]));
+    if (d > 0) sum += d * d;
   }
-  return std::sqrt(sum);
+  return sum;
 }
 
-inline float extent(const Node& n) {
-  return (n.hi[0] - n.lo[0]) + (n.hi[1] - n.lo[1]) + (n.hi[2] - n.lo[2]);
+// An object's exact box against a cube's float bounds: the leaf prefilter.
+template <typename S>
+inline bool overlap(const Box<S>& a, const Node& b) {
+  return (a.lo[0] <= S(b.hi[0])) & (S(b.lo[0]) <= a.hi[0]) & (a.lo[1] <= S(b.hi[1])) &
+         (S(b.lo[1]) <= a.hi[1]) & (a.lo[2] <= S(b.hi[2])) & (S(b.lo[2]) <= a.hi[2]);
 }
+
+struct NoKey {};
 
 // Work counters for QueryStats; the empty one compiles away on the ordinary path.
 struct NoCount {
@@ -85,16 +117,22 @@ struct Count {
 
 template <typename S, class Counter>
 struct CollidePolicy {
+  using Key = NoKey;
   static constexpr bool kOrdered = false;
   void* data;
   CollideFn<S> fn;
   Counter count;
-  bool enter(const Node& a, const Node& b, S& key) const {
+  bool enter(const Node& a, const Node& b, Key&) const {
     count.test();
-    key = 0;
     return overlap(a, b);
   }
-  bool keep(S) const { return true; }
+  bool keep(Key) const { return true; }
+  static bool before(Key, Key) { return false; }
+  // Whether an object can meet anything in the cube `n` at all.
+  bool reaches(const Item<S>& x, const Node& n) const {
+    count.test();
+    return overlap(x.box, n);
+  }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
     if (!overlap(x.box, y.box)) return false;
@@ -105,6 +143,7 @@ struct CollidePolicy {
 
 template <typename S, class Counter>
 struct DistancePolicy {
+  using Key = S;  // squared box gap
   static constexpr bool kOrdered = true;
   void* data;
   DistanceFn<S> fn;
@@ -112,24 +151,26 @@ struct DistancePolicy {
   Counter count;
   // Boxes that overlap are always worth a visit: with a signed-distance callback the best may
   // already be <= 0 and a pair may still penetrate deeper.
-  bool keep(S key) const { return key < best || key <= 0; }
-  bool enter(const Node& a, const Node& b, S& key) const {
+  bool keep(Key sq) const { return sq == 0 || (best > 0 && sq < best * best); }
+  bool enter(const Node& a, const Node& b, Key& key) const {
     count.test();
-    key = gap<S>(a, b);
+    key = gap2<S>(a, b);
     return keep(key);
   }
+  static bool before(Key x, Key y) { return x < y; }
+  bool reaches(const Item<S>&, const Node&) const { return true; }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
-    if (!keep(gap<S>(x.box, y.box))) return false;
+    if (!keep(gap2<S>(x.box, y.box))) return false;
     count.call();
     return fn(x.obj, y.obj, data, best);
   }
 };
 
-template <typename S>
+template <class Key>
 struct Entry {
   std::uint32_t a, b;
-  S key;
+  Key key;
 };
 
 template <typename S, class Policy>
@@ -144,17 +185,20 @@ bool leafSelf(const View<S>& v, const Node& n, const Policy& p) {
 template <typename S, class Policy>
 bool leafPair(const View<S>& va, const Node& na, const View<S>& vb, const Node& nb,
               const Policy& p) {
-  for (std::uint32_t i = na.first; i < na.first + na.count; ++i)
+  for (std::uint32_t i = na.first; i < na.first + na.count; ++i) {
+    const Item<S>& x = va.items[i];
+    if (nb.count > 1 && !p.reaches(x, nb)) continue;
     for (std::uint32_t j = nb.first; j < nb.first + nb.count; ++j)
-      if (va.items[i].obj != vb.items[j].obj && p.leaf(va.items[i], vb.items[j])) return true;
+      if (x.obj != vb.items[j].obj && p.leaf(x, vb.items[j])) return true;
+  }
   return false;
 }
 
 // Pushes up to two entries so that the more promising one is popped first.
-template <typename S, class Policy, class Stack>
-void pushPair(Stack& stack, bool take0, const Entry<S>& e0, bool take1, const Entry<S>& e1) {
+template <class Policy, class Stack, class E>
+void pushPair(Stack& stack, bool take0, const E& e0, bool take1, const E& e1) {
   if (take0 && take1) {
-    if (Policy::kOrdered && e1.key < e0.key) {
+    if (Policy::before(e1.key, e0.key)) {
       stack.push(e0);
       stack.push(e1);
     } else {
@@ -168,15 +212,33 @@ void pushPair(Stack& stack, bool take0, const Entry<S>& e0, bool take1, const En
   }
 }
 
+// Pushes the taken entries of four so that the most promising is popped first (for distance,
+// nearest last on the stack; for collide, in the given order).
+template <class Policy, class Stack, class E>
+void pushFour(Stack& stack, const bool take[4], E e[4]) {
+  int order[4] = {0, 1, 2, 3};
+  if (Policy::kOrdered) {
+    // Insertion sort, farthest first.
+    for (int i = 1; i < 4; ++i)
+      for (int j = i; j > 0 && Policy::before(e[order[j - 1]].key, e[order[j]].key); --j)
+        std::swap(order[j - 1], order[j]);
+  } else {
+    std::reverse(order, order + 4);
+  }
+  for (int i = 0; i < 4; ++i)
+    if (take[order[i]]) stack.push(e[order[i]]);
+}
+
 template <typename S, class Policy>
 bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
+  using E = Entry<typename Policy::Key>;
   if (va.root == kNone || vb.root == kNone) return false;
-  SmallStack<Entry<S>, 128> stack;
-  Entry<S> start{va.root, vb.root, S(0)};
+  SmallStack<E, 128> stack;
+  E start{va.root, vb.root, {}};
   if (!self && !p.enter(va.nodes[va.root], vb.nodes[vb.root], start.key)) return false;
   stack.push(start);
   while (!stack.empty()) {
-    const Entry<S> e = stack.pop();
+    const E e = stack.pop();
     if (!p.keep(e.key)) continue;  // the best distance may have dropped since the push
     p.count.visit();
     const Node& na = va.nodes[e.a];
@@ -186,30 +248,37 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
         if (leafSelf(va, na, p)) return true;
         continue;
       }
+      // Within a cube: within each child, then across the two.
       const std::uint32_t c = na.first;
-      Entry<S> cross{c, c + 1, S(0)};
+      E cross{c, c + 1, {}};
       if (p.enter(va.nodes[c], va.nodes[c + 1], cross.key)) stack.push(cross);
-      stack.push(Entry<S>{c + 1, c + 1, S(0)});
-      stack.push(Entry<S>{c, c, S(0)});
+      stack.push(E{c + 1, c + 1, {}});
+      stack.push(E{c, c, {}});
       continue;
     }
     if (na.isLeaf() && nb.isLeaf()) {
       if (leafPair(va, na, vb, nb, p)) return true;
       continue;
     }
-    const bool split_a = nb.isLeaf() || (!na.isLeaf() && extent(na) >= extent(nb));
-    if (split_a) {
+    if (!na.isLeaf() && !nb.isLeaf()) {
+      // Open both cubes: one visit settles four child pairs.
+      const std::uint32_t ca = na.first, cb = nb.first;
+      E e[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
+      bool take[4];
+      for (int i = 0; i < 4; ++i) take[i] = p.enter(va.nodes[e[i].a], vb.nodes[e[i].b], e[i].key);
+      pushFour<Policy>(stack, take, e);
+    } else if (nb.isLeaf()) {
       const std::uint32_t c = na.first;
-      Entry<S> e0{c, e.b, S(0)}, e1{c + 1, e.b, S(0)};
+      E e0{c, e.b, {}}, e1{c + 1, e.b, {}};
       const bool t0 = p.enter(va.nodes[c], nb, e0.key);
       const bool t1 = p.enter(va.nodes[c + 1], nb, e1.key);
-      pushPair<S, Policy>(stack, t0, e0, t1, e1);
+      pushPair<Policy>(stack, t0, e0, t1, e1);
     } else {
       const std::uint32_t c = nb.first;
-      Entry<S> e0{e.a, c, S(0)}, e1{e.a, c + 1, S(0)};
+      E e0{e.a, c, {}}, e1{e.a, c + 1, {}};
       const bool t0 = p.enter(na, vb.nodes[c], e0.key);
       const bool t1 = p.enter(na, vb.nodes[c + 1], e1.key);
-      pushPair<S, Policy>(stack, t0, e0, t1, e1);
+      pushPair<Policy>(stack, t0, e0, t1, e1);
     }
   }
   return false;

@@ -30,8 +30,8 @@ enum class ViewDirection {
 
 /// How to draw an image of the hierarchy.
 struct ImageOptions {
-  int width = 1024;   ///< pixels (PNG) or px user units (SVG); at least 16
-  int height = 768;   ///< at least 16
+  int width = 1024;  ///< pixels (PNG) or px user units (SVG); at least 16
+  int height = 768;  ///< at least 16
   ViewDirection view = ViewDirection::isometric;
   /// Draw every object's AABB faintly under the cubes.
   bool draw_objects = true;

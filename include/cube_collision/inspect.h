@@ -61,12 +61,12 @@ struct HierarchyStats {
   /// refits stretch the cubes. UpdatePolicy::automatic rebuilds once it exceeds
   /// Config::rebuild_threshold. Infinity if the build had zero area and the cubes now have some.
   double quality_ratio = 1;
-  double rebuild_threshold = 0;      ///< Config::rebuild_threshold, for comparison
-  std::size_t dead_cubes = 0;        ///< unreachable cubes awaiting compaction
-  std::size_t dead_object_slots = 0; ///< removed objects' slots awaiting compaction
-  std::size_t builds = 0;            ///< full builds so far
-  std::size_t bytes = 0;             ///< heap bytes owned by the hierarchy
-  double bytes_per_object = 0;       ///< bytes / all registered objects (0 if none)
+  double rebuild_threshold = 0;       ///< Config::rebuild_threshold, for comparison
+  std::size_t dead_cubes = 0;         ///< unreachable cubes awaiting compaction
+  std::size_t dead_object_slots = 0;  ///< removed objects' slots awaiting compaction
+  std::size_t builds = 0;             ///< full builds so far
+  std::size_t bytes = 0;              ///< heap bytes owned by the hierarchy
+  double bytes_per_object = 0;        ///< bytes / all registered objects (0 if none)
 };
 
 /// Writes the statistics as a few human-readable lines.
@@ -129,7 +129,9 @@ class HierarchyView {
   /// Objects in the cubes, depth-first leaf order (see CubeData::first_object).
   const std::vector<Object*>& objects() const { return objects_; }
   /// Exact AABB of objects()[k] as the hierarchy cached it.
-  const BoundingBox& objectBox(int k) const { return object_boxes_.at(static_cast<std::size_t>(k)); }
+  const BoundingBox& objectBox(int k) const {
+    return object_boxes_.at(static_cast<std::size_t>(k));
+  }
   /// Objects kept outside the cubes, in the hierarchy's order.
   const std::vector<Object*>& unboundedObjects() const { return unbounded_; }
 

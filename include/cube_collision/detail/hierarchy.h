@@ -37,13 +37,14 @@ BoxKind classify(const Box<S>& b, double limit);
 
 /// One cube of the hierarchy. Its bounds are floats rounded outward, so that a cube always
 /// contains its objects' exact boxes and two cubes fit in a cache line; the exact boxes are
-/// tested at the leaves, so results do not depend on the rounding.
+/// tested at the leaves, so results do not depend on the rounding. Each corner is followed by a
+/// 32-bit field so that a corner loads as one 4-wide SIMD register.
 struct Node {
   float lo[3];
-  float hi[3];
   /// Leaf: position of its first object in the object array. Internal: index of its first child
   /// cube; the second child is first + 1. Dead (unreachable, awaiting compaction): kNone.
   std::uint32_t first;
+  float hi[3];
   /// Leaf: number of objects (>= 1), the seed's children range [first, first + count).
   /// Internal and dead cubes: 0.
   std::uint32_t count;
