@@ -176,10 +176,7 @@ void CubeCollisionManager<S>::setup() {
 
 template <typename S>
 void CubeCollisionManager<S>::update() {
-  const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) {
-    b = boxOf(*o);
-    return isValid(b);
-  });
+  const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); });
   tree_.maybeRebuildAfterUpdate();
   if (bad != nullptr)
     fail("update", indexName(tree_, bad) +

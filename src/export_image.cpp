@@ -66,15 +66,17 @@ const char* viewName(ViewDirection v) {
 }
 
 // Distinct colours that stay readable on white when faded (Tableau 10, grey left out).
+// Saturated colours that stay readable on white when faded; the deeper levels, drawn faintest,
+// get the darker ones.
 constexpr std::array<std::array<double, 3>, 9> kPalette{{{0.122, 0.467, 0.706},
                                                          {0.839, 0.153, 0.157},
                                                          {0.173, 0.627, 0.173},
-                                                         {1.000, 0.498, 0.055},
-                                                         {0.580, 0.404, 0.741},
-                                                         {0.090, 0.745, 0.812},
-                                                         {0.549, 0.337, 0.294},
-                                                         {0.890, 0.467, 0.761},
-                                                         {0.737, 0.741, 0.133}}};
+                                                         {0.929, 0.420, 0.000},
+                                                         {0.459, 0.243, 0.667},
+                                                         {0.000, 0.502, 0.502},
+                                                         {0.545, 0.271, 0.075},
+                                                         {0.749, 0.000, 0.549},
+                                                         {0.200, 0.200, 0.200}}};
 
 struct Style {
   std::array<double, 3> rgb;
@@ -193,7 +195,9 @@ void draw(const HierarchyView<S>& view, const ImageOptions& o, cairo_t* cr) {
       corners(d.min, d.max, cam, fit, c);
       for (int k = 0; k < 8; ++k)
         for (int bit = 1; bit < 8; bit <<= 1)
-          if (!(k & bit)) {
+          // Edges seen end-on (vertical ones in the top view) would leave dots at the corners.
+          if (!(k & bit) &&
+              std::fabs(c[k].x - c[k | bit].x) + std::fabs(c[k].y - c[k | bit].y) > 1e-3) {
             cairo_move_to(cr, c[k].x, c[k].y);
             cairo_line_to(cr, c[k | bit].x, c[k | bit].y);
           }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 namespace cube {
@@ -88,43 +89,43 @@ bool isDead(const Node& n) {
 
 template <typename S>
 BoxKind classify(const Box<S>& b, double limit) {
-  bool unbounded = false;
-  for (int k = 0; k < 3; ++k) {
+  // update() classifies every object on every call: one branch-free test for the common case
+  // (a NaN fails every comparison, so it lands in the slow path too).
+  const double l = limit;
+  const bool inside = (std::fabs(double(b.lo[0])) <= l) & (std::fabs(double(b.lo[1])) <= l) &
+                      (std::fabs(double(b.lo[2])) <= l) & (std::fabs(double(b.hi[0])) <= l) &
+                      (std::fabs(double(b.hi[1])) <= l) & (std::fabs(double(b.hi[2])) <= l);
+  if (inside) return BoxKind::finite;
+  for (int k = 0; k < 3; ++k)
     if (std::isnan(b.lo[k]) || std::isnan(b.hi[k])) return BoxKind::invalid;
-    if (!(std::fabs(double(b.lo[k])) <= limit) || !(std::fabs(double(b.hi[k])) <= limit))
-      unbounded = true;
-  }
-  return unbounded ? BoxKind::unbounded : BoxKind::finite;
+  return BoxKind::unbounded;
 }
 
 namespace {
 
-// The next float towards -infinity (f finite). Cheaper than std::nextafter, which refits call
-// for every cube.
-float nextDown(float f) {
-  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
-  std::uint32_t bits;
-  std::memcpy(&bits, &f, sizeof bits);
-  bits += f > 0.0f ? std::uint32_t(-1) : 1u;
-  std::memcpy(&f, &bits, sizeof bits);
-  return f;
+// A float no greater than x (x not NaN), within a few float ulps of it. Branch-free instead of
+// exact: a cube may be a hair larger than needed, never smaller. Values beyond float's range
+// become infinite (the clamp keeps the conversion defined).
+inline float floatBelow(double x) {
+  constexpr double kMax = std::numeric_limits<float>::max();
+  const float f = static_cast<float>(std::min(std::max(x, -kMax), kMax));
+  return f - (std::fabs(f) * 0x1p-22f + std::numeric_limits<float>::min());
 }
 
-float nextUp(float f) { return -nextDown(-f); }
+inline float floatAbove(double x) { return -floatBelow(-x); }
 
 }  // namespace
 
 template <typename S>
 void roundOut(const Box<S>& b, float lo[3], float hi[3]) {
-  constexpr S kMax = S(std::numeric_limits<float>::max());
   for (int k = 0; k < 3; ++k) {
-    // Beyond float's range the cast would be undefined: such bounds become infinite.
-    float l = b.lo[k] < -kMax ? -kInf : b.lo[k] > kMax ? kMax : static_cast<float>(b.lo[k]);
-    if (S(l) > b.lo[k]) l = nextDown(l);
-    float h = b.hi[k] > kMax ? kInf : b.hi[k] < -kMax ? -kMax : static_cast<float>(b.hi[k]);
-    if (S(h) < b.hi[k]) h = nextUp(h);
-    lo[k] = l;
-    hi[k] = h;
+    if constexpr (std::is_same_v<S, float>) {
+      lo[k] = b.lo[k];
+      hi[k] = b.hi[k];
+    } else {
+      lo[k] = floatBelow(double(b.lo[k]));
+      hi[k] = floatAbove(double(b.hi[k]));
+    }
   }
 }
 

@@ -95,7 +95,7 @@ fcl::DistanceResult<S> minimumDistance(const fcl::BroadPhaseCollisionManager<S>&
   return data.result;
 }
 
-#define CUBE_INSTANTIATE_QUERIES(S)                                                               \
+#define CUBE_INSTANTIATE_QUERIES(S)                                                                \
   template std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManager<S>&); \
   template std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManager<S>&,  \
                                                        fcl::CollisionObject<S>*);                  \

@@ -78,5 +78,4 @@ fcl::DistanceResult<S> minimumDistance(
     const fcl::BroadPhaseCollisionManager<S>& manager, fcl::BroadPhaseCollisionManager<S>& other,
     const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>());
 
-
 }  // namespace cube

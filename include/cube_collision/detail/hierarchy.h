@@ -108,8 +108,8 @@ class Hierarchy {
   bool remove(const Object* obj);
   /// Sets a registered object's box and refits the cubes above it; false if not registered.
   bool move(const Object* obj, const Box<S>& box);
-  /// Reads every object's box through `read` (which returns false for an invalid box, leaving
-  /// the old one) and refits all cubes in one bottom-up pass. Returns the earliest registered
+  /// Reads every object's box through `read(obj, box)` and refits all cubes in one bottom-up
+  /// pass; an object whose new box is invalid keeps its old one. Returns the earliest registered
   /// object whose box was invalid, or nullptr.
   template <class Read>
   const Object* refitAll(Read&& read);
@@ -204,25 +204,24 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
   const Object* bad_obj = nullptr;
   std::vector<std::pair<Object*, Box<S>>> movers;  // change of kind: rare, so allocation is fine
   Box<S> b;
-  for (Item<S>& it : items_) {
-    if (it.obj == nullptr) continue;
-    if (!read(it.obj, b)) {
-      if (it.seq < bad) bad = it.seq, bad_obj = it.obj;
-    } else if (classify(b, config_.unbounded_limit) == BoxKind::finite) {
-      it.box = b;
-    } else {
-      movers.emplace_back(it.obj, b);
+  // One pass over each list; the kind an item must have to stay where it is.
+  auto pass = [&](std::vector<Item<S>>& list, BoxKind home) {
+    for (Item<S>& it : list) {
+      if (it.obj == nullptr) continue;
+      read(it.obj, b);
+      const BoxKind kind = classify(b, config_.unbounded_limit);
+      if (kind == home) {
+        it.box = b;
+      } else if (kind != BoxKind::invalid) {
+        movers.emplace_back(it.obj, b);
+      } else if (it.seq < bad) {
+        bad = it.seq;
+        bad_obj = it.obj;
+      }
     }
-  }
-  for (Item<S>& it : unbounded_) {
-    if (!read(it.obj, b)) {
-      if (it.seq < bad) bad = it.seq, bad_obj = it.obj;
-    } else if (classify(b, config_.unbounded_limit) == BoxKind::unbounded) {
-      it.box = b;
-    } else {
-      movers.emplace_back(it.obj, b);
-    }
-  }
+  };
+  pass(items_, BoxKind::finite);
+  pass(unbounded_, BoxKind::unbounded);
   refitAllCubes();
   for (const auto& m : movers) move(m.first, m.second);
   return bad_obj;
