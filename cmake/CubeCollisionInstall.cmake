@@ -1,0 +1,64 @@
+# Install rules: headers, the library, the CMake package CubeCollision (target
+# CubeCollision::cube_collision) and the pkg-config file cube_collision.pc.
+# Included at the end of the top-level CMakeLists.txt, once every link of cube_collision is known.
+
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+set(CUBE_COLLISION_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/CubeCollision)
+
+install(TARGETS cube_collision EXPORT CubeCollisionTargets
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+  INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/cube_collision
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+  FILES_MATCHING PATTERN "*.h")
+install(EXPORT CubeCollisionTargets
+  NAMESPACE CubeCollision::
+  DESTINATION ${CUBE_COLLISION_CMAKE_DIR})
+
+# A static library carries its private links into the consumer's link: if the library links
+# Cairo (the optional SVG/PNG export), consumers of a static install must find Cairo too. A
+# shared library hides it.
+get_target_property(_cube_type cube_collision TYPE)
+get_target_property(_cube_links cube_collision LINK_LIBRARIES)
+set(CUBE_COLLISION_NEEDS_CAIRO OFF)
+if(_cube_type STREQUAL "STATIC_LIBRARY" AND "PkgConfig::CAIRO" IN_LIST _cube_links)
+  set(CUBE_COLLISION_NEEDS_CAIRO ON)
+endif()
+
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/CubeCollisionConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/CubeCollisionConfig.cmake
+  INSTALL_DESTINATION ${CUBE_COLLISION_CMAKE_DIR})
+# 0.x releases follow the same rule: any 0.y satisfies find_package(CubeCollision 0.x).
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/CubeCollisionConfigVersion.cmake
+  VERSION ${PROJECT_VERSION}
+  COMPATIBILITY SameMajorVersion)
+install(FILES
+  ${PROJECT_BINARY_DIR}/CubeCollisionConfig.cmake
+  ${PROJECT_BINARY_DIR}/CubeCollisionConfigVersion.cmake
+  DESTINATION ${CUBE_COLLISION_CMAKE_DIR})
+
+# pkg-config: the prefix is found relative to the .pc file, so `cmake --install --prefix P`
+# (which overrides the configured prefix) gives a correct file.
+set(_cube_pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+if(IS_ABSOLUTE "${_cube_pc_dir}")
+  set(CUBE_COLLISION_PC_PREFIX "${CMAKE_INSTALL_PREFIX}")
+else()
+  file(RELATIVE_PATH _cube_up "/root/${_cube_pc_dir}" "/root")
+  set(CUBE_COLLISION_PC_PREFIX "\${pcfiledir}/${_cube_up}")
+endif()
+set(CUBE_COLLISION_PC_REQUIRES_PRIVATE "")
+set(CUBE_COLLISION_PC_CFLAGS "")
+if(CUBE_COLLISION_NEEDS_CAIRO)
+  set(CUBE_COLLISION_PC_REQUIRES_PRIVATE "cairo")
+endif()
+if(CUBE_COLLISION_HAS_CAIRO)
+  # Public compile definition of the target: the headers declare the image export under it.
+  set(CUBE_COLLISION_PC_CFLAGS " -DCUBE_COLLISION_HAS_CAIRO")
+endif()
+configure_file(${PROJECT_SOURCE_DIR}/cmake/cube_collision.pc.in
+  ${PROJECT_BINARY_DIR}/cube_collision.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/cube_collision.pc DESTINATION ${_cube_pc_dir})
