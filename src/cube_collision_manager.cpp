@@ -9,7 +9,6 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <unordered_set>
 
 #include "cube_collision/detail/traversal.h"
 
@@ -138,18 +137,14 @@ void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_
       fail("registerObjects",
            "entry #" + std::to_string(i) + " has a NaN AABB coordinate; nothing registered");
   }
-  std::vector<Object*> fresh;
-  std::vector<Box<S>> fresh_boxes;
-  std::unordered_set<const Object*> seen;
-  for (std::size_t i = 0; i < other_objs.size(); ++i) {
-    if (tree_.contains(other_objs[i]) || !seen.insert(other_objs[i]).second) continue;
-    fresh.push_back(other_objs[i]);
-    fresh_boxes.push_back(boxes[i]);
-  }
-  if (fresh.size() >= tree_.size()) {
-    tree_.insertAndRebuild(fresh, fresh_boxes);
+  std::size_t fresh = 0;
+  for (const Object* o : other_objs) fresh += tree_.contains(o) ? 0 : 1;
+  // A batch as large as what is registered: one build beats many insertions.
+  if (fresh >= tree_.size()) {
+    tree_.insertAndRebuild(other_objs, boxes);
   } else {
-    for (std::size_t i = 0; i < fresh.size(); ++i) tree_.insert(fresh[i], fresh_boxes[i]);
+    for (std::size_t i = 0; i < other_objs.size(); ++i)
+      if (!tree_.contains(other_objs[i])) tree_.insert(other_objs[i], boxes[i]);
   }
 }
 

@@ -86,7 +86,7 @@ struct Style {
 Style levelStyle(const ImageOptions& o, int level) {
   const auto& c = kPalette[static_cast<std::size_t>(level) % kPalette.size()];
   return {c, o.root_alpha * std::pow(o.alpha_decay, level),
-          o.line_width * std::max(0.5, std::pow(0.88, level))};
+          o.line_width * std::max(0.4, std::pow(0.85, level))};
 }
 
 // Maps scene coordinates to image pixels (y down), fitted into a rectangle.

@@ -170,7 +170,9 @@ std::size_t Hierarchy<S>::slotOf(const Object* obj) const {
 
 template <typename S>
 void Hierarchy<S>::indexInsert(const Object* obj, std::uint32_t loc) {
-  if ((index_used_ + 1) * 2 > index_.size()) {
+  // Load factor up to 3/4: linear probing stays short and the table costs about 6 bytes per
+  // object.
+  if ((index_used_ + 1) * 4 > index_.size() * 3) {
     std::vector<std::uint32_t> old;
     old.swap(index_);
     index_.assign(std::max<std::size_t>(16, old.size() * 2), 0);
@@ -215,7 +217,7 @@ void Hierarchy<S>::indexErase(const Object* obj) {
 template <typename S>
 void Hierarchy<S>::indexRebuild() {
   std::size_t cap = 16;
-  while (cap < 2 * (size() + 1)) cap *= 2;
+  while (cap * 3 < 4 * (size() + 1)) cap *= 2;
   index_.assign(cap, 0);
   index_used_ = 0;
   for (std::size_t p = 0; p < items_.size(); ++p)
@@ -249,79 +251,87 @@ bool Hierarchy<S>::canSplit(std::uint32_t depth) const {
 }
 
 template <typename S>
-void Hierarchy<S>::splitRange(std::uint32_t cube, std::uint32_t depth,
-                              std::vector<std::uint64_t>* stack) {
-  const std::uint32_t b = nodes_[cube].first;
-  const std::uint32_t e = b + nodes_[cube].count;
-  Box<S> box = emptyBox<S>();
-  for (std::uint32_t p = b; p < e; ++p) grow(box, items_[p].box);
-  roundOut(box, nodes_[cube].lo, nodes_[cube].hi);
-  const std::uint32_t count = e - b;
-  if (count > static_cast<std::uint32_t>(config_.leaf_size) && canSplit(depth)) {
-    const int axis = longestAxis(box);
-    const std::uint32_t m = b + count / 2;
-    // Median by AABB centre, ties by registration order: the seed's stable sort, in O(n).
-    std::nth_element(items_.begin() + b, items_.begin() + m, items_.begin() + e,
-                     [axis](const Item<S>& x, const Item<S>& y) {
-                       const S cx = x.box.lo[axis] + x.box.hi[axis];
-                       const S cy = y.box.lo[axis] + y.box.hi[axis];
-                       return cx < cy || (cx == cy && x.seq < y.seq);
-                     });
-    const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
-    Node left{}, right{};
-    left.first = b;
-    left.count = m - b;
-    right.first = m;
-    right.count = e - m;
-    nodes_.push_back(left);
-    nodes_.push_back(right);
-    parent_.push_back(cube);
-    parent_.push_back(cube);
-    nodes_[cube].first = c;
-    nodes_[cube].count = 0;
-    stack->push_back((std::uint64_t(depth + 1) << 32) | (c + 1));
-    stack->push_back((std::uint64_t(depth + 1) << 32) | c);
-  } else {
-    // Within a leaf, registration order: the callback order does not depend on history.
-    std::sort(items_.begin() + b, items_.begin() + e,
-              [](const Item<S>& x, const Item<S>& y) { return x.seq < y.seq; });
-    for (std::uint32_t p = b; p < e; ++p) items_[p].leaf = cube;
-  }
-}
-
-template <typename S>
 void Hierarchy<S>::rebuild() {
+  // Gather the live objects; the build permutes 32-bit indices, not 64-byte items, and lays the
+  // items out in leaf order once at the end.
   std::vector<Item<S>> fresh;
   fresh.reserve(live_);
   for (const Item<S>& it : items_)
     if (it.obj) fresh.push_back(it);
-  items_.swap(fresh);
-  dead_items_ = 0;
+  const std::uint32_t n = static_cast<std::uint32_t>(fresh.size());
   nodes_.clear();
   parent_.clear();
   dead_nodes_ = 0;
   root_ = kNone;
-  if (live_ > 0) {
-    nodes_.reserve(4 * live_ / std::max(1, config_.leaf_size) + 2);
+  if (n > 0) {
+    std::vector<std::uint32_t> perm(n);
+    std::vector<S> centre[3];
+    for (auto& c : centre) c.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      perm[i] = i;
+      for (int k = 0; k < 3; ++k) centre[k][i] = fresh[i].box.lo[k] + fresh[i].box.hi[k];
+    }
+    nodes_.reserve(4 * std::size_t(n) / std::max(1, config_.leaf_size) + 2);
     parent_.reserve(nodes_.capacity());
     Node root{};
     root.first = 0;
-    root.count = static_cast<std::uint32_t>(live_);
+    root.count = n;
     nodes_.push_back(root);
     parent_.push_back(kNone);
     root_ = 0;
-    std::vector<std::uint64_t> stack{0};
+    std::vector<std::uint64_t> stack{0};  // (depth << 32) | cube
     while (!stack.empty()) {
-      const std::uint64_t top = stack.back();
+      const std::uint32_t cube = static_cast<std::uint32_t>(stack.back());
+      const std::uint32_t depth = static_cast<std::uint32_t>(stack.back() >> 32);
       stack.pop_back();
-      splitRange(static_cast<std::uint32_t>(top), static_cast<std::uint32_t>(top >> 32), &stack);
+      const std::uint32_t b = nodes_[cube].first;
+      const std::uint32_t e = b + nodes_[cube].count;
+      if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
+        // Within a leaf, registration order: the callback order does not depend on history.
+        std::sort(perm.begin() + b, perm.begin() + e,
+                  [&](std::uint32_t x, std::uint32_t y) { return fresh[x].seq < fresh[y].seq; });
+        continue;
+      }
+      Box<S> box = emptyBox<S>();
+      for (std::uint32_t p = b; p < e; ++p) grow(box, fresh[perm[p]].box);
+      const std::vector<S>& c = centre[longestAxis(box)];
+      const std::uint32_t m = b + (e - b) / 2;
+      // Median by AABB centre, ties by registration order: the seed's stable sort, in O(n).
+      std::nth_element(perm.begin() + b, perm.begin() + m, perm.begin() + e,
+                       [&](std::uint32_t x, std::uint32_t y) {
+                         return c[x] < c[y] || (c[x] == c[y] && fresh[x].seq < fresh[y].seq);
+                       });
+      const std::uint32_t child = static_cast<std::uint32_t>(nodes_.size());
+      Node left{}, right{};
+      left.first = b;
+      left.count = m - b;
+      right.first = m;
+      right.count = e - m;
+      nodes_.push_back(left);
+      nodes_.push_back(right);
+      parent_.push_back(cube);
+      parent_.push_back(cube);
+      nodes_[cube].first = child;
+      nodes_[cube].count = 0;
+      stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
+      stack.push_back((std::uint64_t(depth + 1) << 32) | child);
     }
-    // The bounds were set on the way down; internal ones are recomputed from the children so
-    // that a refit of an unmoved scene reproduces them exactly.
+    items_.resize(n);
+    for (std::uint32_t p = 0; p < n; ++p) items_[p] = fresh[perm[p]];
+    for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
+      const Node& node = nodes_[i];
+      if (node.isLeaf())
+        for (std::uint32_t p = node.first; p < node.first + node.count; ++p) items_[p].leaf = i;
+    }
     refitAllCubes();
   } else {
+    items_.clear();
     area_ = 0;
   }
+  items_.shrink_to_fit();
+  nodes_.shrink_to_fit();
+  parent_.shrink_to_fit();
+  dead_items_ = 0;
   indexRebuild();
   built_area_ = area_;
   changes_ = 0;
@@ -373,11 +383,14 @@ void Hierarchy<S>::insertAndRebuild(const std::vector<Object*>& objs,
                                     const std::vector<Box<S>>& boxes) {
   items_.reserve(items_.size() + objs.size());
   for (std::size_t i = 0; i < objs.size(); ++i) {
+    if (find(objs[i]) != kNone) continue;  // registered already, or earlier in this batch
     Item<S> it{boxes[i], objs[i], kNone, newSeq()};
     if (classify(boxes[i], config_.unbounded_limit) == BoxKind::unbounded) {
       unbounded_.push_back(it);
+      indexInsert(it.obj, static_cast<std::uint32_t>(unbounded_.size() - 1) | kUnboundedBit);
     } else {
       items_.push_back(it);
+      indexInsert(it.obj, static_cast<std::uint32_t>(items_.size() - 1));
       ++live_;
     }
   }

@@ -42,8 +42,8 @@ struct ImageOptions {
   /// Opacity of the root's lines; each level below multiplies it by `alpha_decay`.
   double root_alpha = 1.0;
   double alpha_decay = 0.8;
-  /// Width in pixels of the root's lines; deeper lines are thinner, down to half of it.
-  double line_width = 1.6;
+  /// Width in pixels of the root's lines; deeper lines are thinner, down to 0.4 of it.
+  double line_width = 2.0;
   /// Free space kept around the scene, in pixels.
   int margin = 24;
   /// White background; false leaves it transparent.

@@ -102,7 +102,7 @@ class Hierarchy {
 
   /// Adds one object (not yet registered, box already checked not invalid) incrementally.
   void insert(Object* obj, const Box<S>& box);
-  /// Adds many objects (not yet registered, distinct, boxes checked) and rebuilds.
+  /// Adds many objects (boxes checked; registered or repeated ones are skipped) and rebuilds.
   void insertAndRebuild(const std::vector<Object*>& objs, const std::vector<Box<S>>& boxes);
   /// Removes an object; returns false if it was not registered.
   bool remove(const Object* obj);
@@ -172,7 +172,6 @@ class Hierarchy {
   /// Recomputes a cube's bounds from its objects or children; returns its area change.
   double refitCube(std::uint32_t cube);
   void refitUp(std::uint32_t cube);
-  void splitRange(std::uint32_t cube, std::uint32_t depth, std::vector<std::uint64_t>* stack);
   void refitAllCubes();
   void maybeCompact();
   void trimTail();
