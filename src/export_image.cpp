@@ -128,7 +128,7 @@ void checkOptions(const ImageOptions& o) {
   };
   if (o.width < 16 || o.height < 16 || o.width > 32768 || o.height > 32768)
     bad("width and height must be in [16, 32768]");
-  if (o.margin < 0 || 4 * o.margin >= std::min(o.width, o.height)) bad("margin out of range");
+  if (o.margin < 0) bad("margin must not be negative");
   if (!(o.root_alpha > 0 && o.root_alpha <= 1)) bad("root_alpha must be in (0, 1]");
   if (!(o.alpha_decay > 0 && o.alpha_decay <= 1)) bad("alpha_decay must be in (0, 1]");
   if (!(o.line_width > 0 && o.line_width < 100)) bad("line_width must be in (0, 100)");
@@ -139,7 +139,9 @@ void draw(const HierarchyView<S>& view, const ImageOptions& o, cairo_t* cr) {
   const Camera cam = cameraFor(o.view);
   const int levels =
       o.max_level < 0 ? view.levelCount() : std::min(view.levelCount(), o.max_level + 1);
-  const double legend_h = o.legend ? 30.0 : 0.0;
+  // Small images keep most of their area for the scene.
+  const double margin = std::min(double(o.margin), std::min(o.width, o.height) / 8.0);
+  const double legend_h = o.legend ? std::min(30.0, o.height / 4.0) : 0.0;
 
   if (o.background) {
     cairo_set_source_rgb(cr, 1, 1, 1);
@@ -158,11 +160,11 @@ void draw(const HierarchyView<S>& view, const ImageOptions& o, cairo_t* cr) {
       x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y),
       y1 = std::max(y1, p.y);
     }
-    const double aw = o.width - 2.0 * o.margin, ah = o.height - 2.0 * o.margin - legend_h;
+    const double aw = o.width - 2 * margin, ah = o.height - 2 * margin - legend_h;
     const double span = std::max({x1 - x0, y1 - y0, 1e-30});
     fit.scale = std::min(aw / std::max(x1 - x0, span * 1e-6), ah / std::max(y1 - y0, span * 1e-6));
-    fit.ox = o.margin + 0.5 * aw - fit.scale * 0.5 * (x0 + x1);
-    fit.oy = o.margin + 0.5 * ah + fit.scale * 0.5 * (y0 + y1);
+    fit.ox = margin + 0.5 * aw - fit.scale * 0.5 * (x0 + x1);
+    fit.oy = margin + 0.5 * ah + fit.scale * 0.5 * (y0 + y1);
   }
 
   cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
@@ -212,8 +214,8 @@ void draw(const HierarchyView<S>& view, const ImageOptions& o, cairo_t* cr) {
   // One line at the bottom: a swatch per level, then the counts.
   cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, 13);
-  double x = o.margin;
-  const double y = o.height - o.margin * 0.5 - 8;
+  double x = margin;
+  const double y = o.height - margin * 0.5 - 8;
   auto text = [&](const std::string& t, double r, double g, double b) {
     cairo_set_source_rgb(cr, r, g, b);
     cairo_move_to(cr, x, y);

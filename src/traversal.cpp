@@ -26,13 +26,13 @@ class SmallStack {
   SmallStack& operator=(const SmallStack&) = delete;
   bool empty() const { return n_ == 0; }
   void push(const T& t) {
-    if (n_ == cap_) grow();
+    if (__builtin_expect(n_ == cap_, 0)) grow();
     data_[n_++] = t;
   }
   T pop() { return data_[--n_]; }
 
  private:
-  void grow() {
+  [[gnu::noinline]] void grow() {
     std::vector<T> bigger(cap_ * 2);
     std::copy(data_, data_ + n_, bigger.begin());
     heap_.swap(bigger);
@@ -229,10 +229,45 @@ void pushFour(Stack& stack, const bool take[4], E e[4]) {
     if (take[order[i]]) stack.push(e[order[i]]);
 }
 
+template <class Key>
+struct OneEntry {
+  std::uint32_t node;
+  Key key;
+};
+
+// One object against a tree: the common query, with a lighter stack than the pair descent.
+// Calls p.leaf(tree object, query object).
+template <typename S, class Policy>
+bool descendOne(const View<S>& tree, const Node& qn, const Item<S>& q, const Policy& p) {
+  using E = OneEntry<typename Policy::Key>;
+  E start{tree.root, {}};
+  if (!p.enter(tree.nodes[tree.root], qn, start.key)) return false;
+  SmallStack<E, 64> stack;
+  stack.push(start);
+  while (!stack.empty()) {
+    const E e = stack.pop();
+    if (!p.keep(e.key)) continue;
+    p.count.visit();
+    const Node& n = tree.nodes[e.node];
+    if (n.isLeaf()) {
+      for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
+        if (tree.items[i].obj != q.obj && p.leaf(tree.items[i], q)) return true;
+      continue;
+    }
+    E e0{n.first, {}}, e1{n.first + 1, {}};
+    const bool t0 = p.enter(tree.nodes[e0.node], qn, e0.key);
+    const bool t1 = p.enter(tree.nodes[e1.node], qn, e1.key);
+    pushPair<Policy>(stack, t0, e0, t1, e1);
+  }
+  return false;
+}
+
 template <typename S, class Policy>
 bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
   using E = Entry<typename Policy::Key>;
   if (va.root == kNone || vb.root == kNone) return false;
+  const Node& qb = vb.nodes[vb.root];
+  if (!self && qb.count == 1) return descendOne(va, qb, vb.items[qb.first], p);
   SmallStack<E, 128> stack;
   E start{va.root, vb.root, {}};
   if (!self && !p.enter(va.nodes[va.root], vb.nodes[vb.root], start.key)) return false;
