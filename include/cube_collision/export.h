@@ -44,7 +44,7 @@ struct ImageOptions {
   double alpha_decay = 0.8;
   /// Width in pixels of the root's lines; deeper lines are thinner, down to 0.4 of it.
   double line_width = 2.0;
-  /// Free space kept around the scene, in pixels.
+  /// Free space kept around the scene, in pixels (at most an eighth of the smaller side).
   int margin = 24;
   /// White background; false leaves it transparent.
   bool background = true;
@@ -57,7 +57,8 @@ template <typename S>
 void writeSvg(const HierarchyView<S>& view, const std::string& path,
               const ImageOptions& options = ImageOptions());
 
-/// Draws the hierarchy to a PNG file of width x height pixels (RGBA). Throws as writeSvg.
+/// Draws the hierarchy to a PNG file of width x height pixels, 8 bits per channel: RGB, or RGBA
+/// when `background` is false. Throws as writeSvg.
 template <typename S>
 void writePng(const HierarchyView<S>& view, const std::string& path,
               const ImageOptions& options = ImageOptions());

@@ -1,0 +1,41 @@
+# ctest driver for draw_hierarchy: runs it on 200 objects into an empty directory and checks that
+# it wrote the OBJ (and, with Cairo, a PNG and an SVG) there. Usage:
+#   cmake -DEXE=<draw_hierarchy> -DDIR=<scratch dir> -DCAIRO=<ON|OFF> -P draw_hierarchy_test.cmake
+
+file(REMOVE_RECURSE "${DIR}")
+file(MAKE_DIRECTORY "${DIR}")
+execute_process(COMMAND "${EXE}" 200 "${DIR}" RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "draw_hierarchy failed (${rc}):\n${out}\n${err}")
+endif()
+
+set(expected cubes.obj)
+if(CAIRO)
+  list(APPEND expected cubes.png cubes.svg)
+endif()
+foreach(f IN LISTS expected)
+  if(NOT EXISTS "${DIR}/${f}")
+    message(FATAL_ERROR "draw_hierarchy did not write ${DIR}/${f}:\n${out}")
+  endif()
+  file(SIZE "${DIR}/${f}" size)
+  if(size LESS 100)
+    message(FATAL_ERROR "${DIR}/${f} is only ${size} bytes")
+  endif()
+endforeach()
+
+file(STRINGS "${DIR}/cubes.obj" groups REGEX "^g level_")
+list(LENGTH groups levels)
+if(levels LESS 3)
+  message(FATAL_ERROR "cubes.obj has ${levels} level groups for 200 objects")
+endif()
+if(NOT out MATCHES "cubes: [0-9]+ \\([0-9]+ leaves\\)")
+  message(FATAL_ERROR "draw_hierarchy did not print the statistics:\n${out}")
+endif()
+if(CAIRO)
+  file(READ "${DIR}/cubes.png" head LIMIT 8 HEX)
+  if(NOT head STREQUAL "89504e470d0a1a0a")
+    message(FATAL_ERROR "cubes.png does not start with the PNG signature (${head})")
+  endif()
+endif()
+message(STATUS "draw_hierarchy wrote ${expected} with ${levels} levels")
