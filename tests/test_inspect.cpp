@@ -531,4 +531,51 @@ TYPED_TEST(InspectTest, QueryStatsWithUnboundedObject) {
   EXPECT_EQ(r.calls.size(), 4u);
 }
 
+// Tree against tree, counted by hand on the current traversal (src/traversal.cpp: both cubes
+// opened at once when both are internal, and a leaf-against-leaf prefilter of each object
+// against the other leaf's cube when that leaf holds several objects).
+TYPED_TEST(InspectTest, QueryStatsManagerPairs) {
+  using S = TypeParam;
+  Tiny<S> t;  // R{A, R1{B, C}}
+  auto unit = std::make_shared<fcl::Box<S>>(S(0.1), 1, 1);
+  auto d = Tiny<S>::make(unit, S(0.85));  // D = [0.8, 0.9]: overlaps A and B
+  auto e = Tiny<S>::make(unit, S(20.5));  // E = [20.45, 20.55]: overlaps nothing
+  {
+    // leaf_size 1: the other tree is R2{D, E}.
+    cube::Config cfg;
+    cfg.leaf_size = 1;
+    CubeCollisionManager<S> other(cfg);
+    other.registerObjects({d.get(), e.get()});
+    other.setup();
+    ASSERT_EQ(HierarchyView<S>(other).getNumberCells(), 3);
+    Recorder<S> r;
+    cube::QueryStats st;
+    t.m.collide(&other, &r, &Recorder<S>::collide, &st);
+    // Pops (R,R2) (A,D) (R1,D) (B,D) = 4. Tests: R-R2, then A-D A-E R1-D R1-E from opening both,
+    // the leaf pair A-D, B-D C-D, the leaf pair B-D = 9. Calls A-D, B-D.
+    EXPECT_EQ(st.cubes_visited, 4u);
+    EXPECT_EQ(st.box_tests, 9u);
+    EXPECT_EQ(st.callbacks, 2u);
+    EXPECT_EQ(r.calls.size(), 2u);
+  }
+  {
+    // leaf_size 2: the other tree is one leaf L2 holding D and E.
+    cube::Config cfg;
+    cfg.leaf_size = 2;
+    CubeCollisionManager<S> other(cfg);
+    other.registerObjects({d.get(), e.get()});
+    other.setup();
+    ASSERT_EQ(HierarchyView<S>(other).getNumberCells(), 1);
+    Recorder<S> r;
+    cube::QueryStats st;
+    t.m.collide(&other, &r, &Recorder<S>::collide, &st);
+    // Pops (R,L2) (A,L2) (R1,L2) (B,L2) (C,L2) = 5. Tests: R-L2, A-L2, R1-L2, then per object leaf
+    // one prefilter and two object pairs (A, B, C: 3 x 3 = 9), B-L2 and C-L2 = 14. Calls A-D, B-D.
+    EXPECT_EQ(st.cubes_visited, 5u);
+    EXPECT_EQ(st.box_tests, 14u);
+    EXPECT_EQ(st.callbacks, 2u);
+    EXPECT_EQ(r.calls.size(), 2u);
+  }
+}
+
 }  // namespace
