@@ -93,6 +93,22 @@ inline S gap2(const B& a, const B& b) {
   return sum;
 }
 
+// Squared gap between two cubes, never above the exact value of their float bounds (so pruning
+// on it is safe): computed in float, then shrunk by a few ulps to absorb the roundings.
+inline float cubeGap2(const Node& a, const Node& b) {
+#if defined(__SSE2__)
+  const __m128 d1 = _mm_sub_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.hi));
+  const __m128 d2 = _mm_sub_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
+  __m128 d = _mm_max_ps(_mm_max_ps(d1, d2), _mm_setzero_ps());
+  d = _mm_mul_ps(d, d);
+  alignas(16) float v[4];
+  _mm_store_ps(v, d);
+  return (v[0] + v[1] + v[2]) * (1.0f - 0x1p-20f);
+#else
+  return gap2<float>(a, b) * (1.0f - 0x1p-20f);
+#endif
+}
+
 // An object's exact box against a cube's float bounds: the leaf prefilter.
 template <typename S>
 inline bool overlap(const Box<S>& a, const Node& b) {
@@ -154,7 +170,7 @@ struct DistancePolicy {
   bool keep(Key sq) const { return sq == 0 || (best > 0 && sq < best * best); }
   bool enter(const Node& a, const Node& b, Key& key) const {
     count.test();
-    key = gap2<S>(a, b);
+    key = S(cubeGap2(a, b));
     return keep(key);
   }
   static bool before(Key x, Key y) { return x < y; }
