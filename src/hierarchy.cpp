@@ -650,7 +650,27 @@ void Hierarchy<S>::removeFromTree(std::uint32_t pos) {
     parent_[dead] = kNone;
   }
   dead_nodes_ += 2;
+  // With a depth cap, the sibling's subtree moved one level up: leaves that were full because
+  // they sat at the cap may now be split further.
+  if (config_.max_depth > 0) splitCrowded(up);
   if (parent_[up] != kNone) refitUp(parent_[up]);
+}
+
+template <typename S>
+void Hierarchy<S>::splitCrowded(std::uint32_t top) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{top, depthOf(top)}};
+  while (!stack.empty()) {
+    const auto [cube, depth] = stack.back();
+    stack.pop_back();
+    const Node n = nodes_[cube];
+    if (n.isLeaf()) {
+      if (n.count <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) continue;
+      splitLeaf(cube);
+      area_ += refitCube(cube);
+    }
+    stack.emplace_back(nodes_[cube].first, depth + 1);
+    stack.emplace_back(nodes_[cube].first + 1, depth + 1);
+  }
 }
 
 template <typename S>

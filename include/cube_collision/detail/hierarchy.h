@@ -164,6 +164,8 @@ class Hierarchy {
   void afterChange();
   void growLeaf(std::uint32_t leaf, const Item<S>& item);
   void splitLeaf(std::uint32_t leaf);
+  /// Splits, below `top`, every leaf holding more than leaf_size objects above the depth cap.
+  void splitCrowded(std::uint32_t top);
   void removeFromTree(std::uint32_t pos);
   void removeUnbounded(std::uint32_t pos);
   std::uint32_t chooseLeaf(const Box<S>& box) const;
