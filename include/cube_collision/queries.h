@@ -26,7 +26,9 @@ using ObjectPair = std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>
 template <typename S>
 std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManager<S>& manager);
 
-/// Every candidate pair (managed object, obj) of manager.collide(obj).
+/// Every candidate pair of manager.collide(obj): (managed object, obj) with our manager and FCL's
+/// tree managers. Note that fcl::NaiveCollisionManager reports (obj, managed object) for every
+/// managed object, overlapping or not.
 template <typename S>
 std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManager<S>& manager,
                                             fcl::CollisionObject<S>* obj);
