@@ -1,0 +1,344 @@
+// Unbounded and huge objects (issue 7): planes and halfspaces (AABBs of +-max), rotated or not,
+// mixed with boxes, spheres and an OcTree spanning the scene. Every query kind must report what
+// fcl::NaiveCollisionManager reports, and objects crossing between the cubes and the unbounded
+// list must keep working.
+
+#include <fcl/broadphase/broadphase_bruteforce.h>
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/geometry/octree/octree.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cube_collision/cube_collision_manager.h"
+#include "support/oracle.h"
+
+namespace {
+
+using S = double;
+using Object = fcl::CollisionObject<S>;
+using Manager = cube::CubeCollisionManager<S>;
+using Base = fcl::BroadPhaseCollisionManager<S>;
+using Pair = cube::oracle::Pair<S>;
+
+bool isPlanar(const Object* o) {
+  return o->getNodeType() == fcl::GEOM_PLANE || o->getNodeType() == fcl::GEOM_HALFSPACE;
+}
+
+// Narrow phase with a canonical argument order, so that both managers run the same call.
+bool narrowCollide(Object* a, Object* b, void* d) {
+  const Pair p = cube::oracle::unordered(a, b);
+  fcl::CollisionRequest<S> req;
+  fcl::CollisionResult<S> res;
+  if (fcl::collide(p.first, p.second, req, res) > 0)
+    static_cast<std::vector<Pair>*>(d)->push_back(p);
+  return false;
+}
+
+// Narrow-phase distance clamped at 0; FCL 0.7's GJK distance has no support function for planes
+// and halfspaces (it crashes), so their AABB distance stands in on both sides.
+bool narrowDistance(Object* a, Object* b, void* d, S& dist) {
+  const Pair p = cube::oracle::unordered(a, b);
+  S v;
+  if (isPlanar(a) || isPlanar(b) || a->getNodeType() == fcl::GEOM_OCTREE ||
+      b->getNodeType() == fcl::GEOM_OCTREE) {
+    v = a->getAABB().distance(b->getAABB());
+  } else {
+    fcl::DistanceRequest<S> req;
+    fcl::DistanceResult<S> res;
+    v = std::max<S>(0, fcl::distance(p.first, p.second, req, res));
+  }
+  S& best = *static_cast<S*>(d);
+  best = std::min(best, v);
+  dist = std::min(dist, v);
+  return false;
+}
+
+bool record(Object* a, Object* b, void* d) {
+  static_cast<std::vector<Pair>*>(d)->emplace_back(a, b);
+  return false;
+}
+
+std::vector<Pair> sorted(std::vector<Pair> v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+std::vector<Object*> objectsOf(const Base& m) {
+  std::vector<Object*> out;
+  m.getObjects(out);
+  return out;
+}
+
+// Brute-force candidate pairs (a of `as`, b of `bs`), a != b, as ordered pairs.
+std::vector<Pair> brutePairs(const std::vector<Object*>& as, const std::vector<Object*>& bs) {
+  std::vector<Pair> out;
+  for (auto* a : as)
+    for (auto* b : bs)
+      if (a != b && a->getAABB().overlap(b->getAABB())) out.emplace_back(a, b);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Every query kind of `m` (holding `objs`) against brute force and Naive.
+void expectLikeNaive(const Manager& m, const std::vector<Object*>& objs,
+                     const std::vector<Object*>& queries) {
+  std::string why;
+  ASSERT_TRUE(m.validate(&why)) << why;
+  ASSERT_EQ(objectsOf(m), objs);
+  fcl::NaiveCollisionManager<S> naive;
+  naive.registerObjects(objs);
+
+  // Self collide: candidates and narrow phase.
+  EXPECT_EQ(cube::oracle::selfPairs(m), cube::oracle::bruteSelfPairs(objs));
+  std::vector<Pair> ours, theirs;
+  m.collide(&ours, narrowCollide);
+  naive.collide(&theirs, narrowCollide);
+  EXPECT_EQ(sorted(ours), sorted(theirs));
+
+  // Self distance.
+  S a = std::numeric_limits<S>::max(), b = a;
+  m.distance(&a, narrowDistance);
+  naive.distance(&b, narrowDistance);
+  EXPECT_NEAR(a, b, 1e-9);
+
+  for (Object* q : queries) {
+    std::vector<Pair> got;
+    m.collide(q, &got, record);
+    std::vector<Pair> want;
+    for (const auto& p : brutePairs(objs, {q})) want.push_back(p);
+    EXPECT_EQ(sorted(got), want) << "collide(obj)";
+    std::vector<Pair> n_ours, n_theirs;
+    m.collide(q, &n_ours, narrowCollide);
+    for (const auto& p : want) narrowCollide(p.first, p.second, &n_theirs);
+    EXPECT_EQ(sorted(n_ours), sorted(n_theirs)) << "collide(obj) narrow phase";
+
+    S da = std::numeric_limits<S>::max(), db = da;
+    m.distance(q, &da, narrowDistance);
+    // Naive's distance(obj) also visits q itself (distance 0) when registered: leave it out.
+    fcl::NaiveCollisionManager<S> others;
+    for (auto* o : objs)
+      if (o != q) others.registerObject(o);
+    others.distance(q, &db, narrowDistance);
+    EXPECT_NEAR(da, db, 1e-9) << "distance(obj)";
+  }
+}
+
+// Manager against manager, both directions where the other is a cube manager.
+void expectPairsWith(const Manager& m, Base& other, const std::vector<Object*>& objs) {
+  if (&other == &m) {
+    // With itself: the self-collide pairs, each once.
+    std::vector<Pair> got;
+    m.collide(&other, &got, record);
+    for (auto& p : got) p = cube::oracle::unordered(p.first, p.second);
+    EXPECT_EQ(sorted(got), cube::oracle::bruteSelfPairs(objs)) << "collide(itself)";
+    return;
+  }
+  const std::vector<Object*> theirs = objectsOf(other);
+  std::vector<Pair> got;
+  m.collide(&other, &got, record);
+  EXPECT_EQ(sorted(got), brutePairs(objs, theirs)) << "collide(manager)";
+  std::vector<Pair> n_ours, n_naive;
+  m.collide(&other, &n_ours, narrowCollide);
+  fcl::NaiveCollisionManager<S> a, b;
+  a.registerObjects(objs);
+  b.registerObjects(theirs);
+  a.collide(&b, &n_naive, [](Object* x, Object* y, void* d) {
+    return x != y && narrowCollide(x, y, d);  // Naive also pairs an object with itself
+  });
+  EXPECT_EQ(sorted(n_ours), sorted(n_naive)) << "collide(manager) narrow phase";
+  S da = std::numeric_limits<S>::max(), db = da;
+  m.distance(&other, &da, narrowDistance);
+  a.distance(&b, &db, [](Object* x, Object* y, void* d, S& dist) {
+    return x != y && narrowDistance(x, y, d, dist);
+  });
+  EXPECT_NEAR(da, db, 1e-9) << "distance(manager)";
+  if (auto* cube = dynamic_cast<Manager*>(&other)) {
+    std::vector<Pair> back;
+    cube->collide(const_cast<Manager*>(&m), &back, record);
+    EXPECT_EQ(sorted(back), brutePairs(theirs, objs)) << "reverse collide(manager)";
+    S dr = std::numeric_limits<S>::max();
+    cube->distance(const_cast<Manager*>(&m), &dr, narrowDistance);
+    EXPECT_NEAR(dr, db, 1e-9) << "reverse distance(manager)";
+  }
+}
+
+struct Scene {
+  std::vector<std::unique_ptr<Object>> owned;
+  Object* add(std::shared_ptr<fcl::CollisionGeometry<S>> g, const fcl::Transform3<S>& tf) {
+    owned.push_back(std::make_unique<Object>(std::move(g), tf));
+    owned.back()->computeAABB();
+    return owned.back().get();
+  }
+  std::vector<Object*> all() const {
+    std::vector<Object*> out;
+    for (const auto& o : owned) out.push_back(o.get());
+    return out;
+  }
+};
+
+fcl::Transform3<S> pose(double x, double y, double z, double angle = 0,
+                        fcl::Vector3<S> axis = fcl::Vector3<S>::UnitZ()) {
+  fcl::Transform3<S> tf = fcl::Transform3<S>::Identity();
+  tf.translation() = fcl::Vector3<S>(x, y, z);
+  tf.linear() = Eigen::AngleAxis<S>(angle, axis.normalized()).toRotationMatrix();
+  return tf;
+}
+
+// Boxes and spheres scattered in [-20, 20]^3, plus planes and halfspaces, axis-aligned and
+// rotated, and (optionally) an OcTree of occupied cells along a diagonal of the whole scene.
+Scene mixedScene(std::uint32_t seed, int shapes, bool octree) {
+  Scene s;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-20, 20), size(0.5, 4), ang(0, 3.1);
+  for (int i = 0; i < shapes; ++i) {
+    const auto tf = pose(u(rng), u(rng), u(rng), ang(rng), fcl::Vector3<S>(u(rng), u(rng), 1));
+    if (i % 2)
+      s.add(std::make_shared<fcl::Box<S>>(size(rng), size(rng), size(rng)), tf);
+    else
+      s.add(std::make_shared<fcl::Sphere<S>>(size(rng) / 2), tf);
+  }
+  s.add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), 1.5), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(1, 0, 0), -3), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(1, 1, 1).normalized(), 4), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 1, 0), 0),
+        pose(2, 5, 0, 0.7, fcl::Vector3<S>(1, 0, 1)));
+  s.add(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(0, 0, 1), -15), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(0, -1, 0), -18), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(1, 0, 0), 0),
+        pose(0, 0, 0, 0.4, fcl::Vector3<S>(0, 1, 1)));
+  if (octree) {
+    auto tree = std::make_shared<octomap::OcTree>(1.0);
+    for (double t = -20; t <= 20; t += 1) tree->updateNode(octomap::point3d(t, t, 0), true);
+    s.add(std::make_shared<fcl::OcTree<S>>(tree), pose(0, 0, 0));
+  }
+  return s;
+}
+
+TEST(Unbounded, PlanesAndHalfspacesStayOutOfTheCubes) {
+  Scene s = mixedScene(1, 40, false);
+  Manager m;
+  m.registerObjects(s.all());
+  EXPECT_EQ(m.hierarchy().unboundedItems().size(), 7u);
+  for (const auto& it : m.hierarchy().unboundedItems()) EXPECT_TRUE(isPlanar(it.obj));
+  // The cubes stay the size of the bounded scene, not of the planes.
+  const auto& root = m.hierarchy().nodes()[m.hierarchy().root()];
+  for (int k = 0; k < 3; ++k) EXPECT_LT(root.hi[k] - root.lo[k], 100.f);
+  expectLikeNaive(m, s.all(), s.all());
+}
+
+class MixedScenes : public ::testing::TestWithParam<std::uint32_t> {};
+
+TEST_P(MixedScenes, EveryQueryKindLikeNaive) {
+  const bool octree = GetParam() % 2 == 0;
+  Scene s = mixedScene(GetParam(), 60, octree);
+  Scene extra = mixedScene(GetParam() + 100, 20, false);
+  for (int leaf_size : {1, 4}) {
+    cube::Config config;
+    config.leaf_size = leaf_size;
+    Manager m(config);
+    // Registered one by one: the incremental path must sort planes out too.
+    for (auto* o : s.all()) m.registerObject(o);
+    expectLikeNaive(m, s.all(), extra.all());
+
+    // Other managers, made of the extra objects and some of ours.
+    std::vector<Object*> mix = extra.all();
+    for (std::size_t i = 0; i < s.owned.size(); i += 3) mix.push_back(s.owned[i].get());
+    fcl::NaiveCollisionManager<S> naive;
+    naive.registerObjects(mix);
+    fcl::DynamicAABBTreeCollisionManager<S> dyn;
+    for (auto* o : mix) dyn.registerObject(o);
+    Manager cube;
+    cube.registerObjects(mix);
+    {
+      SCOPED_TRACE("vs Naive");
+      expectPairsWith(m, naive, s.all());
+    }
+    {
+      SCOPED_TRACE("vs DynamicAABBTree");
+      expectPairsWith(m, dyn, s.all());
+    }
+    {
+      SCOPED_TRACE("vs cube");
+      expectPairsWith(m, cube, s.all());
+    }
+    expectPairsWith(m, m, s.all());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Seeds, MixedScenes, ::testing::Range<std::uint32_t>(1, 7));
+
+TEST(Unbounded, ObjectsCrossBetweenCubesAndUnboundedList) {
+  Scene s = mixedScene(7, 30, false);
+  std::vector<Object*> objs = s.all();
+  for (auto policy :
+       {cube::UpdatePolicy::automatic, cube::UpdatePolicy::refit, cube::UpdatePolicy::rebuild}) {
+    cube::Config config;
+    config.update_policy = policy;
+    Manager m(config);
+    m.registerObjects(objs);
+    const std::size_t planes = std::count_if(objs.begin(), objs.end(), isPlanar);
+    std::mt19937 rng(3);
+    for (int round = 0; round < 12; ++round) {
+      // A few boxes jump beyond the unbounded limit (1e16 > 1e15), others come back.
+      std::vector<Object*> moved;
+      for (int i = 0; i < 4; ++i) {
+        Object* o = s.owned[rng() % 30].get();
+        const bool far = rng() % 2;
+        o->setTranslation(far ? fcl::Vector3<S>(1e16, 0, 0)
+                              : fcl::Vector3<S>(double(rng() % 40) - 20, 0, 0));
+        o->computeAABB();
+        moved.push_back(o);
+      }
+      switch (round % 3) {
+        case 0:
+          for (auto* o : moved) m.update(o);
+          break;
+        case 1:
+          m.update(moved);
+          break;
+        default:
+          m.update();
+      }
+      std::size_t far_count = 0;
+      for (std::size_t i = 0; i < 30; ++i) far_count += s.owned[i]->getAABB().max_[0] > 1e15;
+      EXPECT_EQ(m.hierarchy().unboundedItems().size(), planes + far_count);
+      expectLikeNaive(m, objs, {s.owned[0].get(), s.owned[31].get()});
+      // And in and out of the manager altogether.
+      m.unregisterObject(moved[0]);
+      objs.erase(std::find(objs.begin(), objs.end(), moved[0]));
+      expectLikeNaive(m, objs, {});
+      m.registerObject(moved[0]);
+      objs.push_back(moved[0]);
+      expectLikeNaive(m, objs, {});
+    }
+  }
+}
+
+TEST(Unbounded, OnlyUnboundedObjects) {
+  Scene s;
+  s.add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), 0), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), 5), pose(0, 0, 0));
+  s.add(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(0, 1, 1).normalized(), 0),
+        pose(0, 0, 0));
+  Manager m;
+  m.registerObjects(s.all());
+  EXPECT_EQ(m.hierarchy().unboundedItems().size(), 3u);
+  expectLikeNaive(m, s.all(), s.all());
+  Manager empty;
+  expectPairsWith(m, empty, s.all());
+  expectPairsWith(empty, m, {});
+}
+
+}  // namespace
