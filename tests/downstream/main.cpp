@@ -1,0 +1,97 @@
+// A downstream program: uses only the installed headers and library (through find_package or
+// pkg-config). Checks the cube manager against fcl::NaiveCollisionManager on a small world.
+
+#include <cube_collision/callbacks.h>
+#include <cube_collision/cube_collision_manager.h>
+#include <cube_collision/queries.h>
+#include <fcl/broadphase/broadphase_bruteforce.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/narrowphase/collision.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+#if defined(CUBE_COLLISION_HAS_CAIRO)
+#include <cube_collision/export.h>
+#endif
+
+using Object = fcl::CollisionObjectd;
+using Pair = std::pair<Object*, Object*>;
+
+// argv[1]: where to draw the hierarchy, if the library was built with Cairo.
+int main(int argc, char** argv) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> pos(-10, 10), size(0.5, 2);
+  std::vector<std::unique_ptr<Object>> objects;
+  std::vector<Object*> pointers;
+  for (int i = 0; i < 300; ++i) {
+    fcl::Transform3d tf = fcl::Transform3d::Identity();
+    tf.translation() = fcl::Vector3d(pos(rng), pos(rng), pos(rng));
+    objects.push_back(
+        std::make_unique<Object>(std::make_shared<fcl::Boxd>(size(rng), size(rng), size(rng)), tf));
+    objects.back()->computeAABB();
+    pointers.push_back(objects.back().get());
+  }
+
+  cube::CubeCollisionManagerd cube_manager;
+  fcl::NaiveCollisionManagerd naive;
+  cube_manager.registerObjects(pointers);
+  naive.registerObjects(pointers);
+
+  // Colliding pairs through the callable overload, and through the naive manager.
+  auto colliding = [](fcl::BroadPhaseCollisionManagerd& m) {
+    std::vector<Pair> out;
+    auto* data = &out;
+    m.collide(data, [](Object* a, Object* b, void* d) {
+      fcl::CollisionRequestd request;
+      fcl::CollisionResultd result;
+      if (fcl::collide(a, b, request, result) > 0)
+        static_cast<std::vector<Pair>*>(d)->emplace_back(std::min(a, b), std::max(a, b));
+      return false;
+    });
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const auto by_cube = colliding(cube_manager);
+  const auto by_naive = colliding(naive);
+
+  std::size_t by_lambda = 0;
+  cube_manager.collide([&](Object*, Object*) { ++by_lambda; });
+
+  cube::CollisionData<double> data;
+  data.request.num_max_contacts = 100000;
+  cube_manager.collide(&data, cube::defaultCollisionCallback<double>);
+  const auto helper = cube::collideAll(cube_manager, data.request);
+
+  std::printf("downstream: %zu colliding pairs (naive %zu), %zu candidates, %zu contacts\n",
+              by_cube.size(), by_naive.size(), by_lambda, helper.numContacts());
+  const bool ok = !by_naive.empty() && by_cube == by_naive && by_lambda >= by_cube.size() &&
+                  data.result.numContacts() == by_cube.size() &&
+                  helper.numContacts() == by_cube.size();
+  std::printf(ok ? "OK\n" : "MISMATCH\n");
+  if (!ok) return 1;
+
+#if defined(CUBE_COLLISION_HAS_CAIRO)
+  // Links Cairo in: a static install must carry it to the consumer's link line.
+  if (argc > 1) {
+    cube::writeSvg(cube::HierarchyView<double>(cube_manager), argv[1]);
+    std::ifstream svg(argv[1]);
+    std::string first;
+    svg >> first;
+    if (first.rfind("<?xml", 0) != 0 && first.rfind("<svg", 0) != 0) {
+      std::printf("the SVG drawing was not written\n");
+      return 1;
+    }
+    std::printf("drew %s\n", argv[1]);
+  }
+#else
+  (void)argc;
+  (void)argv;
+#endif
+  return 0;
+}
