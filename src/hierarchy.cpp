@@ -334,6 +334,7 @@ void Hierarchy<S>::rebuild() {
   dead_items_ = 0;
   indexRebuild();
   built_area_ = area_;
+  built_live_ = live_;
   changes_ = 0;
   ++builds_;
   built_ = true;
@@ -345,20 +346,23 @@ void Hierarchy<S>::setup() {
 }
 
 template <typename S>
+double Hierarchy<S>::quality() const {
+  if (live_ == 0 || built_live_ == 0) return 1.0;
+  if (built_area_ <= 0) return area_ > 0 ? std::numeric_limits<double>::infinity() : 1.0;
+  return (area_ * double(built_live_)) / (built_area_ * double(live_));
+}
+
+template <typename S>
+bool Hierarchy<S>::needsRebuild() const {
+  if (config_.update_policy != UpdatePolicy::automatic) return false;
+  // Many insertions or removals since the last build, or cubes grown loose.
+  if (changes_ > std::max<std::size_t>(64, live_ / 2)) return true;
+  return built_ && quality() > config_.rebuild_threshold;
+}
+
+template <typename S>
 void Hierarchy<S>::maybeRebuildAfterUpdate() {
-  switch (config_.update_policy) {
-    case UpdatePolicy::rebuild:
-      rebuild();
-      return;
-    case UpdatePolicy::refit:
-      return;
-    case UpdatePolicy::automatic:
-      break;
-  }
-  const bool degraded =
-      built_area_ > 0 ? area_ > config_.rebuild_threshold * built_area_ : area_ > 0;
-  const bool churned = changes_ > std::max<std::size_t>(64, live_);
-  if (degraded || churned) rebuild();
+  if (config_.update_policy == UpdatePolicy::rebuild || needsRebuild()) rebuild();
 }
 
 template <typename S>
@@ -374,6 +378,7 @@ void Hierarchy<S>::clear() {
   live_ = dead_items_ = dead_nodes_ = 0;
   next_seq_ = 0;
   area_ = built_area_ = 0;
+  built_live_ = 0;
   changes_ = 0;
   built_ = false;
 }
@@ -589,8 +594,7 @@ void Hierarchy<S>::place(Item<S> item) {
 template <typename S>
 void Hierarchy<S>::afterChange() {
   ++changes_;
-  if (config_.update_policy == UpdatePolicy::automatic &&
-      changes_ > std::max<std::size_t>(64, live_)) {
+  if (needsRebuild()) {
     rebuild();
   } else {
     maybeCompact();

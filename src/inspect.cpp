@@ -126,11 +126,7 @@ HierarchyView<S>::HierarchyView(const detail::Hierarchy<S>& h) {
     s.max_leaf_size = std::max<std::size_t>(s.max_leaf_size, n.count);
   }
   s.mean_leaf_size = s.leaves ? double(s.objects) / double(s.leaves) : 0.0;
-  if (h.builtArea() > 0) {
-    s.quality_ratio = h.area() / h.builtArea();
-  } else {
-    s.quality_ratio = h.area() > 0 ? std::numeric_limits<double>::infinity() : 1.0;
-  }
+  s.quality_ratio = h.quality();
   s.rebuild_threshold = h.config().rebuild_threshold;
   s.dead_cubes = nodes.size() - cubes_.size();
   for (const auto& it : items)

@@ -196,9 +196,7 @@ HierarchyView<S> checkView(const CubeCollisionManager<S>& m) {
   EXPECT_EQ(per_level, std::size_t(n));
   EXPECT_NEAR(s.volume, volume, 1e-9 * std::max(1.0, volume));
   EXPECT_NEAR(s.surface_area, h.area(), 1e-6 * std::max(1.0, h.area()));
-  if (h.builtArea() > 0) {
-    EXPECT_DOUBLE_EQ(s.quality_ratio, h.area() / h.builtArea());
-  }
+  EXPECT_DOUBLE_EQ(s.quality_ratio, h.quality());
   EXPECT_EQ(s.bytes, h.bytes());
   EXPECT_EQ(s.builds, h.buildCount());
   if (!all.empty()) {

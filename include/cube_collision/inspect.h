@@ -57,9 +57,10 @@ struct HierarchyStats {
   std::size_t max_leaf_size = 0;
   double surface_area = 0;  ///< sum of the live cubes' surface areas
   double volume = 0;        ///< sum of the live cubes' volumes (nested cubes counted each)
-  /// Current cube area over the area right after the last build: 1 after a build, growing as
-  /// refits stretch the cubes. UpdatePolicy::automatic rebuilds once it exceeds
-  /// Config::rebuild_threshold. Infinity if the build had zero area and the cubes now have some.
+  /// Cube area per object now over the same right after the last build: 1 after a build,
+  /// growing as refits stretch the cubes or insertions land badly. UpdatePolicy::automatic
+  /// rebuilds once it exceeds Config::rebuild_threshold. Infinity if the build had zero area and
+  /// the cubes now have some.
   double quality_ratio = 1;
   double rebuild_threshold = 0;       ///< Config::rebuild_threshold, for comparison
   std::size_t dead_cubes = 0;         ///< unreachable cubes awaiting compaction

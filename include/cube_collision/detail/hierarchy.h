@@ -139,6 +139,10 @@ class Hierarchy {
   double area() const { return area_; }
   /// Area right after the last build.
   double builtArea() const { return built_area_; }
+  /// Tree quality: cube area per object now, relative to right after the last build (1 after a
+  /// build; grows as objects wander or are added where they fit badly). Per object, so that
+  /// adding objects to a good tree does not count as degradation. Drives automatic rebuilds.
+  double quality() const;
   /// Objects added or removed since the last build.
   std::size_t changesSinceBuild() const { return changes_; }
   /// Number of builds so far (tests use it to see whether an update rebuilt).
@@ -175,6 +179,7 @@ class Hierarchy {
   double refitCube(std::uint32_t cube);
   void refitUp(std::uint32_t cube);
   void refitAllCubes();
+  bool needsRebuild() const;
   void maybeCompact();
   void trimTail();
 
@@ -193,6 +198,7 @@ class Hierarchy {
   std::uint32_t next_seq_ = 0;
   double area_ = 0;
   double built_area_ = 0;
+  std::size_t built_live_ = 0;
   std::size_t changes_ = 0;
   std::size_t builds_ = 0;
   bool built_ = false;
