@@ -1,0 +1,165 @@
+// Several threads query one manager at once (issue 7): every const query is safe to run
+// concurrently and each thread gets Naive's answer. Meant to run under ThreadSanitizer too
+// (-DCUBE_COLLISION_SANITIZE=thread), where any data race fails the test.
+
+#include <fcl/broadphase/broadphase_bruteforce.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <limits>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "cube_collision/callbacks.h"
+#include "cube_collision/cube_collision_manager.h"
+#include "scenes.h"
+#include "support/oracle.h"
+
+namespace {
+
+using S = double;
+using Object = fcl::CollisionObject<S>;
+using Pair = cube::oracle::Pair<S>;
+
+bool record(Object* a, Object* b, void* d) {
+  static_cast<std::vector<Pair>*>(d)->emplace_back(a, b);
+  return false;
+}
+
+// Narrow-phase distance of boxes, spheres and cylinders (the scene has no planes here).
+bool minDistance(Object* a, Object* b, void* d, S& dist) {
+  const Pair p = cube::oracle::unordered(a, b);
+  fcl::DistanceRequest<S> req;
+  fcl::DistanceResult<S> res;
+  const S v = std::max<S>(0, fcl::distance(p.first, p.second, req, res));
+  S& best = *static_cast<S*>(d);
+  best = std::min(best, v);
+  dist = std::min(dist, v);
+  return false;
+}
+
+std::vector<Pair> sorted(std::vector<Pair> v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+// What every thread must see, computed once by Naive and brute force.
+struct Expected {
+  std::vector<Pair> self;                  // unordered
+  std::vector<std::vector<Pair>> objects;  // per query object, (managed, query)
+  std::vector<Pair> vs_other;              // (ours, theirs)
+  std::vector<Pair> narrow;                // narrow-phase colliding pairs, unordered
+  S distance = 0;
+};
+
+TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
+  cube::scenes::SceneOptions opt;
+  opt.n = 1500;
+  opt.seed = 7;
+  opt.overlaps_per_object = 2;
+  auto scene = cube::scenes::makeScene<S>(opt);
+  opt.n = 300;
+  opt.seed = 8;
+  auto other_scene = cube::scenes::makeScene<S>(opt);
+  // A plane and a halfspace, so the unbounded list is read concurrently too.
+  Object plane(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), 0));
+  Object half(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(1, 0, 0), 1500));
+  plane.computeAABB();
+  half.computeAABB();
+
+  std::vector<Object*> objs = scene.pointers();
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(objs);
+  m.registerObject(&plane);
+  m.registerObject(&half);
+  objs.push_back(&plane);
+  objs.push_back(&half);
+  cube::CubeCollisionManager<S> other;
+  other.registerObjects(other_scene.pointers());
+  // Distances only among the bounded objects (FCL's GJK distance does not take planes).
+  cube::CubeCollisionManager<S> bounded;
+  bounded.registerObjects(scene.pointers());
+
+  Expected want;
+  want.self = cube::oracle::bruteSelfPairs(objs);
+  const auto queries = other_scene.pointers();
+  for (std::size_t q = 0; q < 40; ++q) {
+    std::vector<Pair> p;
+    for (auto* o : objs)
+      if (o->getAABB().overlap(queries[q]->getAABB())) p.emplace_back(o, queries[q]);
+    want.objects.push_back(sorted(p));
+  }
+  for (auto* a : objs)
+    for (auto* b : other_scene.pointers())
+      if (a->getAABB().overlap(b->getAABB())) want.vs_other.emplace_back(a, b);
+  want.vs_other = sorted(want.vs_other);
+  auto naive = cube::oracle::naiveOf(objs);
+  want.narrow = cube::oracle::collidingPairs(naive);
+  auto naive_bounded = cube::oracle::naiveOf(scene.pointers());
+  want.distance = std::numeric_limits<S>::max();
+  naive_bounded.distance(&want.distance, minDistance);
+  ASSERT_GT(want.self.size(), 1000u);  // a scene with real work in it
+  ASSERT_GT(want.vs_other.size(), 100u);
+
+  constexpr int kThreads = 4, kRounds = 3;
+  std::atomic<int> mismatches{0};
+  std::atomic<int> go{0};
+  auto worker = [&](int id) {
+    go.fetch_add(1);
+    while (go.load() < kThreads) std::this_thread::yield();  // start together
+    for (int round = 0; round < kRounds; ++round) {
+      // Each thread runs the queries in its own order, so different kinds overlap in time.
+      for (int k = 0; k < 5; ++k) {
+        switch ((k + id + round) % 5) {
+          case 0: {
+            if (cube::oracle::selfPairs(m) != want.self) ++mismatches;
+            break;
+          }
+          case 1: {
+            for (std::size_t q = 0; q < want.objects.size(); ++q) {
+              std::vector<Pair> got;
+              m.collide(queries[q], &got, record);
+              if (sorted(got) != want.objects[q]) ++mismatches;
+            }
+            break;
+          }
+          case 2: {
+            std::vector<Pair> got;
+            m.collide(&other, &got, record);
+            if (sorted(got) != want.vs_other) ++mismatches;
+            break;
+          }
+          case 3: {
+            S best = std::numeric_limits<S>::max();
+            bounded.distance(&best, minDistance);
+            if (best != want.distance) ++mismatches;
+            break;
+          }
+          default: {
+            if (cube::oracle::collidingPairs(m) != want.narrow) ++mismatches;
+            // The library's own default callbacks, with their per-call data.
+            cube::CollisionData<S> data;
+            data.request.num_max_contacts = 1000000;
+            m.collide(&data, cube::defaultCollisionCallback<S>);
+            if (data.result.numContacts() < want.narrow.size()) ++mismatches;
+            break;
+          }
+        }
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) threads.emplace_back(worker, t);
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(mismatches.load(), 0);
+  std::string why;
+  EXPECT_TRUE(m.validate(&why)) << why;
+}
+
+}  // namespace
