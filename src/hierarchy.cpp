@@ -251,6 +251,26 @@ bool Hierarchy<S>::canSplit(std::uint32_t depth) const {
 }
 
 template <typename S>
+std::uint32_t Hierarchy<S>::addChildren(std::uint32_t cube, std::uint32_t begin,
+                                        std::uint32_t middle, std::uint32_t end) {
+  const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
+  Node left{}, right{};
+  setEmpty(left);
+  setEmpty(right);
+  left.first = begin;
+  left.count = middle - begin;
+  right.first = middle;
+  right.count = end - middle;
+  nodes_.push_back(left);
+  nodes_.push_back(right);
+  parent_.push_back(cube);
+  parent_.push_back(cube);
+  nodes_[cube].first = c;
+  nodes_[cube].count = 0;
+  return c;
+}
+
+template <typename S>
 void Hierarchy<S>::rebuild() {
   // Gather the live objects; the build permutes 32-bit indices, not 64-byte items, and lays the
   // items out in leaf order once at the end.
@@ -301,18 +321,7 @@ void Hierarchy<S>::rebuild() {
                        [&](std::uint32_t x, std::uint32_t y) {
                          return c[x] < c[y] || (c[x] == c[y] && fresh[x].seq < fresh[y].seq);
                        });
-      const std::uint32_t child = static_cast<std::uint32_t>(nodes_.size());
-      Node left{}, right{};
-      left.first = b;
-      left.count = m - b;
-      right.first = m;
-      right.count = e - m;
-      nodes_.push_back(left);
-      nodes_.push_back(right);
-      parent_.push_back(cube);
-      parent_.push_back(cube);
-      nodes_[cube].first = child;
-      nodes_[cube].count = 0;
+      const std::uint32_t child = addChildren(cube, b, m, e);
       stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
       stack.push_back((std::uint64_t(depth + 1) << 32) | child);
     }
@@ -534,25 +543,12 @@ void Hierarchy<S>::splitLeaf(std::uint32_t leaf) {
                      const S cy = y.first.box.lo[axis] + y.first.box.hi[axis];
                      return cx < cy || (cx == cy && x.first.seq < y.first.seq);
                    });
-  const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
+  const std::uint32_t c = addChildren(leaf, b, b + half, e);
   for (std::uint32_t i = 0; i < e - b; ++i) {
     items_[b + i] = range[i].first;
     items_[b + i].leaf = i < half ? c : c + 1;
     index_[range[i].second] = b + i + 1;
   }
-  Node left{}, right{};
-  setEmpty(left);
-  setEmpty(right);
-  left.first = b;
-  left.count = half;
-  right.first = b + half;
-  right.count = e - b - half;
-  nodes_.push_back(left);
-  nodes_.push_back(right);
-  parent_.push_back(leaf);
-  parent_.push_back(leaf);
-  nodes_[leaf].first = c;
-  nodes_[leaf].count = 0;
   area_ += refitCube(c);
   area_ += refitCube(c + 1);
 }

@@ -167,6 +167,10 @@ class Hierarchy {
   void place(Item<S> item);
   void afterChange();
   void growLeaf(std::uint32_t leaf, const Item<S>& item);
+  /// Turns leaf-range cube `cube` into a parent of two leaves [begin, middle), [middle, end);
+  /// returns the first child. Bounds are left empty for the caller to refit.
+  std::uint32_t addChildren(std::uint32_t cube, std::uint32_t begin, std::uint32_t middle,
+                            std::uint32_t end);
   void splitLeaf(std::uint32_t leaf);
   /// Splits, below `top`, every leaf holding more than leaf_size objects above the depth cap.
   void splitCrowded(std::uint32_t top);
