@@ -875,6 +875,9 @@ bool runs(Case c, const std::string& scene, std::size_t n, Mgr m) {
   if (n >= 100000 && scene == "meshes") return false;
   // The update(vector) and churn cases of issue 3 run at 1,000 and 10,000 objects.
   if ((c == Case::update_vector || isChurn(c)) && (n < 1000 || n > 10000)) return false;
+  // FCL 0.7's IntervalTree corrupts the heap under unregister/register churn (glibc aborts with
+  // "corrupted size vs. prev_size in fastbins" at 1,000 objects).
+  if (isChurn(c) && m == Mgr::interval) return false;
   // Self distance at 10,000: SaP 5.8 s and IntervalTree 9.1 s per call (cube 1.4 ms).
   if (c == Case::selfdistance && n >= 10000 && (m == Mgr::sap || m == Mgr::interval)) return false;
   if (n >= 100000) {
