@@ -133,7 +133,8 @@ void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_
     if (other_objs[i] == nullptr)
       fail("registerObjects", "entry #" + std::to_string(i) + " is null; nothing registered");
     boxes.push_back(boxOf(*other_objs[i]));
-    if (!isValid(boxes.back()))
+    // A registered object is left alone, whatever its AABB says now (as registerObject does).
+    if (!isValid(boxes.back()) && !tree_.contains(other_objs[i]))
       fail("registerObjects",
            "entry #" + std::to_string(i) + " has a NaN AABB coordinate; nothing registered");
   }
@@ -246,8 +247,7 @@ void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
 }
 
 template <typename S>
-void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
-                                      fcl::CollisionCallBack<S> callback,
+void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "collide");
   if (callback == nullptr) fail("collide", "null callback");
@@ -257,8 +257,7 @@ void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
 }
 
 template <typename S>
-void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
-                                       fcl::DistanceCallBack<S> callback,
+void CubeCollisionManager<S>::distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback,
                                        QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "distance");
   if (callback == nullptr) fail("distance", "null callback");
@@ -289,19 +288,16 @@ void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> cal
 
 template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
-                                      fcl::CollisionCallBack<S> callback,
-                                      QueryStats* stats) const {
+                                      fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
-  managerPairs(*this, other_manager, "collide",
-               [&](const View<S>& a, const View<S>& b, bool self) {
-                 return detail::collidePairs(a, b, self, cdata, callback, stats);
-               });
+  managerPairs(*this, other_manager, "collide", [&](const View<S>& a, const View<S>& b, bool self) {
+    return detail::collidePairs(a, b, self, cdata, callback, stats);
+  });
 }
 
 template <typename S>
 void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
-                                       fcl::DistanceCallBack<S> callback,
-                                       QueryStats* stats) const {
+                                       fcl::DistanceCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("distance", "null callback");
   S best = std::numeric_limits<S>::max();
   managerPairs(*this, other_manager, "distance",

@@ -213,6 +213,22 @@ TEST(BadInput, DoubleRegistrationHasNoEffect) {
   for (const auto& p : c.calls) EXPECT_NE(p.first, w[1]);
 }
 
+TEST(BadInput, RegisteringAgainAnObjectWhoseAABBWentNaNHasNoEffect) {
+  World w(3);
+  Manager m;
+  m.registerObjects({w[0], w[1], w[2]});
+  w.poison(1);
+  // Already registered: both calls leave it as it was, with its old AABB; neither throws.
+  EXPECT_NO_THROW(m.registerObject(w[1]));
+  EXPECT_NO_THROW(m.registerObjects({w[1], w[2]}));
+  EXPECT_EQ(m.size(), 3u);
+  std::string why;
+  EXPECT_TRUE(m.validate(&why)) << why;
+  std::vector<Object*> objs;
+  m.getObjects(objs);
+  EXPECT_EQ(objs, (std::vector<Object*>{w[0], w[1], w[2]}));
+}
+
 TEST(BadInput, UnknownObjectsHaveNoEffectEvenOnAnEmptyManager) {
   World w(4);
   Manager e;
