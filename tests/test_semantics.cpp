@@ -638,6 +638,47 @@ TYPED_TEST(Semantics, BadInputThrowsAndChangesNothing) {
   EXPECT_EQ(oracle::selfPairs<S>(cube), with_victim) << "the NaN object keeps its old box";
 }
 
+// Degenerate inputs where median splits tie: identical boxes, zero-size boxes at one point, and
+// points on a line. Every pair is still reported once and the leaves still respect leaf_size.
+TYPED_TEST(Semantics, DegenerateScenesIdenticalAndZeroSizeBoxes) {
+  using S = TypeParam;
+  std::vector<std::pair<V3<S>, V3<S>>> same, points, line;
+  for (int i = 0; i < 120; ++i) {
+    same.emplace_back(V3<S>(1, 2, 3), V3<S>(4, 5, 6));
+    points.emplace_back(V3<S>(7, 7, 7), V3<S>(7, 7, 7));
+    line.emplace_back(V3<S>(S(i), 0, 0), V3<S>(S(i), 0, 0));  // touching nothing
+  }
+  for (const auto* corners : {&same, &points, &line}) {
+    auto objs = boxes<S>(*corners);
+    const auto ptrs = raw(objs);
+    const auto brute = oracle::bruteSelfPairs(ptrs);
+    for (int leaf_size : {1, 4}) {
+      CubeCollisionManager<S> cube(Config{0, leaf_size});
+      cube.registerObjects(ptrs);
+      cube.setup();
+      ASSERT_TRUE(valid(cube));
+      for (const auto& [c, depth] : liveCubes(cube.hierarchy())) {
+        const auto& n = cube.hierarchy().nodes()[c];
+        if (n.isLeaf()) {
+          EXPECT_LE(n.count, std::uint32_t(leaf_size)) << "depth " << depth;
+        }
+      }
+      EXPECT_EQ(oracle::selfPairs<S>(cube), brute);
+      EXPECT_EQ(cubeObjectCalls<S>(cube, ptrs[17]), bruteCrossPairs<S>(ptrs, {ptrs[17]}));
+      // Removing half and adding them back one by one keeps everything.
+      for (std::size_t i = 0; i < ptrs.size(); i += 2) cube.unregisterObject(ptrs[i]);
+      for (std::size_t i = 0; i < ptrs.size(); i += 2) cube.registerObject(ptrs[i]);
+      ASSERT_TRUE(valid(cube));
+      EXPECT_EQ(oracle::selfPairs<S>(cube), brute);
+    }
+    if (corners != &line) {
+      EXPECT_EQ(brute.size(), ptrs.size() * (ptrs.size() - 1) / 2);
+    } else {
+      EXPECT_TRUE(brute.empty());
+    }
+  }
+}
+
 // Config::check rejects out-of-range knobs, and so does the constructor.
 TEST(Config, CheckRejectsOutOfRangeKnobs) {
   EXPECT_NO_THROW(Config().check());
