@@ -6,11 +6,12 @@ and gnuplot data. Python 3 standard library only.
     make_table.py run.json --readme README.md    # replace the block between the table markers
     make_table.py run.json --plot-data out.dat   # time against n for the plot (plot.gp)
 
-Times are medians over the repetitions of each benchmark (real time; manual time for build and
-the motion cases). "best FCL" is the fastest FCL manager on that row; ratio = best FCL / cube.
+Times are medians over the repetitions of each benchmark: CPU time, except the hand-timed cases
+(build and the motion cases), whose figure is the wall time measured around the timed part. "best FCL" is the fastest FCL manager on that row; ratio = best FCL / cube.
 """
 
 import argparse
+import gzip
 import json
 import statistics
 import sys
@@ -33,8 +34,9 @@ COUNTERS = {}  # filled by load(); read by best()
 TO_US = {"ns": 1e-3, "us": 1.0, "ms": 1e3, "s": 1e6}
 
 
-def load(path):
-    with open(path) as f:
+def load(path, clock="cpu"):
+    opener = gzip.open if path.endswith(".gz") else open
+    with opener(path, "rt") as f:
         data = json.load(f)
     times = defaultdict(list)  # (case, scene, n, manager) -> [us]
     counters = {}
@@ -49,7 +51,11 @@ def load(path):
         if b.get("error_occurred"):
             errors[key] = b.get("error_message", "error")
             continue
-        times[key].append(b["real_time"] * TO_US[b["time_unit"]])
+        # On a shared machine the process's CPU time is the robust figure (wall time includes
+        # the time other processes held the core). Cases timed by hand (build, motion) only
+        # have the hand-measured wall time, which Google Benchmark puts in real_time.
+        field = "real_time" if clock == "real" or "manual_time" in b["name"] else "cpu_time"
+        times[key].append(b[field] * TO_US[b["time_unit"]])
         counters[key] = {k: v for k, v in b.items() if isinstance(v, (int, float)) and k not in (
             "real_time", "cpu_time", "iterations", "repetitions", "repetition_index",
             "threads", "family_index", "per_family_instance_index")}
@@ -204,7 +210,10 @@ def render(context, medians, counters, errors, reps, command, machine):
     sizes = sorted({k[2] for k in medians})
     parts = []
     parts.append(f"Run: {context.get('date', '?')}; {reps} repetitions, medians; "
-                 f"load average at start {context.get('load_avg', '?')}.")
+                 f"load average at start {context.get('load_avg', '?')}. Times are the "
+                 "process's CPU time per call, except `build` and the motion cases (`update`, "
+                 "`update_vector`, `churn*`), which are wall time measured by hand around the "
+                 "timed part and so include any time other processes held the core.")
     if machine:
         parts.append(f"Machine: {machine}.")
     if command:
@@ -244,8 +253,10 @@ def main():
     ap.add_argument("--plot-data", help="write gnuplot data for plot.gp here")
     ap.add_argument("--command", default="", help="the command that made the run")
     ap.add_argument("--machine", default="", help="machine description")
+    ap.add_argument("--clock", choices=["cpu", "real"], default="cpu",
+                    help="cpu (default): CPU time, except hand-timed cases; real: wall time")
     args = ap.parse_args()
-    context, medians, counters, errors, reps = load(args.json)
+    context, medians, counters, errors, reps = load(args.json, args.clock)
     text = render(context, medians, counters, errors, reps, args.command, args.machine)
     if args.plot_data:
         plot_data(medians, args.plot_data)

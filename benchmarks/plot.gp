@@ -3,11 +3,11 @@
 #   gnuplot -e "data='time_vs_n.dat'; out='time_vs_n.png'" plot.gp
 if (!exists("data")) data = 'time_vs_n.dat'
 if (!exists("out")) out = 'time_vs_n.png'
-set terminal pngcairo size 1400,560 font ",11"
+set terminal pngcairo size 1400,560 font ",11" noenhanced
 set output out
 set logscale xy
 set xlabel "objects (n)"
-set ylabel "median time per call (µs)"
+set ylabel "median CPU time per call (µs)"
 set grid
 set key top left
 set datafile missing "NaN"

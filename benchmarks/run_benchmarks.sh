@@ -24,6 +24,7 @@ $cmd || status=$?
 machine="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) CPUs ($(lscpu | sed -n 's/^Thread(s) per core: *//p') thread(s) per core), $(uname -sr)"
 python3 benchmarks/make_table.py "$json" --readme benchmarks/README.md \
   --plot-data benchmarks/results/time_vs_n.dat --command "$cmd" --machine "$machine" || status=1
+gzip -f "$json"  # kept compressed in the repository; make_table.py reads .json.gz
 gnuplot -e "data='benchmarks/results/time_vs_n.dat'; out='benchmarks/results/time_vs_n.png'" \
   benchmarks/plot.gp
 echo "tables: benchmarks/README.md; plot: benchmarks/results/time_vs_n.png"
