@@ -112,7 +112,9 @@ inline float floatBelow(double x) {
   return f - (std::fabs(f) * 0x1p-22f + std::numeric_limits<float>::min());
 }
 
-inline float floatAbove(double x) { return -floatBelow(-x); }
+inline float floatAbove(double x) {
+  return -floatBelow(-x);
+}
 
 }  // namespace
 
@@ -351,7 +353,13 @@ void Hierarchy<S>::rebuild() {
 
 template <typename S>
 void Hierarchy<S>::setup() {
-  if (!built_ || changes_ > 0) rebuild();
+  // The first setup() gives the canonical tree (the same objects always give the same tree).
+  // Later ones keep the incremental work, as FCL's tree manager does: only a degraded hierarchy
+  // is rebuilt, or any changed one under a forced policy.
+  const bool changed = changes_ > 0;
+  const bool forced = config_.update_policy != UpdatePolicy::automatic;
+  if (!built_ || (changed && (!setup_done_ || forced)) || needsRebuild()) rebuild();
+  setup_done_ = true;
 }
 
 template <typename S>
@@ -390,6 +398,7 @@ void Hierarchy<S>::clear() {
   built_live_ = 0;
   changes_ = 0;
   built_ = false;
+  setup_done_ = false;
 }
 
 template <typename S>

@@ -55,8 +55,8 @@ inline bool overlap(const Node& a, const Node& b) {
   const __m128 ge = _mm_cmple_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
   return (_mm_movemask_ps(_mm_and_ps(le, ge)) & 7) == 7;
 #else
-  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) &
-         (b.lo[1] <= a.hi[1]) & (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) & (b.lo[1] <= a.hi[1]) &
+         (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
 #endif
 }
 
@@ -71,14 +71,14 @@ inline bool overlap(const Box<double>& a, const Box<double>& b) {
                                 _mm_cmple_pd(_mm_loadu_pd(y + 1), _mm_loadu_pd(x + 4)));
   return _mm_movemask_pd(_mm_and_pd(m0, m1)) == 3;
 #else
-  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) &
-         (b.lo[1] <= a.hi[1]) & (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) & (b.lo[1] <= a.hi[1]) &
+         (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
 #endif
 }
 
 inline bool overlap(const Box<float>& a, const Box<float>& b) {
-  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) &
-         (b.lo[1] <= a.hi[1]) & (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
+  return (a.lo[0] <= b.hi[0]) & (b.lo[0] <= a.hi[0]) & (a.lo[1] <= b.hi[1]) & (b.lo[1] <= a.hi[1]) &
+         (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
 }
 
 // Squared Euclidean gap between two boxes (fcl::AABB::distance squared); square roots are left
@@ -177,11 +177,41 @@ struct DistancePolicy {
   bool reaches(const Item<S>&, const Node&) const { return true; }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
-    if (!keep(gap2<S>(x.box, y.box))) return false;
+    return keep(gap2<S>(x.box, y.box)) && call(x, y);
+  }
+  bool call(const Item<S>& x, const Item<S>& y) const {
     count.call();
     return fn(x.obj, y.obj, data, best);
   }
 };
+
+// A leaf against the query object, nearest object first: the first callbacks then lower `best`
+// as much as they can, and fewer narrow-phase calls follow. Small leaves only (a depth-capped
+// leaf may be large; it is scanned in order).
+template <typename S, class Policy>
+bool leafNearestFirst(const View<S>& tree, const Node& n, const Item<S>& q, const Policy& p) {
+  constexpr std::uint32_t kMax = 16;
+  S key[kMax];
+  std::uint32_t order[kMax];
+  std::uint32_t m = 0;
+  for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
+    if (tree.items[i].obj == q.obj) continue;
+    p.count.test();
+    const S k = gap2<S>(tree.items[i].box, q.box);
+    std::uint32_t j = m++;
+    for (; j > 0 && key[j - 1] > k; --j) {
+      key[j] = key[j - 1];
+      order[j] = order[j - 1];
+    }
+    key[j] = k;
+    order[j] = i;
+  }
+  for (std::uint32_t j = 0; j < m; ++j) {
+    if (!p.keep(key[j])) continue;  // not break: a callback may raise `best` again
+    if (p.call(tree.items[order[j]], q)) return true;
+  }
+  return false;
+}
 
 template <class Key>
 struct Entry {
@@ -266,6 +296,12 @@ bool descendOne(const View<S>& tree, const Node& qn, const Item<S>& q, const Pol
     p.count.visit();
     const Node& n = tree.nodes[e.node];
     if (n.isLeaf()) {
+      if constexpr (Policy::kOrdered) {
+        if (n.count <= 16) {
+          if (leafNearestFirst(tree, n, q, p)) return true;
+          continue;
+        }
+      }
       for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
         if (tree.items[i].obj != q.obj && p.leaf(tree.items[i], q)) return true;
       continue;

@@ -420,6 +420,35 @@ TYPED_TEST(Dynamic, RefitPolicyNeverRebuildsOnUpdate) {
   }
 }
 
+// The first setup() builds from scratch; a later setup() after a few registrations and removals
+// keeps the incremental tree under the automatic policy (as FCL's tree manager keeps its
+// incremental insertions), and rebuilds under a forced policy. Answers are right either way.
+TYPED_TEST(Dynamic, LaterSetupKeepsIncrementalWorkUnlessPolicyForces) {
+  using S = TypeParam;
+  for (UpdatePolicy policy : {UpdatePolicy::automatic, UpdatePolicy::refit}) {
+    auto sc = scene<S>(500, 131);
+    auto objs = sc.pointers();
+    Config c;
+    c.update_policy = policy;
+    CubeCollisionManager<S> cube(c);
+    cube.registerObjects(std::vector<Obj<S>*>(objs.begin(), objs.begin() + 450));
+    cube.setup();
+    const auto built = cube.hierarchy().buildCount();
+    for (std::size_t i = 450; i < objs.size(); ++i) cube.registerObject(objs[i]);
+    for (std::size_t i = 0; i < 20; ++i) cube.unregisterObject(objs[i]);
+    EXPECT_EQ(cube.hierarchy().buildCount(), built);
+    cube.setup();
+    if (policy == UpdatePolicy::automatic) {
+      EXPECT_EQ(cube.hierarchy().buildCount(), built) << "setup() threw the insertions away";
+    } else {
+      EXPECT_EQ(cube.hierarchy().buildCount(), built + 1) << "forced policy did not rebuild";
+    }
+    ASSERT_TRUE(valid(cube));
+    const std::vector<Obj<S>*> kept(objs.begin() + 20, objs.end());
+    EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(kept));
+  }
+}
+
 // UpdatePolicy::rebuild rebuilds on every update, even when nothing moved.
 TYPED_TEST(Dynamic, RebuildPolicyAlwaysRebuilds) {
   using S = TypeParam;

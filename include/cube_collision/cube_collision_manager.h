@@ -56,8 +56,11 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   void registerObject(Object* obj) override;
   /// Removes an object; no effect if it is not registered.
   void unregisterObject(Object* obj) override;
-  /// Builds the hierarchy from scratch if objects were added or removed since the last build.
-  /// Idempotent. Queries are correct without it: it only makes them faster.
+  /// The first call (after construction or clear()) builds the hierarchy from scratch over the
+  /// objects registered so far: the same objects always give the same tree. Later calls are
+  /// cheap, as objects registered meanwhile are already in place; they rebuild only a degraded
+  /// hierarchy (see Config::rebuild_threshold; with a forced update policy, after any insertion
+  /// or removal). Idempotent. Queries are correct without it: it makes them faster.
   void setup() override;
   /// Re-reads every object's AABB and refits the cubes (rebuilds if the policy says so). Throws
   /// std::invalid_argument if an AABB is NaN; that object keeps its previous AABB, all others

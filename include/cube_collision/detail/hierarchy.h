@@ -115,7 +115,9 @@ class Hierarchy {
   const Object* refitAll(Read&& read);
   /// Rebuilds the cubes from scratch over the current objects.
   void rebuild();
-  /// Rebuilds if objects were added or removed since the last build (or if never built).
+  /// The first call (since construction or clear()) builds from scratch if anything changed
+  /// since the last build; later calls rebuild only if the automatic policy finds the tree
+  /// degraded or, with a forced policy, if objects were added or removed since the last build.
   void setup();
   /// Rebuilds if the update policy says so; called after every update.
   void maybeRebuildAfterUpdate();
@@ -206,6 +208,7 @@ class Hierarchy {
   std::size_t changes_ = 0;
   std::size_t builds_ = 0;
   bool built_ = false;
+  bool setup_done_ = false;
 };
 
 template <typename S>
