@@ -43,6 +43,7 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
 
   /// Creates an empty manager. Throws std::invalid_argument if a Config knob is out of range.
   explicit CubeCollisionManager(const Config& config = Config());
+  /// Unregisters nothing and deletes no object: the objects stay the caller's.
   ~CubeCollisionManager() override;
   CubeCollisionManager(const CubeCollisionManager&) = delete;
   CubeCollisionManager& operator=(const CubeCollisionManager&) = delete;
@@ -92,16 +93,23 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// Distance between the objects of this manager and those of another, as collide(other).
   void distance(Base* other_manager, void* cdata, fcl::DistanceCallBack<S> callback) const override;
 
-  /// The six queries above, adding the work they do to `stats` (when not null). Same results and
-  /// callbacks as without; for tuning and for the benchmark's "box tests per object".
+  // The six queries above, adding the work they do to `stats` (when not null). Same results and
+  // callbacks as without; for tuning and for the benchmark's "box tests per object".
+
+  /// collide(obj, cdata, callback), counting its work into `stats` (ignored if null).
   void collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
                QueryStats* stats) const;
+  /// distance(obj, cdata, callback), counting its work into `stats` (ignored if null).
   void distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback,
                 QueryStats* stats) const;
+  /// Self-collide, counting its work into `stats` (ignored if null).
   void collide(void* cdata, fcl::CollisionCallBack<S> callback, QueryStats* stats) const;
+  /// Self distance, counting its work into `stats` (ignored if null).
   void distance(void* cdata, fcl::DistanceCallBack<S> callback, QueryStats* stats) const;
+  /// collide(other_manager, ...), counting its work into `stats` (ignored if null).
   void collide(Base* other_manager, void* cdata, fcl::CollisionCallBack<S> callback,
                QueryStats* stats) const;
+  /// distance(other_manager, ...), counting its work into `stats` (ignored if null).
   void distance(Base* other_manager, void* cdata, fcl::DistanceCallBack<S> callback,
                 QueryStats* stats) const;
 
