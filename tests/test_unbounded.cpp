@@ -36,34 +36,8 @@ bool isPlanar(const Object* o) {
   return o->getNodeType() == fcl::GEOM_PLANE || o->getNodeType() == fcl::GEOM_HALFSPACE;
 }
 
-// Narrow phase with a canonical argument order, so that both managers run the same call.
-bool narrowCollide(Object* a, Object* b, void* d) {
-  const Pair p = cube::oracle::unordered(a, b);
-  fcl::CollisionRequest<S> req;
-  fcl::CollisionResult<S> res;
-  if (fcl::collide(p.first, p.second, req, res) > 0)
-    static_cast<std::vector<Pair>*>(d)->push_back(p);
-  return false;
-}
-
-// Narrow-phase distance clamped at 0; FCL 0.7's GJK distance has no support function for planes
-// and halfspaces (it crashes), so their AABB distance stands in on both sides.
-bool narrowDistance(Object* a, Object* b, void* d, S& dist) {
-  const Pair p = cube::oracle::unordered(a, b);
-  S v;
-  if (isPlanar(a) || isPlanar(b) || a->getNodeType() == fcl::GEOM_OCTREE ||
-      b->getNodeType() == fcl::GEOM_OCTREE) {
-    v = a->getAABB().distance(b->getAABB());
-  } else {
-    fcl::DistanceRequest<S> req;
-    fcl::DistanceResult<S> res;
-    v = std::max<S>(0, fcl::distance(p.first, p.second, req, res));
-  }
-  S& best = *static_cast<S*>(d);
-  best = std::min(best, v);
-  dist = std::min(dist, v);
-  return false;
-}
+using cube::oracle::narrowCollide;
+using cube::oracle::narrowDistance;
 
 bool record(Object* a, Object* b, void* d) {
   static_cast<std::vector<Pair>*>(d)->emplace_back(a, b);
@@ -103,14 +77,14 @@ void expectLikeNaive(const Manager& m, const std::vector<Object*>& objs,
   // Self collide: candidates and narrow phase.
   EXPECT_EQ(cube::oracle::selfPairs(m), cube::oracle::bruteSelfPairs(objs));
   std::vector<Pair> ours, theirs;
-  m.collide(&ours, narrowCollide);
-  naive.collide(&theirs, narrowCollide);
+  m.collide(&ours, narrowCollide<S>);
+  naive.collide(&theirs, narrowCollide<S>);
   EXPECT_EQ(sorted(ours), sorted(theirs));
 
   // Self distance.
   S a = std::numeric_limits<S>::max(), b = a;
-  m.distance(&a, narrowDistance);
-  naive.distance(&b, narrowDistance);
+  m.distance(&a, narrowDistance<S>);
+  naive.distance(&b, narrowDistance<S>);
   EXPECT_NEAR(a, b, 1e-9);
 
   for (Object* q : queries) {
@@ -120,17 +94,17 @@ void expectLikeNaive(const Manager& m, const std::vector<Object*>& objs,
     for (const auto& p : brutePairs(objs, {q})) want.push_back(p);
     EXPECT_EQ(sorted(got), want) << "collide(obj)";
     std::vector<Pair> n_ours, n_theirs;
-    m.collide(q, &n_ours, narrowCollide);
-    for (const auto& p : want) narrowCollide(p.first, p.second, &n_theirs);
+    m.collide(q, &n_ours, narrowCollide<S>);
+    for (const auto& p : want) narrowCollide<S>(p.first, p.second, &n_theirs);
     EXPECT_EQ(sorted(n_ours), sorted(n_theirs)) << "collide(obj) narrow phase";
 
     S da = std::numeric_limits<S>::max(), db = da;
-    m.distance(q, &da, narrowDistance);
+    m.distance(q, &da, narrowDistance<S>);
     // Naive's distance(obj) also visits q itself (distance 0) when registered: leave it out.
     fcl::NaiveCollisionManager<S> others;
     for (auto* o : objs)
       if (o != q) others.registerObject(o);
-    others.distance(q, &db, narrowDistance);
+    others.distance(q, &db, narrowDistance<S>);
     EXPECT_NEAR(da, db, 1e-9) << "distance(obj)";
   }
 }
@@ -150,18 +124,18 @@ void expectPairsWith(const Manager& m, Base& other, const std::vector<Object*>& 
   m.collide(&other, &got, record);
   EXPECT_EQ(sorted(got), brutePairs(objs, theirs)) << "collide(manager)";
   std::vector<Pair> n_ours, n_naive;
-  m.collide(&other, &n_ours, narrowCollide);
+  m.collide(&other, &n_ours, narrowCollide<S>);
   fcl::NaiveCollisionManager<S> a, b;
   a.registerObjects(objs);
   b.registerObjects(theirs);
   a.collide(&b, &n_naive, [](Object* x, Object* y, void* d) {
-    return x != y && narrowCollide(x, y, d);  // Naive also pairs an object with itself
+    return x != y && narrowCollide<S>(x, y, d);  // Naive also pairs an object with itself
   });
   EXPECT_EQ(sorted(n_ours), sorted(n_naive)) << "collide(manager) narrow phase";
   S da = std::numeric_limits<S>::max(), db = da;
-  m.distance(&other, &da, narrowDistance);
+  m.distance(&other, &da, narrowDistance<S>);
   a.distance(&b, &db, [](Object* x, Object* y, void* d, S& dist) {
-    return x != y && narrowDistance(x, y, d, dist);
+    return x != y && narrowDistance<S>(x, y, d, dist);
   });
   EXPECT_NEAR(da, db, 1e-9) << "distance(manager)";
   if (auto* cube = dynamic_cast<Manager*>(&other)) {
@@ -169,7 +143,7 @@ void expectPairsWith(const Manager& m, Base& other, const std::vector<Object*>& 
     cube->collide(const_cast<Manager*>(&m), &back, record);
     EXPECT_EQ(sorted(back), brutePairs(theirs, objs)) << "reverse collide(manager)";
     S dr = std::numeric_limits<S>::max();
-    cube->distance(const_cast<Manager*>(&m), &dr, narrowDistance);
+    cube->distance(const_cast<Manager*>(&m), &dr, narrowDistance<S>);
     EXPECT_NEAR(dr, db, 1e-9) << "reverse distance(manager)";
   }
 }

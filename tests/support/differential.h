@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "cube_collision/cube_collision_manager.h"
+#include "oracle.h"
 
 namespace cube {
 namespace diff {
@@ -784,58 +785,28 @@ class Runner {
     return "";
   }
 
-  // Narrow phase on the same objects as a Naive manager, argument order made canonical so both
-  // sides run exactly the same narrow-phase call per pair.
-  static bool narrowCollide(Object* a, Object* b, void* d) {
-    const Pair p = unordered(a, b);
-    fcl::CollisionRequest<S> req;
-    fcl::CollisionResult<S> res;
-    if (fcl::collide(p.first, p.second, req, res) > 0)
-      static_cast<std::vector<Pair>*>(d)->push_back(p);
-    return false;
-  }
-  static bool unboundedShape(const Object* o) {
-    const fcl::NODE_TYPE t = o->getNodeType();
-    return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE;
-  }
-  static bool narrowDistance(Object* a, Object* b, void* d, S& dist) {
-    const Pair p = unordered(a, b);
-    S v;
-    if (unboundedShape(a) || unboundedShape(b)) {
-      // FCL 0.7's GJK distance dereferences a null support function for planes and halfspaces;
-      // their AABB distance stands in (the same on both sides).
-      v = a->getAABB().distance(b->getAABB());
-    } else {
-      fcl::DistanceRequest<S> req;
-      fcl::DistanceResult<S> res;
-      // Penetration counts as 0: Naive stops visiting at 0, so deeper values are not comparable.
-      v = std::max<S>(0, fcl::distance(p.first, p.second, req, res));
-    }
-    S& best = *static_cast<S*>(d);
-    best = std::min(best, v);
-    dist = std::min(dist, v);
-    return false;
-  }
+  // The narrow-phase callbacks are oracle::narrowCollide / oracle::narrowDistance: the same
+  // call per pair on both sides, argument order made canonical.
 
   std::string checkNarrow() {
     ++narrow_checks_;
     fcl::NaiveCollisionManager<S> naive;
     naive.registerObjects(order_);
     std::vector<Pair> ours, theirs;
-    mgr_.collide(&ours, &narrowCollide);
-    naive.collide(&theirs, &narrowCollide);
+    mgr_.collide(&ours, &oracle::narrowCollide<S>);
+    naive.collide(&theirs, &oracle::narrowCollide<S>);
     if (sorted(ours) != sorted(theirs))
       return "narrow-phase colliding pairs differ from Naive (" + std::to_string(ours.size()) +
              " vs " + std::to_string(theirs.size()) + ")";
     S a = std::numeric_limits<S>::max(), b = a;
-    mgr_.distance(&a, &narrowDistance);
-    naive.distance(&b, &narrowDistance);
+    mgr_.distance(&a, &oracle::narrowDistance<S>);
+    naive.distance(&b, &oracle::narrowDistance<S>);
     if (std::abs(a - b) > 1e-9)
       return "narrow-phase self distance " + std::to_string(a) + " vs Naive " + std::to_string(b);
     // One query object through collide(obj) with FCL's own per-object loop.
     Object* q = anyObject();
     std::vector<Pair> oq, nq;
-    mgr_.collide(q, &oq, &narrowCollide);
+    mgr_.collide(q, &oq, &oracle::narrowCollide<S>);
     struct Filter {
       Object* q;
       std::vector<Pair>* out;
@@ -845,7 +816,7 @@ class Runner {
       // AABB-disjoint pairs, which the narrow phase may still call touching.
       auto* f = static_cast<Filter*>(p);
       if (y == x || !x->getAABB().overlap(y->getAABB())) return false;
-      return narrowCollide(x, y, f->out);
+      return oracle::narrowCollide<S>(x, y, f->out);
     });
     if (sorted(oq) != sorted(nq)) return "narrow-phase collide(obj) differs from Naive";
     return "";
