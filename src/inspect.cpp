@@ -40,7 +40,7 @@ HierarchyView<S>::HierarchyView(const CubeCollisionManager<S>& manager)
 
 template <typename S>
 HierarchyView<S>::HierarchyView(const detail::Hierarchy<S>& h) {
-  const std::vector<detail::Node>& nodes = h.nodes();
+  const detail::NodeArray& nodes = h.nodes();
   const auto& items = h.items();
 
   // Breadth-first numbering. `raw[k]` is the storage index of cube k; the queue is `raw` itself.

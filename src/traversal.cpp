@@ -25,15 +25,25 @@ class SmallStack {
   SmallStack(const SmallStack&) = delete;
   SmallStack& operator=(const SmallStack&) = delete;
   bool empty() const { return n_ == 0; }
+  /// Makes room for k more entries, so that pushIf() needs no check.
+  void reserve(std::size_t k) {
+    if (__builtin_expect(n_ + k > cap_, 0)) grow();
+  }
   void push(const T& t) {
-    if (__builtin_expect(n_ == cap_, 0)) grow();
+    reserve(1);
     data_[n_++] = t;
+  }
+  // Branch-free conditional push (room reserved): whether a child pair overlaps is close to a
+  // coin toss, and a mispredicted branch costs more than writing an entry that is not kept.
+  void pushIf(const T& t, bool take) {
+    data_[n_] = t;
+    n_ += take;
   }
   T pop() { return data_[--n_]; }
 
  private:
   [[gnu::noinline]] void grow() {
-    std::vector<T> bigger(cap_ * 2);
+    std::vector<T> bigger(cap_ * 2 + 8);
     std::copy(data_, data_ + n_, bigger.begin());
     heap_.swap(bigger);
     data_ = heap_.data();
@@ -109,13 +119,6 @@ inline float cubeGap2(const Node& a, const Node& b) {
 #endif
 }
 
-// An object's exact box against a cube's float bounds: the leaf prefilter.
-template <typename S>
-inline bool overlap(const Box<S>& a, const Node& b) {
-  return (a.lo[0] <= S(b.hi[0])) & (S(b.lo[0]) <= a.hi[0]) & (a.lo[1] <= S(b.hi[1])) &
-         (S(b.lo[1]) <= a.hi[1]) & (a.lo[2] <= S(b.hi[2])) & (S(b.lo[2]) <= a.hi[2]);
-}
-
 struct NoKey {};
 
 // Work counters for QueryStats; the empty one compiles away on the ordinary path.
@@ -145,9 +148,9 @@ struct CollidePolicy {
   bool keep(Key) const { return true; }
   static bool before(Key, Key) { return false; }
   // Whether an object can meet anything in the cube `n` at all.
-  bool reaches(const Item<S>& x, const Node& n) const {
+  bool reaches(const Item<S>& x, const Box<S>& cube) const {
     count.test();
-    return overlap(x.box, n);
+    return overlap(x.box, cube);
   }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
@@ -174,7 +177,7 @@ struct DistancePolicy {
     return keep(key);
   }
   static bool before(Key x, Key y) { return x < y; }
-  bool reaches(const Item<S>&, const Node&) const { return true; }
+  bool reaches(const Item<S>&, const Box<S>&) const { return true; }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
     return keep(gap2<S>(x.box, y.box)) && call(x, y);
@@ -231,48 +234,49 @@ bool leafSelf(const View<S>& v, const Node& n, const Policy& p) {
 template <typename S, class Policy>
 bool leafPair(const View<S>& va, const Node& na, const View<S>& vb, const Node& nb,
               const Policy& p) {
+  // Against a single object the prefilter would only repeat the exact test.
+  const bool filter = nb.count > 1;
+  Box<S> reach;
+  for (int k = 0; k < 3; ++k) {
+    reach.lo[k] = S(nb.lo[k]);
+    reach.hi[k] = S(nb.hi[k]);
+  }
   for (std::uint32_t i = na.first; i < na.first + na.count; ++i) {
     const Item<S>& x = va.items[i];
-    if (nb.count > 1 && !p.reaches(x, nb)) continue;
+    if (filter && !p.reaches(x, reach)) continue;
     for (std::uint32_t j = nb.first; j < nb.first + nb.count; ++j)
       if (x.obj != vb.items[j].obj && p.leaf(x, vb.items[j])) return true;
   }
   return false;
 }
 
-// Pushes up to two entries so that the more promising one is popped first.
-template <class Policy, class Stack, class E>
-void pushPair(Stack& stack, bool take0, const E& e0, bool take1, const E& e1) {
-  if (take0 && take1) {
-    if (Policy::before(e1.key, e0.key)) {
-      stack.push(e0);
-      stack.push(e1);
-    } else {
-      stack.push(e1);
-      stack.push(e0);
-    }
-  } else if (take0) {
-    stack.push(e0);
-  } else if (take1) {
-    stack.push(e1);
+// Pushes the taken entries among `e` (room reserved) so that the most promising is popped first:
+// for distance the nearest, for collide the given order (branch-free).
+template <class Policy, class Stack, class E, int N>
+void pushTaken(Stack& stack, const bool (&take)[N], const E (&e)[N]) {
+  if constexpr (Policy::kOrdered) {
+    int order[N];
+    for (int i = 0; i < N; ++i) order[i] = i;
+    // Insertion sort, farthest first.
+    for (int i = 1; i < N; ++i)
+      for (int j = i; j > 0 && Policy::before(e[order[j - 1]].key, e[order[j]].key); --j)
+        std::swap(order[j - 1], order[j]);
+    for (int i = 0; i < N; ++i)
+      if (take[order[i]]) stack.push(e[order[i]]);
+  } else {
+    for (int i = N - 1; i >= 0; --i) stack.pushIf(e[i], take[i]);
   }
 }
 
-// Pushes the taken entries of four so that the most promising is popped first (for distance,
-// nearest last on the stack; for collide, in the given order).
-template <class Policy, class Stack, class E>
-void pushFour(Stack& stack, const bool take[4], E e[4]) {
-  int order[4] = {0, 1, 2, 3};
-  if (Policy::kOrdered) {
-    // Insertion sort, farthest first.
-    for (int i = 1; i < 4; ++i)
-      for (int j = i; j > 0 && Policy::before(e[order[j - 1]].key, e[order[j]].key); --j)
-        std::swap(order[j - 1], order[j]);
-  } else {
-    std::reverse(order, order + 4);
-  }
-  for (int i = 0; i < 4; ++i)
-    if (take[order[i]]) stack.push(e[order[i]]);
+// Starts loading what a visit of cube `n` will read first (its children, or its objects), so
+// that the load overlaps the work on the entries above it on the stack: a descent is otherwise
+// one chain of dependent cache misses.
+template <typename S>
+inline void prefetchBelow(const View<S>& v, const Node& n) {
+  if (n.isLeaf())
+    __builtin_prefetch(v.items + n.first);
+  else
+    __builtin_prefetch(v.nodes + n.first);
 }
 
 template <class Key>
@@ -306,10 +310,14 @@ bool descendOne(const View<S>& tree, const Node& qn, const Item<S>& q, const Pol
         if (tree.items[i].obj != q.obj && p.leaf(tree.items[i], q)) return true;
       continue;
     }
-    E e0{n.first, {}}, e1{n.first + 1, {}};
-    const bool t0 = p.enter(tree.nodes[e0.node], qn, e0.key);
-    const bool t1 = p.enter(tree.nodes[e1.node], qn, e1.key);
-    pushPair<Policy>(stack, t0, e0, t1, e1);
+    E e2[2] = {{n.first, {}}, {n.first + 1, {}}};
+    bool take[2];
+    for (int i = 0; i < 2; ++i) {
+      take[i] = p.enter(tree.nodes[e2[i].node], qn, e2[i].key);
+      prefetchBelow(tree, tree.nodes[e2[i].node]);
+    }
+    stack.reserve(2);
+    pushTaken<Policy>(stack, take, e2);
   }
   return false;
 }
@@ -338,7 +346,11 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
       // Within a cube: within each child, then across the two.
       const std::uint32_t c = na.first;
       E cross{c, c + 1, {}};
-      if (p.enter(va.nodes[c], va.nodes[c + 1], cross.key)) stack.push(cross);
+      const bool touch = p.enter(va.nodes[c], va.nodes[c + 1], cross.key);
+      prefetchBelow(va, va.nodes[c]);
+      prefetchBelow(va, va.nodes[c + 1]);
+      stack.reserve(3);
+      stack.pushIf(cross, touch);
       stack.push(E{c + 1, c + 1, {}});
       stack.push(E{c, c, {}});
       continue;
@@ -350,22 +362,36 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
     if (!na.isLeaf() && !nb.isLeaf()) {
       // Open both cubes: one visit settles four child pairs.
       const std::uint32_t ca = na.first, cb = nb.first;
-      E e[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
+      E e4[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
       bool take[4];
-      for (int i = 0; i < 4; ++i) take[i] = p.enter(va.nodes[e[i].a], vb.nodes[e[i].b], e[i].key);
-      pushFour<Policy>(stack, take, e);
+      for (int i = 0; i < 4; ++i)
+        take[i] = p.enter(va.nodes[e4[i].a], vb.nodes[e4[i].b], e4[i].key);
+      for (int i = 0; i < 2; ++i) {
+        prefetchBelow(va, va.nodes[ca + i]);
+        prefetchBelow(vb, vb.nodes[cb + i]);
+      }
+      stack.reserve(4);
+      pushTaken<Policy>(stack, take, e4);
     } else if (nb.isLeaf()) {
       const std::uint32_t c = na.first;
-      E e0{c, e.b, {}}, e1{c + 1, e.b, {}};
-      const bool t0 = p.enter(va.nodes[c], nb, e0.key);
-      const bool t1 = p.enter(va.nodes[c + 1], nb, e1.key);
-      pushPair<Policy>(stack, t0, e0, t1, e1);
+      E e2[2] = {{c, e.b, {}}, {c + 1, e.b, {}}};
+      bool take[2];
+      for (int i = 0; i < 2; ++i) {
+        take[i] = p.enter(va.nodes[c + i], nb, e2[i].key);
+        prefetchBelow(va, va.nodes[c + i]);
+      }
+      stack.reserve(2);
+      pushTaken<Policy>(stack, take, e2);
     } else {
       const std::uint32_t c = nb.first;
-      E e0{e.a, c, {}}, e1{e.a, c + 1, {}};
-      const bool t0 = p.enter(na, vb.nodes[c], e0.key);
-      const bool t1 = p.enter(na, vb.nodes[c + 1], e1.key);
-      pushPair<Policy>(stack, t0, e0, t1, e1);
+      E e2[2] = {{e.a, c, {}}, {e.a, c + 1, {}}};
+      bool take[2];
+      for (int i = 0; i < 2; ++i) {
+        take[i] = p.enter(na, vb.nodes[c + i], e2[i].key);
+        prefetchBelow(vb, vb.nodes[c + i]);
+      }
+      stack.reserve(2);
+      pushTaken<Policy>(stack, take, e2);
     }
   }
   return false;

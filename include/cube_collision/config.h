@@ -37,7 +37,7 @@ struct Config {
   /// low value rebuilds often (a build costs about as much as 10 to 20 refits); a high value
   /// lets queries slow down on a stale tree. In the drift benchmark (benchmarks/bench_drift.cpp)
   /// 1.1 to 1.5 were within 5% of each other and 1.5 rebuilt least among them.
-  double rebuild_threshold = 1.5;
+  double rebuild_threshold = 1.25;
 
   /// Objects whose AABB has a coordinate beyond +-unbounded_limit (or infinite: planes,
   /// halfspaces) are kept out of the cubes in a separate list that every query tests. Trade-off:

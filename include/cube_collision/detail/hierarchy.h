@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,39 @@ class CollisionObject;
 
 namespace cube {
 namespace detail {
+
+/// Allocator that puts element 0 `Offset` bytes past a cache-line (64-byte) boundary. Sibling
+/// cubes sit at an odd index and the next one, so with Offset 32 each sibling pair fills exactly
+/// one line (glibc's malloc would start the array 16 bytes past a line and split half the cubes
+/// in two); with Offset 0 each 64-byte object record fills one line.
+template <class T, std::size_t Offset>
+struct LineAllocator {
+  static_assert(Offset < 64 && Offset % alignof(T) == 0, "offset within a line, T aligned");
+  using value_type = T;
+  template <class U>
+  struct rebind {
+    using other = LineAllocator<U, Offset>;
+  };
+  LineAllocator() = default;
+  template <class U>
+  LineAllocator(const LineAllocator<U, Offset>&) noexcept {}
+  T* allocate(std::size_t n) {
+    auto* base =
+        static_cast<unsigned char*>(::operator new(n * sizeof(T) + Offset, std::align_val_t(64)));
+    return reinterpret_cast<T*>(base + Offset);
+  }
+  void deallocate(T* p, std::size_t) noexcept {
+    ::operator delete(reinterpret_cast<unsigned char*>(p) - Offset, std::align_val_t(64));
+  }
+  template <class U>
+  bool operator==(const LineAllocator<U, Offset>&) const noexcept {
+    return true;
+  }
+  template <class U>
+  bool operator!=(const LineAllocator<U, Offset>&) const noexcept {
+    return false;
+  }
+};
 
 /// Index meaning "no cube" / "no object".
 inline constexpr std::uint32_t kNone = 0xffffffffu;
@@ -53,6 +87,9 @@ struct Node {
 };
 static_assert(sizeof(Node) == 32, "two cubes per cache line");
 
+/// The cube array: the root at 0, sibling pairs from odd indices, one pair per cache line.
+using NodeArray = std::vector<Node, LineAllocator<Node, 32>>;
+
 /// Surface area of a cube in double; an emptied cube (lo > hi) has none.
 inline double surfaceArea(const Node& n) {
   if (n.lo[0] > n.hi[0]) return 0.0;
@@ -72,6 +109,10 @@ struct Item {
   std::uint32_t seq;             ///< registration order
 };
 static_assert(sizeof(Item<double>) == 64, "one object per cache line for double");
+
+/// The object records, each starting on a cache line for double.
+template <typename S>
+using ItemArray = std::vector<Item<S>, LineAllocator<Item<S>, 0>>;
 
 /// A read-only window on a tree for the traversals: either the cubes, or the list of unbounded
 /// objects seen as one leaf, or a single query object seen as one leaf.
@@ -132,9 +173,9 @@ class Hierarchy {
   }
 
   // Inspection.
-  const std::vector<Node>& nodes() const { return nodes_; }
-  const std::vector<Item<S>>& items() const { return items_; }
-  const std::vector<Item<S>>& unboundedItems() const { return unbounded_; }
+  const NodeArray& nodes() const { return nodes_; }
+  const ItemArray<S>& items() const { return items_; }
+  const ItemArray<S>& unboundedItems() const { return unbounded_; }
   std::uint32_t root() const { return root_; }
   std::uint32_t parent(std::uint32_t cube) const { return parent_[cube]; }
   /// Total surface area of the live cubes, kept up to date by refits.
@@ -190,11 +231,11 @@ class Hierarchy {
   void trimTail();
 
   Config config_;
-  std::vector<Node> nodes_;
+  NodeArray nodes_;
   std::vector<std::uint32_t> parent_;  // per cube; kNone for the root and dead cubes
   std::uint32_t root_ = kNone;
-  std::vector<Item<S>> items_;  // leaf order; dead slots have obj == nullptr
-  std::vector<Item<S>> unbounded_;
+  ItemArray<S> items_;  // leaf order; dead slots have obj == nullptr
+  ItemArray<S> unbounded_;
   Node unbounded_node_{};
   std::vector<std::uint32_t> index_;  // 0 = empty slot, else location + 1
   std::size_t index_used_ = 0;
@@ -219,7 +260,7 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
   std::vector<std::pair<Object*, Box<S>>> movers;  // change of kind: rare, so allocation is fine
   Box<S> b;
   // One pass over each list; the kind an item must have to stay where it is.
-  auto pass = [&](std::vector<Item<S>>& list, BoxKind home) {
+  auto pass = [&](ItemArray<S>& list, BoxKind home) {
     for (Item<S>& it : list) {
       if (it.obj == nullptr) continue;
       read(it.obj, b);
