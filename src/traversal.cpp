@@ -25,25 +25,15 @@ class SmallStack {
   SmallStack(const SmallStack&) = delete;
   SmallStack& operator=(const SmallStack&) = delete;
   bool empty() const { return n_ == 0; }
-  /// Makes room for k more entries, so that pushIf() needs no check.
-  void reserve(std::size_t k) {
-    if (__builtin_expect(n_ + k > cap_, 0)) grow();
-  }
   void push(const T& t) {
-    reserve(1);
+    if (__builtin_expect(n_ == cap_, 0)) grow();
     data_[n_++] = t;
-  }
-  // Branch-free conditional push (room reserved): whether a child pair overlaps is close to a
-  // coin toss, and a mispredicted branch costs more than writing an entry that is not kept.
-  void pushIf(const T& t, bool take) {
-    data_[n_] = t;
-    n_ += take;
   }
   T pop() { return data_[--n_]; }
 
  private:
   [[gnu::noinline]] void grow() {
-    std::vector<T> bigger(cap_ * 2 + 8);
+    std::vector<T> bigger(cap_ * 2);
     std::copy(data_, data_ + n_, bigger.begin());
     heap_.swap(bigger);
     data_ = heap_.data();
@@ -103,6 +93,32 @@ inline S gap2(const B& a, const B& b) {
   return sum;
 }
 
+// Squared gap between two exact boxes (fcl::AABB::distance squared). An axis whose difference
+// is NaN (both boxes reaching the same infinity) counts as touching, as in gap2.
+inline double boxGap2(const Box<double>& a, const Box<double>& b) {
+#if defined(__SSE2__)
+  const __m128d zero = _mm_setzero_pd();
+  const __m128d x01 = _mm_sub_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.hi));
+  const __m128d y01 = _mm_sub_pd(_mm_loadu_pd(b.lo), _mm_loadu_pd(a.hi));
+  const __m128d x2 = _mm_sub_sd(_mm_load_sd(a.lo + 2), _mm_load_sd(b.hi + 2));
+  const __m128d y2 = _mm_sub_sd(_mm_load_sd(b.lo + 2), _mm_load_sd(a.hi + 2));
+  __m128d d01 = _mm_andnot_pd(_mm_cmpunord_pd(x01, y01), _mm_max_pd(x01, y01));
+  __m128d d2 = _mm_andnot_pd(_mm_cmpunord_sd(x2, y2), _mm_max_sd(x2, y2));
+  d01 = _mm_max_pd(d01, zero);
+  d2 = _mm_max_sd(d2, zero);
+  d01 = _mm_mul_pd(d01, d01);
+  // Summed in axis order, as gap2 does.
+  const __m128d s01 = _mm_add_sd(d01, _mm_unpackhi_pd(d01, d01));
+  return _mm_cvtsd_f64(_mm_add_sd(s01, _mm_mul_sd(d2, d2)));
+#else
+  return gap2<double>(a, b);
+#endif
+}
+
+inline float boxGap2(const Box<float>& a, const Box<float>& b) {
+  return gap2<float>(a, b);
+}
+
 // Squared gap between two cubes, never above the exact value of their float bounds (so pruning
 // on it is safe): computed in float, then shrunk by a few ulps to absorb the roundings.
 inline float cubeGap2(const Node& a, const Node& b) {
@@ -152,9 +168,11 @@ struct CollidePolicy {
     count.test();
     return overlap(x.box, cube);
   }
+  // An object never meets itself (two managers may share objects); that check comes after the
+  // box test, which rejects most pairs without touching the object pointers.
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
-    if (!overlap(x.box, y.box)) return false;
+    if (!overlap(x.box, y.box) || x.obj == y.obj) return false;
     count.call();
     return fn(x.obj, y.obj, data);
   }
@@ -180,7 +198,7 @@ struct DistancePolicy {
   bool reaches(const Item<S>&, const Box<S>&) const { return true; }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
-    return keep(gap2<S>(x.box, y.box)) && call(x, y);
+    return keep(boxGap2(x.box, y.box)) && x.obj != y.obj && call(x, y);
   }
   bool call(const Item<S>& x, const Item<S>& y) const {
     count.call();
@@ -200,7 +218,7 @@ bool leafNearestFirst(const View<S>& tree, const Node& n, const Item<S>& q, cons
   for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
     if (tree.items[i].obj == q.obj) continue;
     p.count.test();
-    const S k = gap2<S>(tree.items[i].box, q.box);
+    const S k = boxGap2(tree.items[i].box, q.box);
     std::uint32_t j = m++;
     for (; j > 0 && key[j - 1] > k; --j) {
       key[j] = key[j - 1];
@@ -227,7 +245,7 @@ bool leafSelf(const View<S>& v, const Node& n, const Policy& p) {
   const std::uint32_t end = n.first + n.count;
   for (std::uint32_t i = n.first; i < end; ++i)
     for (std::uint32_t j = i + 1; j < end; ++j)
-      if (v.items[i].obj != v.items[j].obj && p.leaf(v.items[i], v.items[j])) return true;
+      if (p.leaf(v.items[i], v.items[j])) return true;
   return false;
 }
 
@@ -245,26 +263,50 @@ bool leafPair(const View<S>& va, const Node& na, const View<S>& vb, const Node& 
     const Item<S>& x = va.items[i];
     if (filter && !p.reaches(x, reach)) continue;
     for (std::uint32_t j = nb.first; j < nb.first + nb.count; ++j)
-      if (x.obj != vb.items[j].obj && p.leaf(x, vb.items[j])) return true;
+      if (p.leaf(x, vb.items[j])) return true;
   }
   return false;
 }
 
-// Pushes the taken entries among `e` (room reserved) so that the most promising is popped first:
-// for distance the nearest, for collide the given order (branch-free).
+// Chooses what the walk does next among the taken entries of `e`: the most promising one (for
+// distance the nearest, for collide the first) goes into `next` and is visited straight away;
+// the others wait on the stack, the next most promising on top. Returns false if none was taken.
+// Going straight on, and choosing with branches on registers rather than by compacting the
+// taken entries through memory (each store and load of which waits on the last), more than
+// doubled the speed of object queries.
 template <class Policy, class Stack, class E, int N>
-void pushTaken(Stack& stack, const bool (&take)[N], const E (&e)[N]) {
-  if constexpr (Policy::kOrdered) {
-    int order[N];
-    for (int i = 0; i < N; ++i) order[i] = i;
-    // Insertion sort, farthest first.
-    for (int i = 1; i < N; ++i)
-      for (int j = i; j > 0 && Policy::before(e[order[j - 1]].key, e[order[j]].key); --j)
-        std::swap(order[j - 1], order[j]);
-    for (int i = 0; i < N; ++i)
-      if (take[order[i]]) stack.push(e[order[i]]);
+bool continueWithBest(Stack& stack, const bool (&take)[N], const E (&e)[N], E& next) {
+  if constexpr (!Policy::kOrdered) {
+    int first = 0;
+    while (first < N && !take[first]) ++first;
+    if (first == N) return false;
+    for (int i = N - 1; i > first; --i)
+      if (take[i]) stack.push(e[i]);
+    next = e[first];
+    return true;
+  } else if constexpr (N == 2) {
+    if (take[0] && take[1]) {
+      const int near = Policy::before(e[1].key, e[0].key) ? 1 : 0;
+      stack.push(e[1 - near]);
+      next = e[near];
+      return true;
+    }
+    if (!take[0] && !take[1]) return false;
+    next = e[take[0] ? 0 : 1];
+    return true;
   } else {
-    for (int i = N - 1; i >= 0; --i) stack.pushIf(e[i], take[i]);
+    int order[N];
+    int m = 0;
+    for (int i = 0; i < N; ++i)
+      if (take[i]) order[m++] = i;
+    if (m == 0) return false;
+    // Insertion sort, nearest first (stable: equal keys keep their order).
+    for (int i = 1; i < m; ++i)
+      for (int j = i; j > 0 && Policy::before(e[order[j]].key, e[order[j - 1]].key); --j)
+        std::swap(order[j - 1], order[j]);
+    for (int j = m - 1; j > 0; --j) stack.push(e[order[j]]);
+    next = e[order[0]];
+    return true;
   }
 }
 
@@ -295,29 +337,31 @@ bool descendOne(const View<S>& tree, const Node& qn, const Item<S>& q, const Pol
   SmallStack<E, 64> stack;
   stack.push(start);
   while (!stack.empty()) {
-    const E e = stack.pop();
+    E e = stack.pop();
     if (!p.keep(e.key)) continue;
-    p.count.visit();
-    const Node& n = tree.nodes[e.node];
-    if (n.isLeaf()) {
-      if constexpr (Policy::kOrdered) {
-        if (n.count <= 16) {
-          if (leafNearestFirst(tree, n, q, p)) return true;
-          continue;
+    for (bool more = true; more;) {
+      more = false;
+      p.count.visit();
+      const Node& n = tree.nodes[e.node];
+      if (n.isLeaf()) {
+        if constexpr (Policy::kOrdered) {
+          if (n.count <= 16) {
+            if (leafNearestFirst(tree, n, q, p)) return true;
+            break;
+          }
         }
+        for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
+          if (p.leaf(tree.items[i], q)) return true;
+        break;
       }
-      for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
-        if (tree.items[i].obj != q.obj && p.leaf(tree.items[i], q)) return true;
-      continue;
+      E e2[2] = {{n.first, {}}, {n.first + 1, {}}};
+      bool take[2];
+      for (int i = 0; i < 2; ++i) {
+        take[i] = p.enter(tree.nodes[e2[i].node], qn, e2[i].key);
+        prefetchBelow(tree, tree.nodes[e2[i].node]);
+      }
+      more = continueWithBest<Policy>(stack, take, e2, e);
     }
-    E e2[2] = {{n.first, {}}, {n.first + 1, {}}};
-    bool take[2];
-    for (int i = 0; i < 2; ++i) {
-      take[i] = p.enter(tree.nodes[e2[i].node], qn, e2[i].key);
-      prefetchBelow(tree, tree.nodes[e2[i].node]);
-    }
-    stack.reserve(2);
-    pushTaken<Policy>(stack, take, e2);
   }
   return false;
 }
@@ -333,65 +377,64 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
   if (!self && !p.enter(va.nodes[va.root], vb.nodes[vb.root], start.key)) return false;
   stack.push(start);
   while (!stack.empty()) {
-    const E e = stack.pop();
+    E e = stack.pop();
     if (!p.keep(e.key)) continue;  // the best distance may have dropped since the push
-    p.count.visit();
-    const Node& na = va.nodes[e.a];
-    const Node& nb = vb.nodes[e.b];
-    if (self && e.a == e.b) {
-      if (na.isLeaf()) {
-        if (leafSelf(va, na, p)) return true;
+    for (bool more = true; more;) {
+      more = false;
+      p.count.visit();
+      const Node& na = va.nodes[e.a];
+      const Node& nb = vb.nodes[e.b];
+      if (self && e.a == e.b) {
+        if (na.isLeaf()) {
+          if (leafSelf(va, na, p)) return true;
+          break;
+        }
+        // Within a cube: within each child, then across the two.
+        const std::uint32_t c = na.first;
+        E e3[3] = {{c, c, {}}, {c + 1, c + 1, {}}, {c, c + 1, {}}};
+        bool take[3] = {true, true, false};
+        take[2] = p.enter(va.nodes[c], va.nodes[c + 1], e3[2].key);
+        prefetchBelow(va, va.nodes[c]);
+        prefetchBelow(va, va.nodes[c + 1]);
+        more = continueWithBest<Policy>(stack, take, e3, e);
         continue;
       }
-      // Within a cube: within each child, then across the two.
-      const std::uint32_t c = na.first;
-      E cross{c, c + 1, {}};
-      const bool touch = p.enter(va.nodes[c], va.nodes[c + 1], cross.key);
-      prefetchBelow(va, va.nodes[c]);
-      prefetchBelow(va, va.nodes[c + 1]);
-      stack.reserve(3);
-      stack.pushIf(cross, touch);
-      stack.push(E{c + 1, c + 1, {}});
-      stack.push(E{c, c, {}});
-      continue;
-    }
-    if (na.isLeaf() && nb.isLeaf()) {
-      if (leafPair(va, na, vb, nb, p)) return true;
-      continue;
-    }
-    if (!na.isLeaf() && !nb.isLeaf()) {
-      // Open both cubes: one visit settles four child pairs.
-      const std::uint32_t ca = na.first, cb = nb.first;
-      E e4[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
-      bool take[4];
-      for (int i = 0; i < 4; ++i)
-        take[i] = p.enter(va.nodes[e4[i].a], vb.nodes[e4[i].b], e4[i].key);
-      for (int i = 0; i < 2; ++i) {
-        prefetchBelow(va, va.nodes[ca + i]);
-        prefetchBelow(vb, vb.nodes[cb + i]);
+      const bool la = na.isLeaf(), lb = nb.isLeaf();
+      if (la && lb) {
+        if (leafPair(va, na, vb, nb, p)) return true;
+        break;
       }
-      stack.reserve(4);
-      pushTaken<Policy>(stack, take, e4);
-    } else if (nb.isLeaf()) {
-      const std::uint32_t c = na.first;
-      E e2[2] = {{c, e.b, {}}, {c + 1, e.b, {}}};
-      bool take[2];
-      for (int i = 0; i < 2; ++i) {
-        take[i] = p.enter(va.nodes[c + i], nb, e2[i].key);
-        prefetchBelow(va, va.nodes[c + i]);
+      if (!la && !lb) {
+        // Open both cubes: one visit settles four child pairs.
+        const std::uint32_t ca = na.first, cb = nb.first;
+        E e4[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
+        bool take[4];
+        for (int i = 0; i < 4; ++i)
+          take[i] = p.enter(va.nodes[e4[i].a], vb.nodes[e4[i].b], e4[i].key);
+        for (int i = 0; i < 2; ++i) {
+          prefetchBelow(va, va.nodes[ca + i]);
+          prefetchBelow(vb, vb.nodes[cb + i]);
+        }
+        more = continueWithBest<Policy>(stack, take, e4, e);
+      } else if (lb) {
+        const std::uint32_t c = na.first;
+        E e2[2] = {{c, e.b, {}}, {c + 1, e.b, {}}};
+        bool take[2];
+        for (int i = 0; i < 2; ++i) {
+          take[i] = p.enter(va.nodes[c + i], nb, e2[i].key);
+          prefetchBelow(va, va.nodes[c + i]);
+        }
+        more = continueWithBest<Policy>(stack, take, e2, e);
+      } else {
+        const std::uint32_t c = nb.first;
+        E e2[2] = {{e.a, c, {}}, {e.a, c + 1, {}}};
+        bool take[2];
+        for (int i = 0; i < 2; ++i) {
+          take[i] = p.enter(na, vb.nodes[c + i], e2[i].key);
+          prefetchBelow(vb, vb.nodes[c + i]);
+        }
+        more = continueWithBest<Policy>(stack, take, e2, e);
       }
-      stack.reserve(2);
-      pushTaken<Policy>(stack, take, e2);
-    } else {
-      const std::uint32_t c = nb.first;
-      E e2[2] = {{e.a, c, {}}, {e.a, c + 1, {}}};
-      bool take[2];
-      for (int i = 0; i < 2; ++i) {
-        take[i] = p.enter(na, vb.nodes[c + i], e2[i].key);
-        prefetchBelow(vb, vb.nodes[c + i]);
-      }
-      stack.reserve(2);
-      pushTaken<Policy>(stack, take, e2);
     }
   }
   return false;
