@@ -3,6 +3,7 @@
 // The cube hierarchy itself: flat arrays, no FCL or Eigen types beyond a forward declaration, so
 // that this code could be built with any instruction set without touching Eigen's ABI.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <new>
@@ -123,6 +124,12 @@ struct View {
   std::uint32_t root = kNone;  ///< kNone: empty
 };
 
+template <typename S>
+bool sameBox(const Box<S>& a, const Box<S>& b) {
+  return a.lo[0] == b.lo[0] && a.lo[1] == b.lo[1] && a.lo[2] == b.lo[2] && a.hi[0] == b.hi[0] &&
+         a.hi[1] == b.hi[1] && a.hi[2] == b.hi[2];
+}
+
 /// Outward-rounded float copy of an exact box.
 template <typename S>
 void roundOut(const Box<S>& b, float lo[3], float hi[3]);
@@ -149,9 +156,10 @@ class Hierarchy {
   bool remove(const Object* obj);
   /// Sets a registered object's box and refits the cubes above it; false if not registered.
   bool move(const Object* obj, const Box<S>& box);
-  /// Reads every object's box through `read(obj, box)` and refits all cubes in one bottom-up
-  /// pass; an object whose new box is invalid keeps its old one. Returns the earliest registered
-  /// object whose box was invalid, or nullptr.
+  /// Reads every object's box through `read(obj, box)` and refits the cubes above the changed
+  /// ones (path by path if few changed, else all in one bottom-up pass); an object whose new box
+  /// is invalid keeps its old one. Returns the earliest registered object whose box was invalid,
+  /// or nullptr.
   template <class Read>
   const Object* refitAll(Read&& read);
   /// Rebuilds the cubes from scratch over the current objects.
@@ -259,14 +267,20 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
   const Object* bad_obj = nullptr;
   std::vector<std::pair<Object*, Box<S>>> movers;  // change of kind: rare, so allocation is fine
   Box<S> b;
+  // A few moved objects refit their paths to the root (stopping where nothing changes); many
+  // refit every cube in one pass, which costs about as much as refitting 1/32 of the paths.
+  const std::size_t path_limit = std::max<std::size_t>(8, live_ / 32);
+  std::size_t moved = 0;
   // One pass over each list; the kind an item must have to stay where it is.
   auto pass = [&](ItemArray<S>& list, BoxKind home) {
     for (Item<S>& it : list) {
       if (it.obj == nullptr) continue;
       read(it.obj, b);
+      if (sameBox(it.box, b)) continue;  // unmoved: same kind, nothing to refit
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {
         it.box = b;
+        if (home == BoxKind::finite && ++moved <= path_limit) refitUp(it.leaf);
       } else if (kind != BoxKind::invalid) {
         movers.emplace_back(it.obj, b);
       } else if (it.seq < bad) {
@@ -277,7 +291,7 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
   };
   pass(items_, BoxKind::finite);
   pass(unbounded_, BoxKind::unbounded);
-  refitAllCubes();
+  if (moved > path_limit) refitAllCubes();
   for (const auto& m : movers) move(m.first, m.second);
   return bad_obj;
 }
