@@ -133,7 +133,9 @@ struct Motion {
 const Motion kMotions[] = {{"small", 0.2, 0.01 * 2 * kHalf, false},
                            {"teleport", 0.1, 2 * kHalf, false},
                            {"rotation", 0.3, 0.0, true},
-                           {"everything small", 1.0, 0.01 * 2 * kHalf, true}};
+                           {"everything small", 1.0, 0.01 * 2 * kHalf, true},
+                           // Under 1/32 of the objects: update() refits their paths only.
+                           {"few", 0.02, 0.05 * 2 * kHalf, false}};
 
 // After each kind of motion and each update variant: self-collide, per-object queries and
 // distance equal brute force and Naive.
