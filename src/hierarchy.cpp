@@ -54,16 +54,12 @@ Box<S> emptyBox() {
   return b;
 }
 
-template <typename S>
-int longestAxis(const Box<S>& b) {
+// Of an object box or a cube; sides in double, exact for float bounds.
+template <class B>
+int longestAxis(const B& b) {
   int axis = 0;
-  S best = b.hi[0] - b.lo[0];
-  for (int k = 1; k < 3; ++k) {
-    if (b.hi[k] - b.lo[k] > best) {
-      best = b.hi[k] - b.lo[k];
-      axis = k;
-    }
-  }
+  for (int k = 1; k < 3; ++k)
+    if (double(b.hi[k]) - double(b.lo[k]) > double(b.hi[axis]) - double(b.lo[axis])) axis = k;
   return axis;
 }
 
@@ -380,9 +376,7 @@ void Hierarchy<S>::rebuild() {
           box.lo[k] = std::min(box.lo[k], rec[p].lo[k]);
           box.hi[k] = std::max(box.hi[k], rec[p].hi[k]);
         }
-      int axis = 0;
-      for (int k = 1; k < 3; ++k)
-        if (double(box.hi[k]) - box.lo[k] > double(box.hi[axis]) - box.lo[axis]) axis = k;
+      const int axis = longestAxis(box);
       const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
       // Median by centre along that side (the sum of the float bounds: exact order is not
       // needed, only a deterministic one), ties by registration order, in O(n).
