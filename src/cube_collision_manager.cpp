@@ -69,6 +69,14 @@ void moveOne(detail::Hierarchy<S>& tree, const fcl::CollisionObject<S>* obj,
   }
 }
 
+// Collide of two views; a small view against itself takes the all-pairs kernel.
+template <typename S>
+bool collideViews(const Config& config, const View<S>& a, const View<S>& b, bool self, void* data,
+                  detail::CollideFn<S> fn, QueryStats* stats) {
+  if (self && a.slots <= config.all_pairs_limit) return detail::collideAllPairs(a, data, fn, stats);
+  return detail::collidePairs(a, b, self, data, fn, stats);
+}
+
 // Every query is a set of view pairs; `run(a, b, self)` traverses one pair of views and returns
 // true when the callback stopped the query. These three functions say which pairs.
 
@@ -272,7 +280,7 @@ void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> cal
                                       QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
   selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::collidePairs(a, b, self, cdata, callback, stats);
+    return collideViews(tree_.config(), a, b, self, cdata, callback, stats);
   });
 }
 
@@ -291,7 +299,7 @@ void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
   managerPairs(*this, other_manager, "collide", [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::collidePairs(a, b, self, cdata, callback, stats);
+    return collideViews(tree_.config(), a, b, self, cdata, callback, stats);
   });
 }
 

@@ -21,6 +21,8 @@ void Config::check() const {
     throw std::invalid_argument("cube::Config: rebuild_threshold must be > 1");
   if (!(unbounded_limit > 0.0))
     throw std::invalid_argument("cube::Config: unbounded_limit must be > 0");
+  if (all_pairs_limit > kMaxAllPairsLimit)
+    throw std::invalid_argument("cube::Config: all_pairs_limit must be <= 64");
 }
 
 namespace detail {

@@ -5,10 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>  // baseline on x86-64: no -m flag, so no effect on Eigen's ABI
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>  // AVX2 only inside functions marked target("avx2"), chosen at run time
+#define CUBE_HAVE_AVX2_KERNEL 1
 #endif
 
 namespace cube {
@@ -141,12 +146,14 @@ struct NoKey {};
 struct NoCount {
   void visit() const {}
   void test() const {}
+  void tests(std::size_t) const {}
   void call() const {}
 };
 struct Count {
   QueryStats* stats;
   void visit() const { ++stats->cubes_visited; }
   void test() const { ++stats->box_tests; }
+  void tests(std::size_t k) const { stats->box_tests += k; }
   void call() const { ++stats->callbacks; }
 };
 
@@ -209,6 +216,155 @@ bool collideSmall(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys, std::u
     for (std::uint32_t j = Self ? i + 1 : 0; j < ny; ++j)
       hits |= std::uint64_t(p.touches(xs[i], ys[j])) << (kMaskLeaf * i + j);
   return hits != 0 && reportHits(hits, xs, ys, p);
+}
+
+// The all-pairs kernel for small scenes. The boxes are copied into float columns, rounded to
+// nearest: rounding is monotone (a <= b gives float(a) <= float(b)), so no overlapping pair is
+// lost, and the few pairs that overlap only after rounding fail the exact test that follows.
+struct FlatBoxes {
+  alignas(32) float lo[3][kAllPairsMax];
+  alignas(32) float hi[3][kAllPairsMax];
+};
+
+// rows[i] gets bit j set for every j > i whose float box overlaps box i (bits of the padding
+// columns, from n to the next multiple of 8, may be set too).
+using RowMasks = std::uint64_t[kAllPairsMax];
+
+inline std::uint64_t above(std::uint32_t i) {
+  return (~std::uint64_t(0) << i) << 1;
+}
+
+void rowMasksPortable(const FlatBoxes& f, std::uint32_t n, RowMasks& rows) {
+  for (std::uint32_t i = 0; i < n; ++i) {
+    std::uint64_t m = 0;
+    for (std::uint32_t j = i + 1; j < n; ++j) {
+      bool hit = true;
+      for (int k = 0; k < 3; ++k) hit &= (f.lo[k][i] <= f.hi[k][j]) & (f.lo[k][j] <= f.hi[k][i]);
+      m |= std::uint64_t(hit) << j;
+    }
+    rows[i] = m;
+  }
+}
+
+#if defined(__SSE2__)
+void rowMasksSse2(const FlatBoxes& f, std::uint32_t n, RowMasks& rows) {
+  for (std::uint32_t i = 0; i < n; ++i) {
+    __m128 lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = _mm_set1_ps(f.lo[k][i]);
+      hi[k] = _mm_set1_ps(f.hi[k][i]);
+    }
+    std::uint64_t m = 0;
+    for (std::uint32_t j = (i + 1) & ~3u; j < n; j += 4) {
+      __m128 hit = _mm_castsi128_ps(_mm_set1_epi32(-1));
+      for (int k = 0; k < 3; ++k)
+        hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmple_ps(lo[k], _mm_load_ps(f.hi[k] + j)),
+                                         _mm_cmple_ps(_mm_load_ps(f.lo[k] + j), hi[k])));
+      m |= std::uint64_t(_mm_movemask_ps(hit)) << j;
+    }
+    rows[i] = m & above(i);
+  }
+}
+#endif
+
+#if defined(CUBE_HAVE_AVX2_KERNEL)
+[[gnu::target("avx2")]] void rowMasksAvx2(const FlatBoxes& f, std::uint32_t n, RowMasks& rows) {
+  for (std::uint32_t i = 0; i < n; ++i) {
+    __m256 lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = _mm256_set1_ps(f.lo[k][i]);
+      hi[k] = _mm256_set1_ps(f.hi[k][i]);
+    }
+    std::uint64_t m = 0;
+    for (std::uint32_t j = (i + 1) & ~7u; j < n; j += 8) {
+      __m256 hit = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+      for (int k = 0; k < 3; ++k)
+        hit = _mm256_and_ps(
+            hit, _mm256_and_ps(_mm256_cmp_ps(lo[k], _mm256_load_ps(f.hi[k] + j), _CMP_LE_OQ),
+                               _mm256_cmp_ps(_mm256_load_ps(f.lo[k] + j), hi[k], _CMP_LE_OQ)));
+      m |= std::uint64_t(_mm256_movemask_ps(hit)) << j;
+    }
+    rows[i] = m & above(i);
+  }
+}
+#endif
+
+// Column n of f gets box b rounded to float.
+inline void toColumns(const Box<float>& b, FlatBoxes& f, std::uint32_t n) {
+  for (int k = 0; k < 3; ++k) {
+    f.lo[k][n] = b.lo[k];
+    f.hi[k][n] = b.hi[k];
+  }
+}
+
+inline void toColumns(const Box<double>& b, FlatBoxes& f, std::uint32_t n) {
+#if defined(__SSE2__)
+  // Three two-lane conversions instead of six scalar ones (each of which also waits on a
+  // register clear).
+  alignas(16) float v[12];
+  _mm_store_ps(v, _mm_cvtpd_ps(_mm_loadu_pd(b.lo)));
+  _mm_store_ps(v + 4, _mm_cvtpd_ps(_mm_loadu_pd(b.lo + 2)));
+  _mm_store_ps(v + 8, _mm_cvtpd_ps(_mm_loadu_pd(b.hi + 1)));
+  f.lo[0][n] = v[0];
+  f.lo[1][n] = v[1];
+  f.lo[2][n] = v[4];
+  f.hi[0][n] = v[5];
+  f.hi[1][n] = v[8];
+  f.hi[2][n] = v[9];
+#else
+  for (int k = 0; k < 3; ++k) {
+    f.lo[k][n] = float(b.lo[k]);
+    f.hi[k][n] = float(b.hi[k]);
+  }
+#endif
+}
+
+PairKernel resolve(PairKernel k) {
+  if (k != PairKernel::best) return k;
+  if (pairKernelAvailable(PairKernel::avx2)) return PairKernel::avx2;
+  if (pairKernelAvailable(PairKernel::sse2)) return PairKernel::sse2;
+  return PairKernel::portable;
+}
+
+template <typename S, class Policy>
+bool allPairs(const View<S>& v, const Policy& p, PairKernel kernel) {
+  FlatBoxes f;
+  std::uint32_t slot[kAllPairsMax];
+  std::uint32_t n = 0;
+  for (std::uint32_t s = 0; s < v.slots; ++s) {
+    const Item<S>& it = v.items[s];
+    if (it.obj == nullptr) continue;
+    toColumns(it.box, f, n);
+    slot[n++] = s;
+  }
+  // The kernels read whole blocks of 4 or 8 columns; the bits of the padding are dropped below
+  // (no box value could be relied on to overlap nothing: an infinite box overlaps every one).
+  for (std::uint32_t j = n; j < ((n + 7) & ~7u); ++j)
+    for (int k = 0; k < 3; ++k) f.lo[k][j] = f.hi[k][j] = 0.0f;
+  const std::uint64_t live = n == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+  p.count.tests(std::size_t(n) * (n - (n > 0)) / 2);
+  RowMasks rows;
+  switch (resolve(kernel)) {
+#if defined(CUBE_HAVE_AVX2_KERNEL)
+    case PairKernel::avx2:
+      rowMasksAvx2(f, n, rows);
+      break;
+#endif
+#if defined(__SSE2__)
+    case PairKernel::sse2:
+      rowMasksSse2(f, n, rows);
+      break;
+#endif
+    default:
+      rowMasksPortable(f, n, rows);
+      break;
+  }
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::uint64_t m = rows[i] & live; m != 0; m &= m - 1) {
+      const std::uint32_t j = static_cast<std::uint32_t>(__builtin_ctzll(m));
+      if (p.leaf(v.items[slot[i]], v.items[slot[j]])) return true;
+    }
+  return false;
 }
 
 template <typename S, class Counter>
@@ -499,6 +655,36 @@ bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, Col
   return descend(a, b, self, CollidePolicy<S, NoCount>{data, fn, NoCount{}});
 }
 
+bool pairKernelAvailable(PairKernel k) {
+  switch (k) {
+    case PairKernel::best:
+    case PairKernel::portable:
+      return true;
+    case PairKernel::sse2:
+#if defined(__SSE2__)
+      return true;
+#else
+      return false;
+#endif
+    case PairKernel::avx2:
+#if defined(CUBE_HAVE_AVX2_KERNEL)
+      return __builtin_cpu_supports("avx2");
+#else
+      return false;
+#endif
+  }
+  return false;
+}
+
+template <typename S>
+bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats,
+                     PairKernel kernel) {
+  if (v.slots > kAllPairsMax) throw std::logic_error("collideAllPairs: view too large");
+  if (!pairKernelAvailable(kernel)) throw std::logic_error("collideAllPairs: kernel unavailable");
+  if (stats) return allPairs(v, CollidePolicy<S, Count>{data, fn, Count{stats}}, kernel);
+  return allPairs(v, CollidePolicy<S, NoCount>{data, fn, NoCount{}}, kernel);
+}
+
 template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
                    S& best, QueryStats* stats) {
@@ -518,6 +704,10 @@ template bool collidePairs<float>(const View<float>&, const View<float>&, bool, 
                                   CollideFn<float>, QueryStats*);
 template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
                                    CollideFn<double>, QueryStats*);
+template bool collideAllPairs<float>(const View<float>&, void*, CollideFn<float>, QueryStats*,
+                                     PairKernel);
+template bool collideAllPairs<double>(const View<double>&, void*, CollideFn<double>, QueryStats*,
+                                      PairKernel);
 template bool distancePairs<float>(const View<float>&, const View<float>&, bool, void*,
                                    DistanceFn<float>, float&, QueryStats*);
 template bool distancePairs<double>(const View<double>&, const View<double>&, bool, void*,

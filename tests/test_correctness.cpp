@@ -31,6 +31,8 @@ struct Case {
   std::size_t narrow_queries;
   /// Register objects one at a time after an initial setup() instead of in one batch.
   bool incremental = false;
+  /// Config::all_pairs_limit of the cube manager (0: small scenes walk the cubes too).
+  std::size_t all_pairs_limit = cube::Config().all_pairs_limit;
 };
 
 std::ostream& operator<<(std::ostream& os, const Case& c) {
@@ -77,6 +79,14 @@ std::vector<Case> collideCases() {
     for (std::size_t n : {0, 1, 2, 32, 200})
       out.push_back(makeCase(s, L::uniform, true, n, n == 0 ? 4 : 200, 20));
     out.push_back(makeCase(s, L::clustered, true, 200, 200, 20));
+    // Small scenes self-collide through the all-pairs kernel by default; these walk the cubes.
+    for (Case c : {makeCase(s, L::uniform, false, 32, 100, 40),
+                   makeCase(s, L::clustered, false, 60, 100, 40),
+                   makeCase(s, L::uniform, true, 32, 32, 10)}) {
+      c.all_pairs_limit = 0;
+      c.name += "_walk";
+      out.push_back(c);
+    }
   }
   return out;
 }
@@ -108,7 +118,13 @@ struct World {
   CubeCollisionManager<S> cube;
   fcl::NaiveCollisionManager<S> naive;
 
-  explicit World(const Case& c) {
+  static cube::Config configFor(const Case& c) {
+    cube::Config config;
+    config.all_pairs_limit = c.all_pairs_limit;
+    return config;
+  }
+
+  explicit World(const Case& c) : cube(configFor(c)) {
     scene = scenes::makeScene<S>(c.scene);
     objs = scene.pointers();
     scenes::SceneOptions o = c.scene;

@@ -404,17 +404,20 @@ template <typename S>
 struct Tiny {
   std::shared_ptr<fcl::Box<S>> unit = std::make_shared<fcl::Box<S>>(1, 1, 1);
   std::unique_ptr<fcl::CollisionObject<S>> a, b, c;
-  CubeCollisionManager<S> m{[] {
-    cube::Config cfg;
-    cfg.leaf_size = 1;
-    return cfg;
-  }()};
-  Tiny() {
+  CubeCollisionManager<S> m;
+  // all_pairs_limit 0: self-collide walks the cubes, as the hand counts below assume.
+  explicit Tiny(std::size_t all_pairs_limit = 0) : m(config(all_pairs_limit)) {
     a = make(unit, 0.5);
     b = make(unit, 1.0);
     c = make(unit, 10.5);
     m.registerObjects({a.get(), b.get(), c.get()});
     m.setup();
+  }
+  static cube::Config config(std::size_t all_pairs_limit) {
+    cube::Config cfg;
+    cfg.leaf_size = 1;
+    cfg.all_pairs_limit = all_pairs_limit;
+    return cfg;
   }
   // An object centred at (x, 0.5, 0.5).
   static std::unique_ptr<fcl::CollisionObject<S>> make(std::shared_ptr<fcl::Box<S>> g, S x) {
@@ -471,6 +474,37 @@ TYPED_TEST(InspectTest, QueryStatsSelfCollide) {
   t.m.collide(&plain, &Recorder<S>::collide);
   ASSERT_EQ(plain.calls.size(), 1u);
   EXPECT_EQ(plain.calls[0], r.calls[0]);
+}
+
+// The all-pairs kernel (the default for small scenes): the three pairs are tested in float,
+// then the one that passes (A-B) exactly; no cube is visited.
+TYPED_TEST(InspectTest, QueryStatsSelfCollideAllPairs) {
+  using S = TypeParam;
+  Tiny<S> t(cube::Config().all_pairs_limit);
+  Recorder<S> r;
+  cube::QueryStats st;
+  t.m.collide(&r, &Recorder<S>::collide, &st);
+  EXPECT_EQ(st.cubes_visited, 0u);
+  EXPECT_EQ(st.box_tests, 4u);
+  EXPECT_EQ(st.callbacks, 1u);
+  ASSERT_EQ(r.calls.size(), 1u);
+  const std::set<fcl::CollisionObject<S>*> pair{r.calls[0].first, r.calls[0].second};
+  EXPECT_EQ(pair, (std::set<fcl::CollisionObject<S>*>{t.a.get(), t.b.get()}));
+
+  // With a halfspace in the unbounded list: the cubes against the list still walk (5 pops, 8
+  // tests, 3 calls, as in QueryStatsWithUnboundedObject); the list against itself holds one
+  // object, so no pair.
+  fcl::CollisionObject<S> half(
+      std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(0, 0, 1), S(0.5)));
+  half.computeAABB();
+  t.m.registerObject(&half);
+  cube::QueryStats su;
+  Recorder<S> ru;
+  t.m.collide(&ru, &Recorder<S>::collide, &su);
+  EXPECT_EQ(su.cubes_visited, 5u);
+  EXPECT_EQ(su.box_tests, 12u);
+  EXPECT_EQ(su.callbacks, 4u);
+  EXPECT_EQ(ru.calls.size(), 4u);
 }
 
 TYPED_TEST(InspectTest, QueryStatsObjectQueries) {

@@ -694,6 +694,11 @@ TEST(Config, CheckRejectsOutOfRangeKnobs) {
   c.rebuild_threshold = 1.0;
   EXPECT_THROW(c.check(), std::invalid_argument);
   c = Config();
+  c.all_pairs_limit = Config::kMaxAllPairsLimit + 1;
+  EXPECT_THROW(c.check(), std::invalid_argument);
+  c.all_pairs_limit = Config::kMaxAllPairsLimit;
+  EXPECT_NO_THROW(c.check());
+  c = Config();
   c.leaf_size = 1;
   c.max_depth = 1;
   EXPECT_NO_THROW(c.check());

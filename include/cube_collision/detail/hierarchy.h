@@ -122,6 +122,7 @@ struct View {
   const Node* nodes = nullptr;
   const Item<S>* items = nullptr;
   std::uint32_t root = kNone;  ///< kNone: empty
+  std::uint32_t slots = 0;     ///< length of `items`, dead slots (obj == nullptr) included
 };
 
 template <typename S>
@@ -175,9 +176,12 @@ class Hierarchy {
   /// Objects in registration order.
   void objects(std::vector<Object*>& out) const;
 
-  View<S> cubes() const { return View<S>{nodes_.data(), items_.data(), root_}; }
+  View<S> cubes() const {
+    return View<S>{nodes_.data(), items_.data(), root_, std::uint32_t(items_.size())};
+  }
   View<S> unbounded() const {
-    return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u};
+    return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u,
+                   std::uint32_t(unbounded_.size())};
   }
 
   // Inspection.

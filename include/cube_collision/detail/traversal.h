@@ -21,6 +21,24 @@ template <typename S>
 bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
                   QueryStats* stats = nullptr);
 
+/// Largest view that collideAllPairs accepts (one 64-bit mask per object).
+inline constexpr std::uint32_t kAllPairsMax = Config::kMaxAllPairsLimit;
+
+/// Instruction set of the all-pairs kernel. Queries use `best` (AVX2 where the CPU has it, else
+/// SSE2); tests force each one in turn.
+enum class PairKernel { best, portable, sse2, avx2 };
+
+/// Whether this build and this CPU can run kernel `k`.
+bool pairKernelAvailable(PairKernel k);
+
+/// Self-collide of one view without its cubes: every pair of objects is tested, several at a
+/// time in float, and pairs that pass are tested again exactly before fn is called. For small
+/// scenes, where the cubes' fixed cost per call outweighs their pruning. Same pairs as
+/// collidePairs(v, v, true, ...), in slot order. Requires v.slots <= kAllPairsMax.
+template <typename S>
+bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats = nullptr,
+                     PairKernel kernel = PairKernel::best);
+
 /// Branch and bound over the same pairs: calls fn(x, y, data, best) for pairs whose box distance
 /// is below `best` (or whose boxes overlap), nearer cubes first; fn lowers `best`. Returns true
 /// as soon as fn does. `stats`, if given, counts the work done.
@@ -34,7 +52,7 @@ struct SingleView {
   Node node;
   Item<S> item;
   SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box);
-  View<S> view() const { return View<S>{&node, &item, 0}; }
+  View<S> view() const { return View<S>{&node, &item, 0, 1}; }
 };
 
 }  // namespace detail

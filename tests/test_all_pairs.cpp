@@ -1,0 +1,192 @@
+// The all-pairs kernel that self-collides small scenes (detail::collideAllPairs), each
+// instruction set in turn, against brute force over the exact boxes: boxes that touch exactly,
+// gaps too small for float, infinite boxes, dead slots, every size up to the limit.
+
+#include <fcl/geometry/shape/box.h>
+#include <fcl/narrowphase/collision_object.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "cube_collision/detail/traversal.h"
+
+namespace {
+
+using cube::detail::Box;
+using cube::detail::Item;
+using cube::detail::PairKernel;
+using cube::detail::View;
+
+template <typename S>
+class AllPairs : public ::testing::Test {};
+using Scalars = ::testing::Types<double, float>;
+TYPED_TEST_SUITE(AllPairs, Scalars);
+
+const PairKernel kKernels[] = {PairKernel::portable, PairKernel::sse2, PairKernel::avx2,
+                               PairKernel::best};
+
+const char* name(PairKernel k) {
+  switch (k) {
+    case PairKernel::portable:
+      return "portable";
+    case PairKernel::sse2:
+      return "sse2";
+    case PairKernel::avx2:
+      return "avx2";
+    case PairKernel::best:
+      return "best";
+  }
+  return "?";
+}
+
+template <typename S>
+using Obj = fcl::CollisionObject<S>;
+template <typename S>
+using Pairs = std::vector<std::pair<Obj<S>*, Obj<S>*>>;
+
+template <typename S>
+struct Recorder {
+  Pairs<S> calls;
+  std::size_t stop_after = 0;  // 0: never stop
+  static bool fn(Obj<S>* a, Obj<S>* b, void* d) {
+    auto* r = static_cast<Recorder*>(d);
+    r->calls.emplace_back(a, b);
+    return r->stop_after != 0 && r->calls.size() == r->stop_after;
+  }
+};
+
+// A run of object slots (some dead) with awkward boxes, and what brute force says about it.
+template <typename S>
+struct Slots {
+  std::vector<std::unique_ptr<Obj<S>>> owned;
+  std::vector<Item<S>> items;
+
+  Slots(std::size_t n, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    auto geom = std::make_shared<fcl::Box<S>>(1, 1, 1);
+    std::vector<Box<S>> live;
+    while (items.size() < n) {
+      Item<S> it{};
+      if (u(rng) < 0.15) {  // a dead slot
+        items.push_back(it);
+        continue;
+      }
+      const double kind = u(rng);
+      for (int k = 0; k < 3; ++k) {
+        const double c = u(rng);
+        it.box.lo[k] = S(c - 0.15 * u(rng));
+        it.box.hi[k] = S(c + 0.15 * u(rng));
+      }
+      if (!live.empty() && kind < 0.25) {
+        // Touches an earlier box exactly on one face (closed intervals: a pair).
+        const Box<S>& o = live[std::size_t(u(rng) * live.size())];
+        it.box = o;
+        const S w = o.hi[0] - o.lo[0];
+        it.box.lo[0] = o.hi[0];
+        it.box.hi[0] = o.hi[0] + w;
+      } else if (!live.empty() && kind < 0.45) {
+        // Misses an earlier box by less than float can tell apart (no pair in double; in float
+        // the same box touches).
+        const Box<S>& o = live[std::size_t(u(rng) * live.size())];
+        it.box = o;
+        it.box.lo[1] = std::nextafter(o.hi[1], S(2));
+        it.box.hi[1] = it.box.lo[1] + S(0.1);
+      } else if (kind > 0.97) {
+        // Everywhere, as a plane's box is: it meets every box (and any padding the kernels use).
+        for (int k = 0; k < 3; ++k) {
+          it.box.lo[k] = -std::numeric_limits<S>::infinity();
+          it.box.hi[k] = std::numeric_limits<S>::infinity();
+        }
+      } else if (kind > 0.94) {
+        // Unbounded in one direction, as a halfspace's box is.
+        it.box.lo[2] = -std::numeric_limits<S>::infinity();
+      }
+      owned.push_back(std::make_unique<Obj<S>>(geom));
+      it.obj = owned.back().get();
+      live.push_back(it.box);
+      items.push_back(it);
+    }
+  }
+
+  View<S> view() const {
+    return View<S>{nullptr, items.data(), 0, static_cast<std::uint32_t>(items.size())};
+  }
+
+  // Every overlapping pair of live slots, in slot order.
+  Pairs<S> bruteForce() const {
+    Pairs<S> out;
+    for (std::size_t i = 0; i < items.size(); ++i)
+      for (std::size_t j = i + 1; j < items.size(); ++j) {
+        if (items[i].obj == nullptr || items[j].obj == nullptr) continue;
+        bool hit = true;
+        for (int k = 0; k < 3; ++k)
+          hit = hit && items[i].box.lo[k] <= items[j].box.hi[k] &&
+                items[j].box.lo[k] <= items[i].box.hi[k];
+        if (hit) out.emplace_back(items[i].obj, items[j].obj);
+      }
+    return out;
+  }
+};
+
+TYPED_TEST(AllPairs, EveryKernelEverySizeEqualsBruteForce) {
+  using S = TypeParam;
+  std::size_t kernels_run = 0, pairs_seen = 0;
+  for (PairKernel k : kKernels) {
+    if (!cube::detail::pairKernelAvailable(k)) {
+      // Only a CPU without AVX2 (or a build without SSE2) gets here; the others still run.
+      EXPECT_TRUE(k == PairKernel::avx2 || k == PairKernel::sse2) << name(k);
+      continue;
+    }
+    ++kernels_run;
+    for (std::size_t n : {0, 1, 2, 3, 7, 8, 9, 15, 16, 17, 31, 32, 33, 48, 63, 64})
+      for (std::uint32_t seed = 1; seed <= 6; ++seed) {
+        const Slots<S> s(n, seed * 1000 + std::uint32_t(n));
+        const Pairs<S> expected = s.bruteForce();
+        Recorder<S> r;
+        cube::QueryStats st;
+        EXPECT_FALSE(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn, &st, k));
+        // Same pairs, in slot order (row by row).
+        ASSERT_EQ(r.calls, expected) << name(k) << " n " << n << " seed " << seed;
+        std::size_t live = 0;
+        for (const auto& it : s.items) live += it.obj != nullptr;
+        // Every pair in float, then at least the real pairs exactly.
+        EXPECT_GE(st.box_tests, live * (live - (live > 0)) / 2 + expected.size());
+        EXPECT_EQ(st.callbacks, expected.size());
+        EXPECT_EQ(st.cubes_visited, 0u);
+        pairs_seen += expected.size();
+      }
+  }
+  EXPECT_GE(kernels_run, 2u);  // portable and best at least
+  EXPECT_GT(pairs_seen, 1000u);
+}
+
+TYPED_TEST(AllPairs, StopsWhenTheCallbackSaysSo) {
+  using S = TypeParam;
+  const Slots<S> s(64, 99);
+  const Pairs<S> expected = s.bruteForce();
+  ASSERT_GT(expected.size(), 5u);
+  for (PairKernel k : kKernels) {
+    if (!cube::detail::pairKernelAvailable(k)) continue;
+    Recorder<S> r;
+    r.stop_after = 5;
+    EXPECT_TRUE(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn, nullptr, k));
+    EXPECT_EQ(r.calls, Pairs<S>(expected.begin(), expected.begin() + 5)) << name(k);
+  }
+}
+
+TYPED_TEST(AllPairs, RefusesViewsBeyondTheLimit) {
+  using S = TypeParam;
+  const Slots<S> s(cube::detail::kAllPairsMax + 1, 3);
+  Recorder<S> r;
+  EXPECT_THROW(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn), std::logic_error);
+  EXPECT_TRUE(r.calls.empty());
+}
+
+}  // namespace
