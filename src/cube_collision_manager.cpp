@@ -84,7 +84,7 @@ template <typename S, class Run>
 void selfPairs(const detail::Hierarchy<S>& tree, Run&& run) {
   const View<S> cubes = tree.cubes();
   const View<S> unbounded = tree.unbounded();
-  if (run(cubes, cubes, true)) return;
+  if (run(cubes, cubes, true) || unbounded.root == detail::kNone) return;
   if (run(cubes, unbounded, false)) return;
   run(unbounded, unbounded, true);
 }
@@ -93,7 +93,7 @@ template <typename S, class Run>
 void objectPairs(const detail::Hierarchy<S>& tree, fcl::CollisionObject<S>* obj, const Box<S>& box,
                  Run&& run) {
   const detail::SingleView<S> query(obj, box);
-  if (run(tree.cubes(), query.view(), false)) return;
+  if (run(tree.cubes(), query.view(), false) || tree.unbounded().root == detail::kNone) return;
   run(tree.unbounded(), query.view(), false);
 }
 

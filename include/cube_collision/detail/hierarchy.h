@@ -12,6 +12,10 @@
 
 #include "cube_collision/config.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>  // baseline on x86-64: no -m flag, so no effect on Eigen's ABI
+#endif
+
 namespace fcl {
 template <typename S>
 class CollisionObject;
@@ -125,11 +129,23 @@ struct View {
   std::uint32_t slots = 0;     ///< length of `items`, dead slots (obj == nullptr) included
 };
 
+/// Whether two boxes are equal coordinate by coordinate. Without branches: update() asks this
+/// of every object, and the answer is "yes" for most.
 template <typename S>
 bool sameBox(const Box<S>& a, const Box<S>& b) {
-  return a.lo[0] == b.lo[0] && a.lo[1] == b.lo[1] && a.lo[2] == b.lo[2] && a.hi[0] == b.hi[0] &&
-         a.hi[1] == b.hi[1] && a.hi[2] == b.hi[2];
+  return (a.lo[0] == b.lo[0]) & (a.lo[1] == b.lo[1]) & (a.lo[2] == b.lo[2]) &
+         (a.hi[0] == b.hi[0]) & (a.hi[1] == b.hi[1]) & (a.hi[2] == b.hi[2]);
 }
+
+#if defined(__SSE2__)
+inline bool sameBox(const Box<double>& a, const Box<double>& b) {
+  // The six coordinates are contiguous: three two-lane compares.
+  const __m128d e0 = _mm_cmpeq_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.lo));
+  const __m128d e1 = _mm_cmpeq_pd(_mm_loadu_pd(a.lo + 2), _mm_loadu_pd(b.lo + 2));
+  const __m128d e2 = _mm_cmpeq_pd(_mm_loadu_pd(a.hi + 1), _mm_loadu_pd(b.hi + 1));
+  return _mm_movemask_pd(_mm_and_pd(_mm_and_pd(e0, e1), e2)) == 3;
+}
+#endif
 
 /// Outward-rounded float copy of an exact box.
 template <typename S>
