@@ -108,36 +108,6 @@ BoxKind classify(const Box<S>& b, double limit) {
   return BoxKind::unbounded;
 }
 
-namespace {
-
-// A float no greater than x (x not NaN), within a few float ulps of it. Branch-free instead of
-// exact: a cube may be a hair larger than needed, never smaller. Values beyond float's range
-// become infinite (the clamp keeps the conversion defined).
-inline float floatBelow(double x) {
-  constexpr double kMax = std::numeric_limits<float>::max();
-  const float f = static_cast<float>(std::min(std::max(x, -kMax), kMax));
-  return f - (std::fabs(f) * 0x1p-22f + std::numeric_limits<float>::min());
-}
-
-inline float floatAbove(double x) {
-  return -floatBelow(-x);
-}
-
-}  // namespace
-
-template <typename S>
-void roundOut(const Box<S>& b, float lo[3], float hi[3]) {
-  for (int k = 0; k < 3; ++k) {
-    if constexpr (std::is_same_v<S, float>) {
-      lo[k] = b.lo[k];
-      hi[k] = b.hi[k];
-    } else {
-      lo[k] = floatBelow(double(b.lo[k]));
-      hi[k] = floatAbove(double(b.hi[k]));
-    }
-  }
-}
-
 template <typename S>
 Hierarchy<S>::Hierarchy(const Config& config) : config_(config) {
   config_.check();
@@ -349,7 +319,11 @@ void Hierarchy<S>::rebuild() {
       rec[i].seq = fresh[i].seq;
       rec[i].item = i;
     }
-    nodes_.reserve(4 * std::size_t(n) / std::max(1, config_.leaf_size) + 2);
+    // Every lower child holds a multiple of leaf_size objects (splitCount), so the leaves are
+    // full but one: at most 2 ceil(n / leaf_size) - 1 cubes, fewer under max_depth. Reserving
+    // that leaves nothing for shrink_to_fit below to reallocate.
+    const std::size_t leaf = static_cast<std::size_t>(std::max(1, config_.leaf_size));
+    nodes_.reserve(2 * ((n + leaf - 1) / leaf) - 1);
     parent_.reserve(nodes_.capacity());
     Node root{};
     root.first = 0;
@@ -962,8 +936,6 @@ bool Hierarchy<S>::validate(std::string* why) const {
 
 template BoxKind classify<float>(const Box<float>&, double);
 template BoxKind classify<double>(const Box<double>&, double);
-template void roundOut<float>(const Box<float>&, float*, float*);
-template void roundOut<double>(const Box<double>&, float*, float*);
 template class Hierarchy<float>;
 template class Hierarchy<double>;
 

@@ -1,12 +1,16 @@
-// The all-pairs kernel that self-collides small scenes (detail::collideAllPairs), each
-// instruction set in turn, against brute force over the exact boxes: boxes that touch exactly,
-// gaps too small for float, infinite boxes, dead slots, every size up to the limit.
+// The SIMD kernels against their plain references. The all-pairs kernel that self-collides
+// small scenes (detail::collideAllPairs), each instruction set in turn, against brute force over
+// the exact boxes: boxes that touch exactly, gaps too small for float, infinite boxes, dead
+// slots, every size up to the limit. The outward rounding of boxes to float (detail::roundOut)
+// against floatBelow, one coordinate at a time.
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/narrowphase/collision_object.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <random>
@@ -187,6 +191,47 @@ TYPED_TEST(AllPairs, RefusesViewsBeyondTheLimit) {
   Recorder<S> r;
   EXPECT_THROW(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn), std::logic_error);
   EXPECT_TRUE(r.calls.empty());
+}
+
+// roundOut works on whole boxes with SIMD; its result must be floatBelow's bit for bit (lo) and
+// its mirror image (hi), and contain the box.
+TEST(RoundOut, EqualsTheScalarRoundingAndContainsTheBox) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::uniform_int_distribution<int> exponent(-140, 140);
+  const double special[] = {0.0,
+                            -0.0,
+                            1e-45,
+                            double(std::numeric_limits<float>::max()),
+                            -double(std::numeric_limits<float>::max()),
+                            1e39,
+                            -1e300,
+                            std::numeric_limits<double>::infinity(),
+                            -std::numeric_limits<double>::infinity()};
+  std::size_t checked = 0;
+  for (int rep = 0; rep < 20000; ++rep) {
+    Box<double> b;
+    for (int k = 0; k < 3; ++k) {
+      double x = std::ldexp(unit(rng), exponent(rng));
+      double y = std::ldexp(unit(rng), exponent(rng));
+      if (rep % 7 == 0) x = special[std::size_t(rep / 7 + k) % std::size(special)];
+      if (x > y) std::swap(x, y);
+      b.lo[k] = x;
+      b.hi[k] = y;
+    }
+    float lo[3], hi[3];
+    cube::detail::roundOut(b, lo, hi);
+    for (int k = 0; k < 3; ++k) {
+      const float want_lo = cube::detail::floatBelow(b.lo[k]);
+      const float want_hi = -cube::detail::floatBelow(-b.hi[k]);
+      ASSERT_EQ(std::memcmp(&lo[k], &want_lo, sizeof(float)), 0) << b.lo[k];
+      ASSERT_EQ(std::memcmp(&hi[k], &want_hi, sizeof(float)), 0) << b.hi[k];
+      EXPECT_LE(double(lo[k]), b.lo[k]);
+      EXPECT_GE(double(hi[k]), b.hi[k]);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 60000u);
 }
 
 }  // namespace
