@@ -259,26 +259,66 @@ struct BuildRecord {
 };
 static_assert(sizeof(BuildRecord) == 32, "two records per cache line");
 
-// Puts into *nth the record that a sort by `less` would put there, smaller ones before it and
-// larger ones after (std::nth_element's contract, for a strict total order). Quickselect whose
+// Twice a record's centre along an axis (the sum of its bounds: only the order matters). A box
+// reaching both infinities has no centre; it counts as 0, so that the order stays total.
+inline float centre2(const BuildRecord& r, int axis) {
+  const float c = r.lo[axis] + r.hi[axis];
+  return c == c ? c : 0.0f;
+}
+
+// The build's order: by centre along `axis`, ties by registration order (a strict total order,
+// so the same objects always give the same tree).
+inline bool before(const BuildRecord& x, const BuildRecord& y, int axis) {
+  const float cx = centre2(x, axis);
+  const float cy = centre2(y, axis);
+  return (cx < cy) | ((cx == cy) & (x.seq < y.seq));
+}
+
+// Runs this short are sorted by rank.
+constexpr std::ptrdiff_t kRankMax = 16;
+
+// Sorts [first, last) (at most kRankMax records) in the build's order along `axis`, or by
+// registration order alone if axis < 0: each record goes to the place given by the number of
+// records before it, counted without a branch. An insertion sort here mispredicted on about
+// every other comparison, and builds happen in the middle of update().
+void rankSort(BuildRecord* first, BuildRecord* last, int axis) {
+  const std::ptrdiff_t c = last - first;
+  BuildRecord tmp[kRankMax];
+  float key[kRankMax];
+  std::uint32_t seq[kRankMax];
+  for (std::ptrdiff_t i = 0; i < c; ++i) {
+    tmp[i] = first[i];
+    key[i] = axis < 0 ? 0.0f : centre2(first[i], axis);
+    seq[i] = first[i].seq;
+  }
+  for (std::ptrdiff_t i = 0; i < c; ++i) {
+    int rank = 0;
+    for (std::ptrdiff_t j = 0; j < c; ++j)
+      rank += (key[j] < key[i]) | ((key[j] == key[i]) & (seq[j] < seq[i]));
+    first[rank] = tmp[i];
+  }
+}
+
+// Puts into *nth the record that a sort in the build's order along `axis` would put there,
+// smaller ones before it and larger ones after (std::nth_element's contract). Quickselect whose
 // partition writes each record to both ends of `scratch` and advances one of them: no branch on
 // the comparison and no load that waits for it. Whether a record goes left is a coin toss, so
 // std::nth_element's branches mispredicted on half the records, most of the build time.
-template <class Less>
-void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, Less less,
+void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis,
                BuildRecord* scratch) {
-  while (last - first > 16) {
+  while (last - first > kRankMax) {
     // Median of three distinct records: both sides get at least one, so every pass shrinks.
     const BuildRecord& x = *first;
     const BuildRecord& y = first[(last - first) / 2];
     const BuildRecord& z = *(last - 1);
-    const BuildRecord pivot = less(x, y) ? (less(y, z) ? y : (less(x, z) ? z : x))
-                                         : (less(x, z) ? x : (less(y, z) ? z : y));
+    const BuildRecord pivot =
+        before(x, y, axis) ? (before(y, z, axis) ? y : (before(x, z, axis) ? z : x))
+                           : (before(x, z, axis) ? x : (before(y, z, axis) ? z : y));
     BuildRecord* lo = scratch;
     BuildRecord* hi = scratch + (last - first);
     for (const BuildRecord* p = first; p < last; ++p) {
       const BuildRecord r = *p;
-      const bool left = less(r, pivot);
+      const bool left = before(r, pivot, axis);
       *lo = r;
       *(hi - 1) = r;
       lo += left;
@@ -291,13 +331,7 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, Less les
     else
       first += k;
   }
-  // Insertion sort of the short rest.
-  for (BuildRecord* p = first + 1; p < last; ++p) {
-    const BuildRecord r = *p;
-    BuildRecord* q = p;
-    for (; q > first && less(r, *(q - 1)); --q) *q = *(q - 1);
-    *q = r;
-  }
+  rankSort(first, last, axis);
 }
 
 template <typename S>
@@ -340,8 +374,11 @@ void Hierarchy<S>::rebuild() {
       const std::uint32_t e = b + nodes_[cube].count;
       if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
         // Within a leaf, registration order: the callback order does not depend on history.
-        std::sort(rec.begin() + b, rec.begin() + e,
-                  [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
+        if (e - b <= kRankMax)
+          rankSort(rec.data() + b, rec.data() + e, -1);
+        else
+          std::sort(rec.begin() + b, rec.begin() + e,
+                    [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
         continue;
       }
       // The cube's sides: the union of its objects' rounded bounds, as refitting will make it.
@@ -356,14 +393,7 @@ void Hierarchy<S>::rebuild() {
       const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
       // Median by centre along that side (the sum of the float bounds: exact order is not
       // needed, only a deterministic one), ties by registration order, in O(n).
-      selectNth(
-          rec.data() + b, rec.data() + m, rec.data() + e,
-          [axis](const BuildRecord& x, const BuildRecord& y) {
-            const float cx = x.lo[axis] + x.hi[axis];
-            const float cy = y.lo[axis] + y.hi[axis];
-            return (cx < cy) | ((cx == cy) & (x.seq < y.seq));
-          },
-          scratch.data());
+      selectNth(rec.data() + b, rec.data() + m, rec.data() + e, axis, scratch.data());
       const std::uint32_t child = addChildren(cube, b, m, e);
       stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
       stack.push_back((std::uint64_t(depth + 1) << 32) | child);
