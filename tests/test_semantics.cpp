@@ -679,6 +679,39 @@ TYPED_TEST(Semantics, DegenerateScenesIdenticalAndZeroSizeBoxes) {
   }
 }
 
+// With unbounded_limit beyond float's range, boxes past float's range stay in the cubes, where
+// their bounds round to float infinities: a box spanning both has no centre (inf - inf). The
+// build must still order every object (its centre counts as 0) and answer like brute force.
+TEST(Semantics, BoxesBeyondFloatRangeInsideTheCubes) {
+  using S = double;
+  std::vector<std::pair<V3<S>, V3<S>>> corners;
+  for (int i = 0; i < 300; ++i) {
+    const S x = S(i % 17), y = S(i % 5), z = S(i / 17);
+    if (i % 10 == 0)
+      corners.emplace_back(V3<S>(-1e39, y, z), V3<S>(1e39, y + 1, z + 1));  // both infinities
+    else if (i % 10 == 5)
+      corners.emplace_back(V3<S>(x, 1e39, z), V3<S>(x + 1, 2e39, z + 1));  // +inf only
+    else
+      corners.emplace_back(V3<S>(x, y, z), V3<S>(x + 1.5, y + 1.5, z + 1.5));
+  }
+  auto objs = boxes<S>(corners);
+  const auto ptrs = raw(objs);
+  const auto brute = oracle::bruteSelfPairs(ptrs);
+  Config c;
+  c.unbounded_limit = 1e300;
+  for (int leaf_size : {1, 4, 16}) {
+    c.leaf_size = leaf_size;
+    CubeCollisionManager<S> cube(c);
+    cube.registerObjects(ptrs);
+    cube.setup();
+    ASSERT_TRUE(valid(cube));
+    EXPECT_TRUE(cube.hierarchy().unboundedItems().empty());  // all in the cubes
+    EXPECT_EQ(oracle::selfPairs<S>(cube), brute);
+    EXPECT_EQ(cubeObjectCalls<S>(cube, ptrs[30]), bruteCrossPairs<S>(ptrs, {ptrs[30]}));
+  }
+  EXPECT_GT(brute.size(), 500u);
+}
+
 // Config::check rejects out-of-range knobs, and so does the constructor.
 TEST(Config, CheckRejectsOutOfRangeKnobs) {
   EXPECT_NO_THROW(Config().check());
