@@ -75,9 +75,63 @@ std::uint32_t splitCount(std::uint32_t count, int leaf_size) {
 }
 
 bool sameBounds(const Node& a, const Node& b) {
+#if defined(__SSE2__)
+  const __m128 lo = _mm_cmpeq_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.lo));
+  const __m128 hi = _mm_cmpeq_ps(_mm_loadu_ps(a.hi), _mm_loadu_ps(b.hi));
+  return (_mm_movemask_ps(_mm_and_ps(lo, hi)) & 7) == 7;  // lane 3 is first/count
+#else
   for (int k = 0; k < 3; ++k)
     if (a.lo[k] != b.lo[k] || a.hi[k] != b.hi[k]) return false;
   return true;
+#endif
+}
+
+// A leaf's bounds: the union of its objects' exact boxes, rounded out.
+template <typename S>
+void fitLeaf(Node& n, const Item<S>* items) {
+  Box<S> box = emptyBox<S>();
+  for (std::uint32_t p = n.first; p < n.first + n.count; ++p) grow(box, items[p].box);
+  roundOut(box, n.lo, n.hi);
+}
+
+#if defined(__SSE2__)
+// Two lanes at a time: every update() refits the leaves of the objects that moved. A zero's sign
+// may differ from the scalar union's, which roundOut maps to the same bound.
+void fitLeaf(Node& n, const Item<double>* items) {
+  const double inf = std::numeric_limits<double>::infinity();
+  __m128d lo01 = _mm_set1_pd(inf), lo2 = lo01;
+  __m128d hi01 = _mm_set1_pd(-inf), hi2 = hi01;
+  for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+    const double* b = items[p].box.lo;  // lo0 lo1 lo2 hi0 hi1 hi2, contiguous
+    lo01 = _mm_min_pd(lo01, _mm_loadu_pd(b));
+    lo2 = _mm_min_sd(lo2, _mm_load_sd(b + 2));
+    hi01 = _mm_max_pd(hi01, _mm_loadu_pd(b + 3));
+    hi2 = _mm_max_sd(hi2, _mm_load_sd(b + 5));
+  }
+  Box<double> box;
+  _mm_storeu_pd(box.lo, lo01);
+  _mm_store_sd(box.lo + 2, lo2);
+  _mm_storeu_pd(box.hi, hi01);
+  _mm_store_sd(box.hi + 2, hi2);
+  roundOut(box, n.lo, n.hi);
+}
+#endif
+
+// An internal cube's bounds: the union of its two children's.
+void fitParent(Node& n, const Node& a, const Node& b) {
+#if defined(__SSE2__)
+  // Lane 3 holds first/count: n keeps its own.
+  const __m128 own = _mm_castsi128_ps(_mm_set_epi32(-1, 0, 0, 0));
+  const __m128 lo = _mm_min_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.lo));
+  const __m128 hi = _mm_max_ps(_mm_loadu_ps(a.hi), _mm_loadu_ps(b.hi));
+  _mm_storeu_ps(n.lo, _mm_or_ps(_mm_andnot_ps(own, lo), _mm_and_ps(own, _mm_loadu_ps(n.lo))));
+  _mm_storeu_ps(n.hi, _mm_or_ps(_mm_andnot_ps(own, hi), _mm_and_ps(own, _mm_loadu_ps(n.hi))));
+#else
+  for (int k = 0; k < 3; ++k) {
+    n.lo[k] = std::min(a.lo[k], b.lo[k]);
+    n.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+#endif
 }
 
 std::size_t hashPtr(const void* p) {
@@ -266,6 +320,14 @@ inline float centre2(const BuildRecord& r, int axis) {
   return c == c ? c : 0.0f;
 }
 
+// An unsigned integer in the order of the float x (not NaN); -0 and +0 give the same one.
+inline std::uint32_t orderedBits(float x) {
+  std::uint32_t u;
+  const float y = x + 0.0f;  // -0 + 0 is +0
+  std::memcpy(&u, &y, sizeof u);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
 // The build's order: by centre along `axis`, ties by registration order (a strict total order,
 // so the same objects always give the same tree).
 inline bool before(const BuildRecord& x, const BuildRecord& y, int axis) {
@@ -284,17 +346,15 @@ constexpr std::ptrdiff_t kRankMax = 16;
 void rankSort(BuildRecord* first, BuildRecord* last, int axis) {
   const std::ptrdiff_t c = last - first;
   BuildRecord tmp[kRankMax];
-  float key[kRankMax];
-  std::uint32_t seq[kRankMax];
+  std::uint64_t key[kRankMax];  // the order as one integer: one compare per pair
   for (std::ptrdiff_t i = 0; i < c; ++i) {
     tmp[i] = first[i];
-    key[i] = axis < 0 ? 0.0f : centre2(first[i], axis);
-    seq[i] = first[i].seq;
+    key[i] =
+        (axis < 0 ? 0 : std::uint64_t(orderedBits(centre2(first[i], axis))) << 32) | first[i].seq;
   }
   for (std::ptrdiff_t i = 0; i < c; ++i) {
     int rank = 0;
-    for (std::ptrdiff_t j = 0; j < c; ++j)
-      rank += (key[j] < key[i]) | ((key[j] == key[i]) & (seq[j] < seq[i]));
+    for (std::ptrdiff_t j = 0; j < c; ++j) rank += key[j] < key[i];
     first[rank] = tmp[i];
   }
 }
@@ -311,9 +371,9 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
     const BuildRecord& x = *first;
     const BuildRecord& y = first[(last - first) / 2];
     const BuildRecord& z = *(last - 1);
-    const BuildRecord pivot =
-        before(x, y, axis) ? (before(y, z, axis) ? y : (before(x, z, axis) ? z : x))
-                           : (before(x, z, axis) ? x : (before(y, z, axis) ? z : y));
+    const BuildRecord pivot = before(x, y, axis)
+                                  ? (before(y, z, axis) ? y : (before(x, z, axis) ? z : x))
+                                  : (before(x, z, axis) ? x : (before(y, z, axis) ? z : y));
     BuildRecord* lo = scratch;
     BuildRecord* hi = scratch + (last - first);
     for (const BuildRecord* p = first; p < last; ++p) {
@@ -499,18 +559,10 @@ template <typename S>
 double Hierarchy<S>::refitCube(std::uint32_t cube) {
   Node& n = nodes_[cube];
   const double before = surfaceArea(n);
-  if (n.isLeaf()) {
-    Box<S> box = emptyBox<S>();
-    for (std::uint32_t p = n.first; p < n.first + n.count; ++p) grow(box, items_[p].box);
-    roundOut(box, n.lo, n.hi);
-  } else {
-    const Node& a = nodes_[n.first];
-    const Node& b = nodes_[n.first + 1];
-    for (int k = 0; k < 3; ++k) {
-      n.lo[k] = std::min(a.lo[k], b.lo[k]);
-      n.hi[k] = std::max(a.hi[k], b.hi[k]);
-    }
-  }
+  if (n.isLeaf())
+    fitLeaf(n, items_.data());
+  else
+    fitParent(n, nodes_[n.first], nodes_[n.first + 1]);
   return surfaceArea(n) - before;
 }
 
