@@ -1,8 +1,9 @@
-// The SIMD kernels against their plain references. The all-pairs kernel that self-collides
-// small scenes (detail::collideAllPairs), each instruction set in turn, against brute force over
-// the exact boxes: boxes that touch exactly, gaps too small for float, infinite boxes, dead
-// slots, every size up to the limit. The outward rounding of boxes to float (detail::roundOut)
-// against floatBelow, one coordinate at a time.
+// The SIMD kernels against their plain references:
+// - the all-pairs kernel that self-collides small scenes (detail::collideAllPairs), each
+//   instruction set in turn, against brute force over the exact boxes: boxes that touch exactly,
+//   gaps too small for float, infinite boxes, dead slots, every size up to the limit;
+// - the leaf kernels of the walks (detail::leafOverlapMask) on the same kinds of boxes;
+// - the outward rounding of boxes to float (detail::roundOut) against floatBelow.
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/narrowphase/collision_object.h>
@@ -15,6 +16,7 @@
 #include <memory>
 #include <random>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -191,6 +193,57 @@ TYPED_TEST(AllPairs, RefusesViewsBeyondTheLimit) {
   Recorder<S> r;
   EXPECT_THROW(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn), std::logic_error);
   EXPECT_TRUE(r.calls.empty());
+}
+
+// The leaf kernels (detail::leafOverlapMask): every pair of runs of 1 to kMaskLeaf objects, self
+// and not, against brute force over the exact boxes, for each kernel this CPU runs.
+TYPED_TEST(AllPairs, LeafMasksEqualBruteForce) {
+  using S = TypeParam;
+  using cube::detail::kMaskLeaf;
+  std::vector<PairKernel> kernels = {PairKernel::portable, PairKernel::best};
+  if (std::is_same_v<S, double> && cube::detail::pairKernelAvailable(PairKernel::avx2))
+    kernels.push_back(PairKernel::avx2);
+  std::size_t hits_seen = 0, runs = 0;
+  for (std::uint32_t seed = 1; seed <= 40; ++seed) {
+    const Slots<S> s(3 * kMaskLeaf, seed);
+    std::vector<Item<S>> live;  // leaves hold live objects only
+    for (const Item<S>& it : s.items)
+      if (it.obj != nullptr) live.push_back(it);
+    ASSERT_GE(live.size(), 2 * kMaskLeaf);
+    for (std::uint32_t nx = 1; nx <= kMaskLeaf; ++nx)
+      for (std::uint32_t ny = 1; ny <= kMaskLeaf; ++ny)
+        for (bool self : {false, true}) {
+          if (self && nx != ny) continue;
+          const Item<S>* xs = live.data();
+          const Item<S>* ys = self ? xs : live.data() + live.size() - ny;
+          std::uint64_t expected = 0;
+          for (std::uint32_t i = 0; i < nx; ++i)
+            for (std::uint32_t j = self ? i + 1 : 0; j < ny; ++j) {
+              bool hit = true;
+              for (int k = 0; k < 3; ++k)
+                hit =
+                    hit && xs[i].box.lo[k] <= ys[j].box.hi[k] && ys[j].box.lo[k] <= xs[i].box.hi[k];
+              if (hit) expected |= std::uint64_t(1) << (kMaskLeaf * i + j);
+            }
+          for (PairKernel k : kernels)
+            ASSERT_EQ(cube::detail::leafOverlapMask(xs, nx, ys, ny, self, k), expected)
+                << name(k) << " seed " << seed << " nx " << nx << " ny " << ny << " self " << self;
+          hits_seen += std::size_t(__builtin_popcountll(expected));
+          ++runs;
+        }
+  }
+  EXPECT_EQ(runs, 40u * (kMaskLeaf * kMaskLeaf + kMaskLeaf));
+  EXPECT_GT(hits_seen, 2000u);  // the boxes overlap often enough for the comparison to mean much
+  // Misuse is refused.
+  const Slots<S> s(2, 1);
+  EXPECT_THROW(cube::detail::leafOverlapMask(s.items.data(), kMaskLeaf + 1, s.items.data(), 1,
+                                             false, PairKernel::portable),
+               std::logic_error);
+  if (!std::is_same_v<S, double>) {
+    EXPECT_THROW(cube::detail::leafOverlapMask(s.items.data(), 1, s.items.data(), 1, false,
+                                               PairKernel::avx2),
+                 std::logic_error);
+  }
 }
 
 // roundOut works on whole boxes with SIMD; its result must be floatBelow's bit for bit (lo) and
