@@ -189,12 +189,6 @@ struct CollidePolicy {
   bool leaf(const Item<S>& x, const Item<S>& y) const { return touches(x, y) && report(x, y); }
 };
 
-// Collide between two small runs of objects (at most kMaskLeaf each; Self: the same run, each
-// unordered pair once): all box tests first, into a bit mask (bit kMaskLeaf i + j for xs[i],
-// ys[j]), then the callbacks in that order. Whether two boxes overlap is a coin toss for the
-// branch predictor; testing every pair without a branch costs less than skipping some behind
-// mispredicted branches (self-collide of 10,000 objects ran 1.6 times faster this way).
-
 // The callbacks for the set bits of `hits`, in order; apart, so that the test loop stays small.
 template <typename S, class Policy>
 [[gnu::noinline]] bool reportHits(std::uint64_t hits, const Item<S>* xs, const Item<S>* ys,
@@ -288,6 +282,11 @@ std::uint64_t leafHitsWith(PairKernel k, bool self, const Item<S>* xs, std::uint
   return self ? leafHitsPortable<true>(xs, nx, ys, ny) : leafHitsPortable<false>(xs, nx, ys, ny);
 }
 
+// Collide between two small runs of objects (at most kMaskLeaf each; Self: the same run, each
+// unordered pair once): all box tests first, into a bit mask (bit kMaskLeaf i + j for xs[i],
+// ys[j]), then the callbacks in that order. Whether two boxes overlap is a coin toss for the
+// branch predictor; testing every pair without a branch costs less than skipping some behind
+// mispredicted branches (self-collide of 10,000 objects ran 1.6 times faster this way).
 template <bool Self, typename S, class Policy>
 bool collideSmall(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys, std::uint32_t ny,
                   const Policy& p) {

@@ -24,8 +24,8 @@ bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, Col
 /// Largest view that collideAllPairs accepts (one 64-bit mask per object).
 inline constexpr std::uint32_t kAllPairsMax = Config::kMaxAllPairsLimit;
 
-/// Instruction set of the all-pairs kernel. Queries use `best` (AVX2 where the CPU has it, else
-/// SSE2); tests force each one in turn.
+/// Instruction set of the pair kernels (collideAllPairs, leafOverlapMask). Queries use `best`
+/// (AVX2 where the CPU has it); tests force each one in turn.
 enum class PairKernel { best, portable, sse2, avx2 };
 
 /// Whether this build and this CPU can run kernel `k`.
