@@ -328,12 +328,14 @@ inline std::uint32_t orderedBits(float x) {
   return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
 }
 
-// The build's order: by centre along `axis`, ties by registration order (a strict total order,
-// so the same objects always give the same tree).
+// The build's order as one integer: by centre along `axis`, ties by registration order (a strict
+// total order, so the same objects always give the same tree); axis < 0: registration order.
+inline std::uint64_t orderKey(const BuildRecord& r, int axis) {
+  return (axis < 0 ? 0 : std::uint64_t(orderedBits(centre2(r, axis))) << 32) | r.seq;
+}
+
 inline bool before(const BuildRecord& x, const BuildRecord& y, int axis) {
-  const float cx = centre2(x, axis);
-  const float cy = centre2(y, axis);
-  return (cx < cy) | ((cx == cy) & (x.seq < y.seq));
+  return orderKey(x, axis) < orderKey(y, axis);
 }
 
 // Runs this short are sorted by rank.
@@ -349,8 +351,7 @@ void rankSort(BuildRecord* first, BuildRecord* last, int axis) {
   std::uint64_t key[kRankMax];  // the order as one integer: one compare per pair
   for (std::ptrdiff_t i = 0; i < c; ++i) {
     tmp[i] = first[i];
-    key[i] =
-        (axis < 0 ? 0 : std::uint64_t(orderedBits(centre2(first[i], axis))) << 32) | first[i].seq;
+    key[i] = orderKey(first[i], axis);
   }
   for (std::ptrdiff_t i = 0; i < c; ++i) {
     int rank = 0;
@@ -374,11 +375,12 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
     const BuildRecord pivot = before(x, y, axis)
                                   ? (before(y, z, axis) ? y : (before(x, z, axis) ? z : x))
                                   : (before(x, z, axis) ? x : (before(y, z, axis) ? z : y));
+    const std::uint64_t pivot_key = orderKey(pivot, axis);
     BuildRecord* lo = scratch;
     BuildRecord* hi = scratch + (last - first);
     for (const BuildRecord* p = first; p < last; ++p) {
       const BuildRecord r = *p;
-      const bool left = before(r, pivot, axis);
+      const bool left = orderKey(r, axis) < pivot_key;
       *lo = r;
       *(hi - 1) = r;
       lo += left;
