@@ -338,6 +338,38 @@ inline bool before(const BuildRecord& x, const BuildRecord& y, int axis) {
   return orderKey(x, axis) < orderKey(y, axis);
 }
 
+// Sets n's bounds (not first/count) to the union of the records' bounds.
+void unionOf(const BuildRecord* first, const BuildRecord* last, Node& n) {
+#if defined(__SSE2__)
+  // A record's two halves: lo0 lo1 lo2 hi0 and hi1 hi2 seq item.
+  const float inf = std::numeric_limits<float>::infinity();
+  __m128 a_min = _mm_set1_ps(inf), a_max = _mm_set1_ps(-inf), b_max = a_max;
+  for (const BuildRecord* r = first; r < last; ++r) {
+    const __m128 a = _mm_loadu_ps(r->lo);
+    a_min = _mm_min_ps(a_min, a);
+    a_max = _mm_max_ps(a_max, a);
+    b_max = _mm_max_ps(b_max, _mm_loadu_ps(r->hi + 1));
+  }
+  float lo[4], hi[4], b[4];
+  _mm_storeu_ps(lo, a_min);
+  _mm_storeu_ps(hi, a_max);
+  _mm_storeu_ps(b, b_max);
+  n.lo[0] = lo[0];
+  n.lo[1] = lo[1];
+  n.lo[2] = lo[2];
+  n.hi[0] = hi[3];
+  n.hi[1] = b[0];
+  n.hi[2] = b[1];
+#else
+  setEmpty(n);  // keeps first/count
+  for (const BuildRecord* r = first; r < last; ++r)
+    for (int k = 0; k < 3; ++k) {
+      n.lo[k] = std::min(n.lo[k], r->lo[k]);
+      n.hi[k] = std::max(n.hi[k], r->hi[k]);
+    }
+#endif
+}
+
 // Runs this short are sorted by rank.
 constexpr std::ptrdiff_t kRankMax = 16;
 
@@ -360,25 +392,65 @@ void rankSort(BuildRecord* first, BuildRecord* last, int axis) {
   }
 }
 
+// Ranges at least this long take their pivot from a sample instead of a median of three.
+constexpr std::ptrdiff_t kSampleMin = 256;
+constexpr std::ptrdiff_t kSampleMax = 128;
+
+// The key of a pivot that leaves *nth on the smaller side of the partition when it can: from
+// evenly spaced records, the one just beyond nth's estimated place (by two standard deviations
+// of the estimate), or at that place when nth is near the middle, where either side is about
+// half. The sample's smallest key is never the pivot, so both sides get at least one record.
+std::uint64_t samplePivot(const BuildRecord* first, const BuildRecord* nth, const BuildRecord* last,
+                          int axis) {
+  const std::ptrdiff_t n = last - first;
+  std::ptrdiff_t s = 1;
+  while (s * s < 4 * n && s < kSampleMax) s *= 2;
+  std::uint64_t key[kSampleMax];
+  for (std::ptrdiff_t i = 0; i < s; ++i) key[i] = orderKey(first[(2 * i + 1) * n / (2 * s)], axis);
+  std::sort(key, key + s);
+  const double q = (double(nth - first) + 0.5) / double(n);
+  const double margin = 2.0 * std::sqrt(double(s) * q * (1.0 - q)) + 1.0;
+  double r = q * double(s);
+  if (std::min(q, 1.0 - q) * double(s) + margin < 0.5 * double(s)) r += q < 0.5 ? margin : -margin;
+  const std::ptrdiff_t i =
+      std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(s - 1, std::ptrdiff_t(r)));
+  return key[i];
+}
+
 // Puts into *nth the record that a sort in the build's order along `axis` would put there,
-// smaller ones before it and larger ones after (std::nth_element's contract). Quickselect whose
-// partition writes each record to both ends of `scratch` and advances one of them: no branch on
-// the comparison and no load that waits for it. Whether a record goes left is a coin toss, so
-// std::nth_element's branches mispredicted on half the records, most of the build time.
+// smaller ones before it and larger ones after (std::nth_element's contract). `scratch` is as
+// long as [first, last). Quickselect whose partition writes each record to both ends of the
+// other buffer and advances one of them: no branch on the comparison and no load that waits for
+// it. Whether a record goes left is a coin toss, so std::nth_element's branches mispredicted on
+// half the records, most of the build time. Long ranges pick the pivot from a sample, so that
+// about one and a half passes find the median instead of about three. The passes alternate
+// between the buffers; only what a pass into `scratch` leaves behind is copied back.
 void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis,
                BuildRecord* scratch) {
-  while (last - first > kRankMax) {
-    // Median of three distinct records: both sides get at least one, so every pass shrinks.
-    const BuildRecord& x = *first;
-    const BuildRecord& y = first[(last - first) / 2];
-    const BuildRecord& z = *(last - 1);
-    const BuildRecord pivot = before(x, y, axis)
-                                  ? (before(y, z, axis) ? y : (before(x, z, axis) ? z : x))
-                                  : (before(x, z, axis) ? x : (before(y, z, axis) ? z : y));
-    const std::uint64_t pivot_key = orderKey(pivot, axis);
-    BuildRecord* lo = scratch;
-    BuildRecord* hi = scratch + (last - first);
-    for (const BuildRecord* p = first; p < last; ++p) {
+  BuildRecord* const home = first;
+  BuildRecord* src = first;
+  std::ptrdiff_t lo_off = 0, hi_off = last - first, nth_off = nth - first;
+  bool in_scratch = false;
+  while (hi_off - lo_off > kRankMax) {
+    const BuildRecord* f = src + lo_off;
+    const BuildRecord* l = src + hi_off;
+    std::uint64_t pivot_key;
+    if (l - f >= kSampleMin) {
+      pivot_key = samplePivot(f, src + nth_off, l, axis);
+    } else {
+      // Median of three distinct records: both sides get at least one, so every pass shrinks.
+      const BuildRecord& x = *f;
+      const BuildRecord& y = f[(l - f) / 2];
+      const BuildRecord& z = *(l - 1);
+      const BuildRecord pivot = before(x, y, axis)
+                                    ? (before(y, z, axis) ? y : (before(x, z, axis) ? z : x))
+                                    : (before(x, z, axis) ? x : (before(y, z, axis) ? z : y));
+      pivot_key = orderKey(pivot, axis);
+    }
+    BuildRecord* const dst = in_scratch ? home : scratch;
+    BuildRecord* lo = dst + lo_off;
+    BuildRecord* hi = dst + hi_off;
+    for (const BuildRecord* p = f; p < l; ++p) {
       const BuildRecord r = *p;
       const bool left = orderKey(r, axis) < pivot_key;
       *lo = r;
@@ -386,14 +458,20 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
       lo += left;
       hi -= !left;
     }
-    const std::ptrdiff_t k = lo - scratch;
-    std::copy(scratch, scratch + (last - first), first);
-    if (nth < first + k)
-      last = first + k;
-    else
-      first += k;
+    const std::ptrdiff_t mid = lo - dst;
+    // The side without nth is final; in scratch it goes home now.
+    if (nth_off < mid) {
+      if (!in_scratch) std::copy(dst + mid, dst + hi_off, home + mid);
+      hi_off = mid;
+    } else {
+      if (!in_scratch) std::copy(dst + lo_off, dst + mid, home + lo_off);
+      lo_off = mid;
+    }
+    src = dst;
+    in_scratch = !in_scratch;
   }
-  rankSort(first, last, axis);
+  if (in_scratch) std::copy(src + lo_off, src + hi_off, home + lo_off);
+  rankSort(home + lo_off, home + hi_off, axis);
 }
 
 template <typename S>
@@ -434,6 +512,9 @@ void Hierarchy<S>::rebuild() {
       stack.pop_back();
       const std::uint32_t b = nodes_[cube].first;
       const std::uint32_t e = b + nodes_[cube].count;
+      // The cube's sides: the union of its objects' rounded bounds, which is what refitting
+      // makes of them (rounding out is monotonic), so no refit follows the build.
+      unionOf(rec.data() + b, rec.data() + e, nodes_[cube]);
       if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
         // Within a leaf, registration order: the callback order does not depend on history.
         if (e - b <= kRankMax)
@@ -443,19 +524,11 @@ void Hierarchy<S>::rebuild() {
                     [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
         continue;
       }
-      // The cube's sides: the union of its objects' rounded bounds, as refitting will make it.
-      Node box;
-      setEmpty(box);
-      for (std::uint32_t p = b; p < e; ++p)
-        for (int k = 0; k < 3; ++k) {
-          box.lo[k] = std::min(box.lo[k], rec[p].lo[k]);
-          box.hi[k] = std::max(box.hi[k], rec[p].hi[k]);
-        }
-      const int axis = longestAxis(box);
+      const int axis = longestAxis(nodes_[cube]);
       const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
       // Median by centre along that side (the sum of the float bounds: exact order is not
       // needed, only a deterministic one), ties by registration order, in O(n).
-      selectNth(rec.data() + b, rec.data() + m, rec.data() + e, axis, scratch.data());
+      selectNth(rec.data() + b, rec.data() + m, rec.data() + e, axis, scratch.data() + b);
       const std::uint32_t child = addChildren(cube, b, m, e);
       stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
       stack.push_back((std::uint64_t(depth + 1) << 32) | child);
@@ -467,7 +540,8 @@ void Hierarchy<S>::rebuild() {
       if (node.isLeaf())
         for (std::uint32_t p = node.first; p < node.first + node.count; ++p) items_[p].leaf = i;
     }
-    refitAllCubes();
+    area_ = 0;
+    for (const Node& node : nodes_) area_ += surfaceArea(node);
   } else {
     items_.clear();
     area_ = 0;

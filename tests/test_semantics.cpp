@@ -679,6 +679,96 @@ TYPED_TEST(Semantics, DegenerateScenesIdenticalAndZeroSizeBoxes) {
   }
 }
 
+// The first build splits every cube at its median object along its longest side, by centre
+// (the sum of the float bounds, ties by registration order), and each cube's bounds are exactly
+// the union of its objects' rounded boxes. Large enough that the selection samples its pivots,
+// on inputs that defeat poor pivots: sorted either way, all equal, few distinct centres.
+TYPED_TEST(Semantics, BuildSplitsEveryCubeAtItsMedian) {
+  using S = TypeParam;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::vector<std::vector<std::pair<V3<S>, V3<S>>>> inputs(5);
+  for (int i = 0; i < 3000; ++i) {
+    const S x = S(i) * S(0.5);
+    inputs[0].emplace_back(V3<S>(x, 0, 0), V3<S>(x + 1, 1, 1));                // ascending
+    inputs[1].emplace_back(V3<S>(-x, 0, 0), V3<S>(-x + 1, 1, 1));              // descending
+    inputs[2].emplace_back(V3<S>(1, 2, 3), V3<S>(4, 5, 6));                    // all equal
+    inputs[3].emplace_back(V3<S>(S(i % 3), 0, 0), V3<S>(S(i % 3) + 1, 1, 1));  // 3 centres
+    inputs[4].emplace_back(V3<S>(0, S(i % 7), -x), V3<S>(1, S(i % 7) + 1, -x + 2));
+  }
+  auto uniform = scene<S>(4000);
+  std::vector<std::vector<Obj<S>*>> sets;
+  std::vector<std::vector<std::unique_ptr<TestObject<S>>>> owned;
+  for (const auto& corners : inputs) {
+    owned.push_back(boxes<S>(corners));
+    sets.push_back(raw(owned.back()));
+  }
+  sets.push_back(uniform.pointers());
+  for (int leaf_size : {1, 4, 7}) {
+    for (const auto& ptrs : sets) {
+      CubeCollisionManager<S> cube(Config{0, leaf_size});
+      cube.registerObjects(ptrs);
+      cube.setup();
+      ASSERT_TRUE(valid(cube));
+      const auto& t = cube.hierarchy();
+      const auto& nodes = t.nodes();
+      const auto& items = t.items();
+      // Each cube's object range, children before parents (children have larger indices).
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> range(nodes.size());
+      std::size_t internal = 0;
+      for (std::size_t i = nodes.size(); i-- > 0;) {
+        const auto& n = nodes[i];
+        if (n.isLeaf()) {
+          range[i] = {n.first, n.first + n.count};
+          continue;
+        }
+        ++internal;
+        const auto l = range[n.first], r = range[n.first + 1];
+        ASSERT_EQ(l.second, r.first) << "children of " << i << " not adjacent";
+        range[i] = {l.first, r.second};
+      }
+      ASSERT_EQ(range[t.root()], std::make_pair(0u, std::uint32_t(ptrs.size())));
+      ASSERT_GT(internal, 0u);
+      for (std::size_t i = 0; i < nodes.size(); ++i) {
+        const auto& n = nodes[i];
+        // Bounds: exactly the union of the objects' rounded boxes.
+        float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+        for (std::uint32_t p = range[i].first; p < range[i].second; ++p) {
+          float a[3], b[3];
+          detail::roundOut(items[p].box, a, b);
+          for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], a[k]);
+            hi[k] = std::max(hi[k], b[k]);
+          }
+        }
+        for (int k = 0; k < 3; ++k) {
+          ASSERT_EQ(n.lo[k], lo[k]) << "cube " << i;
+          ASSERT_EQ(n.hi[k], hi[k]) << "cube " << i;
+        }
+        if (n.isLeaf()) continue;
+        int axis = 0;
+        for (int k = 1; k < 3; ++k)
+          if (double(hi[k]) - lo[k] > double(hi[axis]) - lo[axis]) axis = k;
+        auto key = [&](std::uint32_t p) {
+          float a[3], b[3];
+          detail::roundOut(items[p].box, a, b);
+          const float c = a[axis] + b[axis];
+          return std::make_pair(c == c ? c : 0.0f, items[p].seq);
+        };
+        const std::uint32_t count = range[i].second - range[i].first;
+        const std::uint32_t split = range[n.first].second - range[i].first;
+        const std::uint32_t full = (count / 2 + leaf_size - 1) / leaf_size * leaf_size;
+        ASSERT_EQ(split, full < count ? full : count / 2) << "cube " << i;
+        auto left_max = key(range[i].first), right_min = key(range[i].first + split);
+        for (std::uint32_t p = range[i].first; p < range[i].first + split; ++p)
+          left_max = std::max(left_max, key(p));
+        for (std::uint32_t p = range[i].first + split; p < range[i].second; ++p)
+          right_min = std::min(right_min, key(p));
+        ASSERT_LT(left_max, right_min) << "cube " << i << " is not split at its median";
+      }
+    }
+  }
+}
+
 // With unbounded_limit beyond float's range, boxes past float's range stay in the cubes, where
 // their bounds round to float infinities: a box spanning both has no centre (inf - inf). The
 // build must still order every object (its centre counts as 0) and answer like brute force.
