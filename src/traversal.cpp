@@ -482,7 +482,13 @@ struct DistancePolicy {
     return keep(key);
   }
   static bool before(Key x, Key y) { return x < y; }
-  bool reaches(const Item<S>&, const Box<S>&) const { return true; }
+  // The gap to a cube is never above the gap to a box inside it (each step of boxGap2 is
+  // monotone, roundings included), so an object too far from the cube is too far from all its
+  // objects, and skipping it changes no call.
+  bool reaches(const Item<S>& x, const Box<S>& cube) const {
+    count.test();
+    return keep(boxGap2(x.box, cube));
+  }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
     return keep(boxGap2(x.box, y.box)) && x.obj != y.obj && call(x, y);

@@ -26,9 +26,11 @@ struct Config {
   int max_depth = 0;
 
   /// The seed's split threshold: a cube with more than `leaf_size` objects is split (min 1).
-  /// Trade-off: small leaves prune more precisely but mean more cubes (memory, refit time);
-  /// large leaves test more object pairs exhaustively.
-  int leaf_size = 4;
+  /// Trade-off: small leaves prune more precisely but mean more cubes (memory, build and refit
+  /// time, walk steps); large leaves test more object pairs exhaustively. Leaves of up to 8
+  /// are tested against each other in one vectorised pass, so 8 gave the fastest self-collide
+  /// (10,000 objects: about 20% faster than 4); larger leaves fall back to pair-by-pair tests.
+  int leaf_size = 8;
 
   /// See UpdatePolicy.
   UpdatePolicy update_policy = UpdatePolicy::automatic;
