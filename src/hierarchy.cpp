@@ -325,7 +325,10 @@ inline std::uint32_t orderedBits(float x) {
   std::uint32_t u;
   const float y = x + 0.0f;  // -0 + 0 is +0
   std::memcpy(&u, &y, sizeof u);
-  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+  // Negative: all bits flipped; otherwise the sign bit set. Without a branch: the build's
+  // centres fall on both sides of 0 at random, and a branch here mispredicted on those.
+  const std::uint32_t neg = static_cast<std::uint32_t>(static_cast<std::int32_t>(u) >> 31);
+  return u ^ (neg | 0x80000000u);
 }
 
 // The build's order as one integer: by centre along `axis`, ties by registration order (a strict
@@ -450,14 +453,24 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
     BuildRecord* const dst = in_scratch ? home : scratch;
     BuildRecord* lo = dst + lo_off;
     BuildRecord* hi = dst + hi_off;
-    for (const BuildRecord* p = f; p < l; ++p) {
-      const BuildRecord r = *p;
-      const bool left = orderKey(r, axis) < pivot_key;
-      *lo = r;
-      *(hi - 1) = r;
-      lo += left;
-      hi -= !left;
-    }
+    // One loop per axis, so that the centre is read at a fixed offset.
+    const auto pass = [&](auto axis_constant) {
+      constexpr int a = decltype(axis_constant)::value;
+      for (const BuildRecord* p = f; p < l; ++p) {
+        const BuildRecord r = *p;
+        const bool left = orderKey(r, a) < pivot_key;
+        *lo = r;
+        *(hi - 1) = r;
+        lo += left;
+        hi -= !left;
+      }
+    };
+    if (axis == 0)
+      pass(std::integral_constant<int, 0>());
+    else if (axis == 1)
+      pass(std::integral_constant<int, 1>());
+    else
+      pass(std::integral_constant<int, 2>());
     const std::ptrdiff_t mid = lo - dst;
     // The side without nth is final; in scratch it goes home now.
     if (nth_off < mid) {
@@ -476,22 +489,22 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
 
 template <typename S>
 void Hierarchy<S>::rebuild() {
-  // Gather the live objects; the items are laid out in leaf order once at the end.
-  std::vector<Item<S>> fresh;
-  fresh.reserve(live_);
-  for (const Item<S>& it : items_)
-    if (it.obj) fresh.push_back(it);
-  const std::uint32_t n = static_cast<std::uint32_t>(fresh.size());
+  // The records point at the live items where they are; the items are laid out in leaf order
+  // once at the end.
+  std::uint32_t n = 0;
+  for (const Item<S>& it : items_) n += it.obj != nullptr;
   nodes_.clear();
   parent_.clear();
   dead_nodes_ = 0;
   root_ = kNone;
   if (n > 0) {
     std::vector<BuildRecord> rec(n), scratch(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-      roundOut(fresh[i].box, rec[i].lo, rec[i].hi);
-      rec[i].seq = fresh[i].seq;
-      rec[i].item = i;
+    for (std::uint32_t p = 0, i = 0; p < items_.size(); ++p) {
+      if (items_[p].obj == nullptr) continue;
+      roundOut(items_[p].box, rec[i].lo, rec[i].hi);
+      rec[i].seq = items_[p].seq;
+      rec[i].item = p;
+      ++i;
     }
     // Every lower child holds a multiple of leaf_size objects (splitCount), so the leaves are
     // full but one: at most 2 ceil(n / leaf_size) - 1 cubes, fewer under max_depth. Reserving
@@ -533,8 +546,14 @@ void Hierarchy<S>::rebuild() {
       stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
       stack.push_back((std::uint64_t(depth + 1) << 32) | child);
     }
-    items_.resize(n);
-    for (std::uint32_t p = 0; p < n; ++p) items_[p] = fresh[rec[p].item];
+    ItemArray<S> sorted(n);
+    // A gather from all over the old array: fetch a few records ahead.
+    constexpr std::uint32_t kAhead = 8;
+    for (std::uint32_t p = 0; p < n; ++p) {
+      if (p + kAhead < n) __builtin_prefetch(&items_[rec[p + kAhead].item]);
+      sorted[p] = items_[rec[p].item];
+    }
+    items_.swap(sorted);
     for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
       const Node& node = nodes_[i];
       if (node.isLeaf())
@@ -611,16 +630,26 @@ void Hierarchy<S>::clear() {
 template <typename S>
 void Hierarchy<S>::insertAndRebuild(const std::vector<Object*>& objs,
                                     const std::vector<Box<S>>& boxes) {
+  // rebuild() indexes every object afresh, so the batch is not indexed one by one here; each
+  // such insertion (and each lookup in a growing index) loaded a random item to compare
+  // pointers. Duplicates within the batch are caught by a set of the pointers themselves.
+  const bool empty = live_ == 0 && unbounded_.empty();
+  std::size_t cap = 16;
+  while (cap < 2 * objs.size()) cap *= 2;
+  std::vector<const Object*> seen(cap, nullptr);
+  const std::size_t mask = cap - 1;
   items_.reserve(items_.size() + objs.size());
   for (std::size_t i = 0; i < objs.size(); ++i) {
-    if (find(objs[i]) != kNone) continue;  // registered already, or earlier in this batch
+    if (!empty && find(objs[i]) != kNone) continue;  // registered already
+    std::size_t h = hashPtr(objs[i]) & mask;
+    while (seen[h] != nullptr && seen[h] != objs[i]) h = (h + 1) & mask;
+    if (seen[h] != nullptr) continue;  // earlier in this batch
+    seen[h] = objs[i];
     Item<S> it{boxes[i], objs[i], kNone, newSeq()};
     if (classify(boxes[i], config_.unbounded_limit) == BoxKind::unbounded) {
       unbounded_.push_back(it);
-      indexInsert(it.obj, static_cast<std::uint32_t>(unbounded_.size() - 1) | kUnboundedBit);
     } else {
       items_.push_back(it);
-      indexInsert(it.obj, static_cast<std::uint32_t>(items_.size() - 1));
       ++live_;
     }
   }
