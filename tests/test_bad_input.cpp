@@ -211,6 +211,11 @@ TEST(BadInput, DoubleRegistrationHasNoEffect) {
   cube::oracle::Calls<S> c;
   m.collide(w[1], &c, &cube::oracle::Calls<S>::record);
   for (const auto& p : c.calls) EXPECT_NE(p.first, w[1]);
+  // The same into an empty manager, where a batch skips the lookups of registered objects.
+  Manager fresh;
+  fresh.registerObjects({w[3], w[0], w[3], w[0], w[2]});
+  EXPECT_EQ(fresh.size(), 3u);
+  expectAnswersLikeNaive(fresh, {w[3], w[0], w[2]});
 }
 
 TEST(BadInput, RegisteringAgainAnObjectWhoseAABBWentNaNHasNoEffect) {
