@@ -410,13 +410,13 @@ std::uint64_t samplePivot(const BuildRecord* first, const BuildRecord* nth, cons
   while (s * s < 4 * n && s < kSampleMax) s *= 2;
   std::uint64_t key[kSampleMax];
   for (std::ptrdiff_t i = 0; i < s; ++i) key[i] = orderKey(first[(2 * i + 1) * n / (2 * s)], axis);
-  std::sort(key, key + s);
   const double q = (double(nth - first) + 0.5) / double(n);
   const double margin = 2.0 * std::sqrt(double(s) * q * (1.0 - q)) + 1.0;
   double r = q * double(s);
   if (std::min(q, 1.0 - q) * double(s) + margin < 0.5 * double(s)) r += q < 0.5 ? margin : -margin;
   const std::ptrdiff_t i =
       std::max<std::ptrdiff_t>(1, std::min<std::ptrdiff_t>(s - 1, std::ptrdiff_t(r)));
+  std::nth_element(key, key + i, key + s);  // the sample's i-th key; the rest needs no order
   return key[i];
 }
 
