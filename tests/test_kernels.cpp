@@ -3,12 +3,15 @@
 //   instruction set in turn, against brute force over the exact boxes: boxes that touch exactly,
 //   gaps too small for float, infinite boxes, dead slots, every size up to the limit;
 // - the leaf kernels of the walks (detail::leafOverlapMask) on the same kinds of boxes;
+// - self-collide of trees large enough to test their leaves on float columns, against brute
+//   force;
 // - the outward rounding of boxes to float (detail::roundOut) against floatBelow.
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/narrowphase/collision_object.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iterator>
@@ -16,6 +19,7 @@
 #include <memory>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -244,6 +248,62 @@ TYPED_TEST(AllPairs, LeafMasksEqualBruteForce) {
                                                PairKernel::avx2),
                  std::logic_error);
   }
+}
+
+// Self-collide of a tree large enough for the walk to test its leaves on float columns (AVX2,
+// double): the same pairs as brute force over the exact boxes, with exact touches, gaps float
+// cannot see, and dead slots left by removals.
+TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
+  using S = TypeParam;
+  std::size_t pairs_seen = 0;
+  for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+    const Slots<S> s(700, 500 + seed);
+    std::vector<Obj<S>*> objs;
+    std::vector<Box<S>> boxes;
+    for (const Item<S>& it : s.items) {
+      if (it.obj == nullptr || !std::isfinite(it.box.lo[2]) || !std::isfinite(it.box.hi[0]))
+        continue;  // unbounded boxes live outside the cubes
+      objs.push_back(it.obj);
+      boxes.push_back(it.box);
+    }
+    cube::detail::Hierarchy<S> h{cube::Config()};
+    h.insertAndRebuild(objs, boxes);
+    // Every seventh object removed: its slot stays in the array, dead, until a rebuild.
+    std::vector<std::pair<Obj<S>*, Box<S>>> kept;
+    for (std::size_t i = 0; i < objs.size(); ++i) {
+      if (i % 7 == 3)
+        ASSERT_TRUE(h.remove(objs[i]));
+      else
+        kept.emplace_back(objs[i], boxes[i]);
+    }
+    std::string why;
+    ASSERT_TRUE(h.validate(&why)) << why;
+    ASSERT_GE(h.cubes().slots, 256u);  // where the walk switches to columns
+    Pairs<S> expected;
+    for (std::size_t i = 0; i < kept.size(); ++i)
+      for (std::size_t j = i + 1; j < kept.size(); ++j) {
+        bool hit = true;
+        for (int k = 0; k < 3; ++k)
+          hit = hit && kept[i].second.lo[k] <= kept[j].second.hi[k] &&
+                kept[j].second.lo[k] <= kept[i].second.hi[k];
+        if (hit)
+          expected.emplace_back(std::min(kept[i].first, kept[j].first),
+                                std::max(kept[i].first, kept[j].first));
+      }
+    Recorder<S> r;
+    EXPECT_FALSE(cube::detail::collidePairs(h.cubes(), h.cubes(), true, &r, &Recorder<S>::fn));
+    for (auto& c : r.calls) c = {std::min(c.first, c.second), std::max(c.first, c.second)};
+    std::sort(r.calls.begin(), r.calls.end());
+    std::sort(expected.begin(), expected.end());
+    ASSERT_EQ(r.calls, expected) << "seed " << seed;
+    pairs_seen += expected.size();
+    // A callback that stops the walk is obeyed there.
+    Recorder<S> stop;
+    stop.stop_after = 3;
+    EXPECT_TRUE(cube::detail::collidePairs(h.cubes(), h.cubes(), true, &stop, &Recorder<S>::fn));
+    EXPECT_EQ(stop.calls.size(), 3u);
+  }
+  EXPECT_GT(pairs_seen, 1000u);
 }
 
 // roundOut works on whole boxes with SIMD; its result must be floatBelow's bit for bit (lo) and
