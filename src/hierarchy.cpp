@@ -149,20 +149,6 @@ bool isDead(const Node& n) {
 }  // namespace
 
 template <typename S>
-BoxKind classify(const Box<S>& b, double limit) {
-  // update() classifies every object on every call: one branch-free test for the common case
-  // (a NaN fails every comparison, so it lands in the slow path too).
-  const double l = limit;
-  const bool inside = (std::fabs(double(b.lo[0])) <= l) & (std::fabs(double(b.lo[1])) <= l) &
-                      (std::fabs(double(b.lo[2])) <= l) & (std::fabs(double(b.hi[0])) <= l) &
-                      (std::fabs(double(b.hi[1])) <= l) & (std::fabs(double(b.hi[2])) <= l);
-  if (inside) return BoxKind::finite;
-  for (int k = 0; k < 3; ++k)
-    if (std::isnan(b.lo[k]) || std::isnan(b.hi[k])) return BoxKind::invalid;
-  return BoxKind::unbounded;
-}
-
-template <typename S>
 Hierarchy<S>::Hierarchy(const Config& config) : config_(config) {
   config_.check();
   for (int k = 0; k < 3; ++k) {
@@ -252,11 +238,18 @@ void Hierarchy<S>::indexRebuild() {
   std::size_t cap = 16;
   while (cap * 3 < 4 * (size() + 1)) cap *= 2;
   index_.assign(cap, 0);
-  index_used_ = 0;
+  // Sized for everything: no growth check, no comparison (each object is there once).
+  const std::size_t mask = cap - 1;
+  const auto put = [&](const Object* obj, std::uint32_t loc) {
+    std::size_t i = hashPtr(obj) & mask;
+    while (index_[i] != 0) i = (i + 1) & mask;
+    index_[i] = loc + 1;
+  };
   for (std::size_t p = 0; p < items_.size(); ++p)
-    if (items_[p].obj) indexInsert(items_[p].obj, static_cast<std::uint32_t>(p));
+    if (items_[p].obj) put(items_[p].obj, static_cast<std::uint32_t>(p));
   for (std::size_t p = 0; p < unbounded_.size(); ++p)
-    indexInsert(unbounded_[p].obj, static_cast<std::uint32_t>(p) | kUnboundedBit);
+    put(unbounded_[p].obj, static_cast<std::uint32_t>(p) | kUnboundedBit);
+  index_used_ = size();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1121,8 +1114,6 @@ bool Hierarchy<S>::validate(std::string* why) const {
   return true;
 }
 
-template BoxKind classify<float>(const Box<float>&, double);
-template BoxKind classify<double>(const Box<double>&, double);
 template class Hierarchy<float>;
 template class Hierarchy<double>;
 

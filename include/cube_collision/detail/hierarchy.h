@@ -73,9 +73,21 @@ struct Box {
 /// Where an object's AABB puts it.
 enum class BoxKind { finite, unbounded, invalid };
 
-/// Classifies a box: any NaN makes it invalid, any coordinate beyond +-limit unbounded.
+/// Classifies a box: any NaN makes it invalid, any coordinate beyond +-limit unbounded. Inline:
+/// registration calls it once per object, update() once per moved one.
 template <typename S>
-BoxKind classify(const Box<S>& b, double limit);
+inline BoxKind classify(const Box<S>& b, double limit) {
+  // update() classifies every object on every call: one branch-free test for the common case
+  // (a NaN fails every comparison, so it lands in the slow path too).
+  const double l = limit;
+  const bool inside = (std::fabs(double(b.lo[0])) <= l) & (std::fabs(double(b.lo[1])) <= l) &
+                      (std::fabs(double(b.lo[2])) <= l) & (std::fabs(double(b.hi[0])) <= l) &
+                      (std::fabs(double(b.hi[1])) <= l) & (std::fabs(double(b.hi[2])) <= l);
+  if (inside) return BoxKind::finite;
+  for (int k = 0; k < 3; ++k)
+    if (std::isnan(b.lo[k]) || std::isnan(b.hi[k])) return BoxKind::invalid;
+  return BoxKind::unbounded;
+}
 
 /// One cube of the hierarchy. Its bounds are floats rounded outward, so that a cube always
 /// contains its objects' exact boxes and two cubes fit in a cache line; the exact boxes are
