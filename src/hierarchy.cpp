@@ -142,6 +142,15 @@ std::size_t hashPtr(const void* p) {
   return static_cast<std::size_t>(x);
 }
 
+// Stores `entry` in the first empty slot of obj's probe chain (the table has room, and obj is not
+// in it yet).
+void putEntry(std::vector<std::uint32_t>& table, const void* obj, std::uint32_t entry) {
+  const std::size_t mask = table.size() - 1;
+  std::size_t i = hashPtr(obj) & mask;
+  while (table[i] != 0) i = (i + 1) & mask;
+  table[i] = entry;
+}
+
 bool isDead(const Node& n) {
   return n.count == 0 && n.first == kNone;
 }
@@ -195,18 +204,10 @@ void Hierarchy<S>::indexInsert(const Object* obj, std::uint32_t loc) {
     std::vector<std::uint32_t> old;
     old.swap(index_);
     index_.assign(std::max<std::size_t>(16, old.size() * 2), 0);
-    const std::size_t mask = index_.size() - 1;
-    for (std::uint32_t e : old) {
-      if (e == 0) continue;
-      std::size_t i = hashPtr(objectAt(e - 1)) & mask;
-      while (index_[i] != 0) i = (i + 1) & mask;
-      index_[i] = e;
-    }
+    for (std::uint32_t e : old)
+      if (e != 0) putEntry(index_, objectAt(e - 1), e);
   }
-  const std::size_t mask = index_.size() - 1;
-  std::size_t i = hashPtr(obj) & mask;
-  while (index_[i] != 0) i = (i + 1) & mask;
-  index_[i] = loc + 1;
+  putEntry(index_, obj, loc + 1);
   ++index_used_;
 }
 
@@ -239,16 +240,10 @@ void Hierarchy<S>::indexRebuild() {
   while (cap * 3 < 4 * (size() + 1)) cap *= 2;
   index_.assign(cap, 0);
   // Sized for everything: no growth check, no comparison (each object is there once).
-  const std::size_t mask = cap - 1;
-  const auto put = [&](const Object* obj, std::uint32_t loc) {
-    std::size_t i = hashPtr(obj) & mask;
-    while (index_[i] != 0) i = (i + 1) & mask;
-    index_[i] = loc + 1;
-  };
   for (std::size_t p = 0; p < items_.size(); ++p)
-    if (items_[p].obj) put(items_[p].obj, static_cast<std::uint32_t>(p));
+    if (items_[p].obj) putEntry(index_, items_[p].obj, static_cast<std::uint32_t>(p) + 1);
   for (std::size_t p = 0; p < unbounded_.size(); ++p)
-    put(unbounded_[p].obj, static_cast<std::uint32_t>(p) | kUnboundedBit);
+    putEntry(index_, unbounded_[p].obj, (static_cast<std::uint32_t>(p) | kUnboundedBit) + 1);
   index_used_ = size();
 }
 

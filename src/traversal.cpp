@@ -305,16 +305,19 @@ template <typename S>
 std::unique_ptr<float[]> fillColumns(const View<S>& v, Columns& cols) {
   const std::size_t stride = std::size_t(v.slots) + kMaskLeaf;
   std::unique_ptr<float[]> buf(new float[6 * stride]);
-  float* col[6];
-  for (int k = 0; k < 6; ++k) cols.c[k] = col[k] = buf.get() + k * stride;
+  float* const lo = buf.get();  // column k at lo + k stride; hi's at lo + (3 + k) stride
+  float* const hi = lo + 3 * stride;
   for (std::uint32_t p = 0; p < v.slots; ++p) {
     const Box<S>& b = v.items[p].box;
     for (int k = 0; k < 3; ++k) {
-      col[k][p] = static_cast<float>(b.lo[k]);
-      col[3 + k][p] = static_cast<float>(b.hi[k]);
+      lo[k * stride + p] = static_cast<float>(b.lo[k]);
+      hi[k * stride + p] = static_cast<float>(b.hi[k]);
     }
   }
-  for (int k = 0; k < 6; ++k) std::fill(col[k] + v.slots, col[k] + stride, 0.0f);
+  for (int k = 0; k < 6; ++k) {
+    cols.c[k] = lo + k * stride;
+    std::fill(lo + k * stride + v.slots, lo + (k + 1) * stride, 0.0f);
+  }
   return buf;
 }
 
@@ -350,6 +353,13 @@ std::uint64_t leafHitsWith(PairKernel k, bool self, const Item<S>* xs, std::uint
   return self ? leafHitsPortable<true>(xs, nx, ys, ny) : leafHitsPortable<false>(xs, nx, ys, ny);
 }
 
+// The box tests between two runs of nx and ny objects (Self: one run, each pair once), for
+// QueryStats.
+template <bool Self, class Policy>
+void countLeafTests(const Policy& p, std::uint32_t nx, std::uint32_t ny) {
+  p.count.tests(Self ? std::size_t(nx) * (nx - (nx > 0)) / 2 : std::size_t(nx) * ny);
+}
+
 // Collide between two small runs of objects (at most kMaskLeaf each; Self: the same run, each
 // unordered pair once): all box tests first, into a bit mask (bit kMaskLeaf i + j for xs[i],
 // ys[j]), then the callbacks in that order. Whether two boxes overlap is a coin toss for the
@@ -358,7 +368,7 @@ std::uint64_t leafHitsWith(PairKernel k, bool self, const Item<S>* xs, std::uint
 template <bool Self, typename S, class Policy>
 bool collideSmall(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys, std::uint32_t ny,
                   const Policy& p) {
-  p.count.tests(Self ? std::size_t(nx) * (nx - (nx > 0)) / 2 : std::size_t(nx) * ny);
+  countLeafTests<Self>(p, nx, ny);
   const std::uint64_t hits = leafHits<Self>(xs, nx, ys, ny);
   return hits != 0 && reportHits<false>(hits, xs, ys, p);
 }
@@ -370,7 +380,7 @@ bool collideLeaves(const View<S>& v, std::uint32_t x0, std::uint32_t nx, std::ui
                    std::uint32_t ny, const Policy& p) {
 #if defined(CUBE_HAVE_AVX2_KERNEL)
   if (p.columns != nullptr) {
-    p.count.tests(Self ? std::size_t(nx) * (nx - (nx > 0)) / 2 : std::size_t(nx) * ny);
+    countLeafTests<Self>(p, nx, ny);
     const std::uint64_t hits = columnHitsAvx2<Self>(*p.columns, x0, nx, y0, ny);
     return hits != 0 && reportHits<true>(hits, v.items + x0, v.items + y0, p);
   }
