@@ -56,13 +56,17 @@ Box<S> checkedQueryBox(const fcl::CollisionObject<S>* obj, const char* where) {
   return b;
 }
 
-// Re-reads one object's AABB; unknown objects are ignored, an invalid AABB is remembered.
+// Re-reads one object's AABB; unknown objects are ignored, an invalid AABB is remembered. The
+// location of a moved object goes to `changed`, if given.
 template <typename S>
 void moveOne(detail::Hierarchy<S>& tree, const fcl::CollisionObject<S>* obj,
-             const fcl::CollisionObject<S>*& bad) {
-  if (obj == nullptr || !tree.contains(obj)) return;
+             const fcl::CollisionObject<S>*& bad, std::vector<std::uint32_t>* changed) {
+  if (obj == nullptr) return;
+  const std::uint32_t loc = tree.locationOf(obj);
+  if (loc == detail::kNone) return;
   const Box<S> b = boxOf(*obj);
   if (isValid(b)) {
+    if (changed) changed->push_back(loc);
     tree.move(obj, b);
   } else if (bad == nullptr) {
     bad = obj;
@@ -183,9 +187,25 @@ void CubeCollisionManager<S>::setup() {
 }
 
 template <typename S>
+void CubeCollisionManager<S>::syncPairs(bool was_current) {
+  // A refresh needs the list current before the boxes moved; it lists afresh by itself if the
+  // update also rearranged the objects (a rebuild, or a move to or from the unbounded list).
+  if (was_current)
+    pairs_.refresh(tree_, changed_);
+  else
+    pairs_.recompute(tree_);
+}
+
+template <typename S>
 void CubeCollisionManager<S>::update() {
-  const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); });
+  const bool keep = tree_.config().keep_pairs;
+  const bool was_current = keep && pairs_.current(tree_);
+  pairs_.invalidate();  // until synced: nothing below may leave it claiming to be current
+  changed_.clear();
+  const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); },
+                                     was_current ? &changed_ : nullptr);
   tree_.maybeRebuildAfterUpdate();
+  if (keep) syncPairs(was_current);
   if (bad != nullptr)
     fail("update", indexName(tree_, bad) +
                        " has a NaN AABB coordinate; it keeps its previous "
@@ -195,7 +215,10 @@ void CubeCollisionManager<S>::update() {
 template <typename S>
 void CubeCollisionManager<S>::update(Object* updated_obj) {
   const Object* bad = nullptr;
-  moveOne(tree_, updated_obj, bad);
+  // Dropped rather than refreshed: a refresh passes over the whole list, which a loop of single
+  // updates would repeat for each object. The next update() or update(objects) lists afresh.
+  pairs_.invalidate();
+  moveOne(tree_, updated_obj, bad, nullptr);
   tree_.maybeRebuildAfterUpdate();
   if (bad != nullptr)
     fail("update", indexName(tree_, bad) +
@@ -206,8 +229,13 @@ void CubeCollisionManager<S>::update(Object* updated_obj) {
 template <typename S>
 void CubeCollisionManager<S>::update(const std::vector<Object*>& updated_objs) {
   const Object* bad = nullptr;
-  for (Object* obj : updated_objs) moveOne(tree_, obj, bad);
+  const bool keep = tree_.config().keep_pairs;
+  const bool was_current = keep && pairs_.current(tree_);
+  pairs_.invalidate();
+  changed_.clear();
+  for (Object* obj : updated_objs) moveOne(tree_, obj, bad, was_current ? &changed_ : nullptr);
   tree_.maybeRebuildAfterUpdate();
+  if (keep) syncPairs(was_current);
   if (bad != nullptr)
     fail("update", indexName(tree_, bad) +
                        " has a NaN AABB coordinate; it keeps its previous "
@@ -217,6 +245,8 @@ void CubeCollisionManager<S>::update(const std::vector<Object*>& updated_objs) {
 template <typename S>
 void CubeCollisionManager<S>::clear() {
   tree_.clear();
+  pairs_.release();
+  changed_ = {};
 }
 
 template <typename S>
@@ -283,6 +313,10 @@ template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
+  if (pairs_.current(tree_)) {
+    pairs_.collide(tree_, cdata, callback, stats);
+    return;
+  }
   selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
     return collideViews(tree_.config(), a, b, self, cdata, callback, stats);
   });
@@ -316,6 +350,11 @@ void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
                [&](const View<S>& a, const View<S>& b, bool self) {
                  return detail::distancePairs(a, b, self, cdata, callback, best, stats);
                });
+}
+
+template <typename S>
+bool CubeCollisionManager<S>::validate(std::string* why) const {
+  return tree_.validate(why) && pairs_.validate(tree_, why);
 }
 
 template <typename S>

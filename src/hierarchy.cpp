@@ -172,7 +172,7 @@ Hierarchy<S>::Hierarchy(const Config& config) : config_(config) {
 // Object index
 
 template <typename S>
-const typename Hierarchy<S>::Object* Hierarchy<S>::objectAt(std::uint32_t loc) const {
+typename Hierarchy<S>::Object* Hierarchy<S>::objectAt(std::uint32_t loc) const {
   if (loc & kUnboundedBit) return unbounded_[loc & ~kUnboundedBit].obj;
   return items_[loc].obj;
 }
@@ -562,6 +562,7 @@ void Hierarchy<S>::rebuild() {
   built_live_ = live_;
   changes_ = 0;
   ++builds_;
+  ++layout_version_;
   built_ = true;
 }
 
@@ -611,6 +612,7 @@ void Hierarchy<S>::clear() {
   area_ = built_area_ = 0;
   built_live_ = 0;
   changes_ = 0;
+  ++layout_version_;
   built_ = false;
   setup_done_ = false;
 }
@@ -815,6 +817,7 @@ void Hierarchy<S>::place(Item<S> item) {
 template <typename S>
 void Hierarchy<S>::afterChange() {
   ++changes_;
+  ++layout_version_;
   if (needsRebuild()) {
     rebuild();
   } else {

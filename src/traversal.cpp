@@ -163,12 +163,35 @@ struct Columns {
   const float* c[6];  // lo 0..2, hi 0..2
 };
 
-template <typename S, class Counter>
+// What a collide does with a pair whose boxes overlap: call the user's function...
+template <typename S>
+struct CallFn {
+  void* data;
+  CollideFn<S> fn;
+  bool operator()(const Item<S>& x, const Item<S>& y) const { return fn(x.obj, y.obj, data); }
+};
+
+// ...or note the pair's locations (see collectPairs): a slot of view a or b, or'ed with its tag.
+template <typename S>
+struct RecordLocations {
+  const Item<S>* base_a;
+  std::uint32_t tag_a;
+  const Item<S>* base_b;
+  std::uint32_t tag_b;
+  std::vector<std::uint64_t>* out;
+  bool operator()(const Item<S>& x, const Item<S>& y) const {
+    const std::uint32_t a = static_cast<std::uint32_t>(&x - base_a) | tag_a;
+    const std::uint32_t b = static_cast<std::uint32_t>(&y - base_b) | tag_b;
+    out->push_back(std::uint64_t(a) << 32 | b);
+    return false;
+  }
+};
+
+template <typename S, class Counter, class Sink = CallFn<S>>
 struct CollidePolicy {
   using Key = NoKey;
   static constexpr bool kOrdered = false;
-  void* data;
-  CollideFn<S> fn;
+  Sink sink;
   Counter count;
   const Columns* columns = nullptr;  // null: leaves are tested on the exact boxes only
   bool enter(const Node& a, const Node& b, Key&) const {
@@ -191,7 +214,7 @@ struct CollidePolicy {
   bool report(const Item<S>& x, const Item<S>& y) const {
     if (x.obj == y.obj) return false;
     count.call();
-    return fn(x.obj, y.obj, data);
+    return sink(x, y);
   }
   bool leaf(const Item<S>& x, const Item<S>& y) const { return touches(x, y) && report(x, y); }
 };
@@ -844,11 +867,9 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
   return false;
 }
 
-}  // namespace
-
-template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
-                  QueryStats* stats) {
+template <typename S, class Sink>
+bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink,
+                 QueryStats* stats) {
   Columns columns;
   const Columns* use = nullptr;
   std::unique_ptr<float[]> storage;
@@ -860,8 +881,26 @@ bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, Col
     }
   }
 #endif
-  if (stats) return descend(a, b, self, CollidePolicy<S, Count>{data, fn, Count{stats}, use});
-  return descend(a, b, self, CollidePolicy<S, NoCount>{data, fn, NoCount{}, use});
+  if (stats) return descend(a, b, self, CollidePolicy<S, Count, Sink>{sink, Count{stats}, use});
+  return descend(a, b, self, CollidePolicy<S, NoCount, Sink>{sink, NoCount{}, use});
+}
+
+}  // namespace
+
+template <typename S>
+bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+                  QueryStats* stats) {
+  return collideWith(a, b, self, CallFn<S>{data, fn}, stats);
+}
+
+template <typename S>
+void collectPairs(const View<S>& a, std::uint32_t tag_a, const View<S>& b, std::uint32_t tag_b,
+                  bool self, std::size_t all_pairs_limit, std::vector<std::uint64_t>& out) {
+  const RecordLocations<S> sink{a.items, tag_a, b.items, tag_b, &out};
+  if (self && a.slots <= all_pairs_limit)
+    allPairs(a, CollidePolicy<S, NoCount, RecordLocations<S>>{sink, NoCount{}}, PairKernel::best);
+  else
+    collideWith(a, b, self, sink, nullptr);
 }
 
 bool pairKernelAvailable(PairKernel k) {
@@ -890,8 +929,8 @@ bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* 
                      PairKernel kernel) {
   if (v.slots > kAllPairsMax) throw std::logic_error("collideAllPairs: view too large");
   if (!pairKernelAvailable(kernel)) throw std::logic_error("collideAllPairs: kernel unavailable");
-  if (stats) return allPairs(v, CollidePolicy<S, Count>{data, fn, Count{stats}}, kernel);
-  return allPairs(v, CollidePolicy<S, NoCount>{data, fn, NoCount{}}, kernel);
+  if (stats) return allPairs(v, CollidePolicy<S, Count>{{data, fn}, Count{stats}}, kernel);
+  return allPairs(v, CollidePolicy<S, NoCount>{{data, fn}, NoCount{}}, kernel);
 }
 
 template <typename S>
@@ -922,6 +961,10 @@ template bool collidePairs<float>(const View<float>&, const View<float>&, bool, 
                                   CollideFn<float>, QueryStats*);
 template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
                                    CollideFn<double>, QueryStats*);
+template void collectPairs<float>(const View<float>&, std::uint32_t, const View<float>&,
+                                  std::uint32_t, bool, std::size_t, std::vector<std::uint64_t>&);
+template void collectPairs<double>(const View<double>&, std::uint32_t, const View<double>&,
+                                   std::uint32_t, bool, std::size_t, std::vector<std::uint64_t>&);
 template bool collideAllPairs<float>(const View<float>&, void*, CollideFn<float>, QueryStats*,
                                      PairKernel);
 template bool collideAllPairs<double>(const View<double>&, void*, CollideFn<double>, QueryStats*,

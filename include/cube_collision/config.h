@@ -36,6 +36,17 @@ struct Config {
   /// See UpdatePolicy.
   UpdatePolicy update_policy = UpdatePolicy::automatic;
 
+  /// update() and update(objects) keep the list of overlapping pairs, and a self-collide that
+  /// follows calls the callback for those pairs without walking the cubes (as FCL's SaP manager
+  /// keeps its pairs). The first such update, and the first after the objects were rearranged
+  /// (registrations, removals, rebuilds, setup() rebuilding, update(obj)), lists every pair
+  /// with one self walk; later ones query only the objects that moved. Trade-off: each update
+  /// costs more (a query per moved object and a pass over the list, or a full listing now and
+  /// then), which a caller who never self-collides pays for nothing; the list takes 8 bytes per
+  /// overlapping pair. update(obj) drops the list instead of refreshing it, so that a loop of
+  /// single updates costs no more than before. Same pairs either way, in another order.
+  bool keep_pairs = true;
+
   /// With UpdatePolicy::automatic: rebuild when the total surface area of the cubes per object
   /// exceeds this multiple of its value right after the last build (must be > 1). Trade-off: a
   /// low value rebuilds often (a build costs about as much as 10 to 20 refits); a high value

@@ -9,6 +9,7 @@
 
 #include "cube_collision/config.h"
 #include "cube_collision/detail/hierarchy.h"
+#include "cube_collision/detail/pair_cache.h"
 #include "cube_collision/query_stats.h"
 
 namespace cube {
@@ -154,9 +155,14 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
 
   /// The configuration the manager was made with.
   const Config& config() const { return tree_.config(); }
-  /// Checks every invariant of the hierarchy; on failure returns false and, if `why` is given,
-  /// says which.
-  bool validate(std::string* why = nullptr) const { return tree_.validate(why); }
+  /// Checks every invariant of the hierarchy and, when the pair list of Config::keep_pairs is
+  /// in use, that it holds exactly the overlapping pairs; on failure returns false and, if
+  /// `why` is given, says which.
+  bool validate(std::string* why = nullptr) const;
+  /// Heap bytes owned: the hierarchy and the pair list.
+  std::size_t bytes() const { return tree_.bytes() + pairs_.bytes(); }
+  /// Whether the next self-collide is served from the pair list (Config::keep_pairs).
+  bool pairsListed() const { return pairs_.current(tree_); }
   /// Read-only access to the hierarchy, for inspection and export.
   const detail::Hierarchy<S>& hierarchy() const { return tree_; }
 
@@ -184,7 +190,12 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
     }
   }
 
+  // Brings the pair list up to date after an update: `was_current` says whether it was before.
+  void syncPairs(bool was_current);
+
   detail::Hierarchy<S> tree_;
+  detail::PairCache<S> pairs_;
+  std::vector<std::uint32_t> changed_;  // update()'s scratch: locations whose box changed
 };
 
 using CubeCollisionManagerd = CubeCollisionManager<double>;

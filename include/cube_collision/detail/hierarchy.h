@@ -239,9 +239,11 @@ class Hierarchy {
   /// Reads every object's box through `read(obj, box)` and refits the cubes above the changed
   /// ones (path by path if few changed, else all in one bottom-up pass); an object whose new box
   /// is invalid keeps its old one. Returns the earliest registered object whose box was invalid,
-  /// or nullptr.
+  /// or nullptr. If `changed` is given, the location of every object whose box changed in place
+  /// is appended to it (objects moving between the cubes and the unbounded list change
+  /// location, and changesSinceBuild() with it).
   template <class Read>
-  const Object* refitAll(Read&& read);
+  const Object* refitAll(Read&& read, std::vector<std::uint32_t>* changed = nullptr);
   /// Rebuilds the cubes from scratch over the current objects.
   void rebuild();
   /// The first call (since construction or clear()) builds from scratch if anything changed
@@ -254,6 +256,17 @@ class Hierarchy {
 
   /// Objects in registration order.
   void objects(std::vector<Object*>& out) const;
+
+  /// An object's location: its slot in cubes().items, or its position in unbounded().items
+  /// or'ed with kUnboundedBit. Locations change with builds, insertions and removals only.
+  static constexpr std::uint32_t kUnboundedBit = 0x80000000u;
+  /// The object at a live location.
+  Object* objectAt(std::uint32_t loc) const;
+  /// The location of a registered object, or kNone.
+  std::uint32_t locationOf(const Object* obj) const { return find(obj); }
+  /// Changes whenever locations may have changed: on every build, insertion, removal, move
+  /// between the cubes and the unbounded list, and clear().
+  std::uint64_t layoutVersion() const { return layout_version_; }
 
   View<S> cubes() const {
     return View<S>{nodes_.data(), items_.data(), root_, std::uint32_t(items_.size())};
@@ -288,13 +301,11 @@ class Hierarchy {
 
  private:
   // Object index: open addressing over 32-bit locations; the key is read from the item itself.
-  static constexpr std::uint32_t kUnboundedBit = 0x80000000u;
   std::uint32_t find(const Object* obj) const;
   void indexInsert(const Object* obj, std::uint32_t loc);
   void indexSet(const Object* obj, std::uint32_t loc);
   void indexErase(const Object* obj);
   void indexRebuild();
-  const Object* objectAt(std::uint32_t loc) const;
   std::size_t slotOf(const Object* obj) const;
 
   std::uint32_t newSeq();
@@ -339,13 +350,15 @@ class Hierarchy {
   std::size_t built_live_ = 0;
   std::size_t changes_ = 0;
   std::size_t builds_ = 0;
+  std::uint64_t layout_version_ = 0;
   bool built_ = false;
   bool setup_done_ = false;
 };
 
 template <typename S>
 template <class Read>
-const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
+const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read,
+                                                            std::vector<std::uint32_t>* changed) {
   std::uint32_t bad = kNone;
   const Object* bad_obj = nullptr;
   std::vector<std::pair<Object*, Box<S>>> movers;  // change of kind: rare, so allocation is fine
@@ -355,7 +368,7 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
   const std::size_t path_limit = std::max<std::size_t>(8, live_ / 32);
   std::size_t moved = 0;
   // One pass over each list; the kind an item must have to stay where it is.
-  auto pass = [&](ItemArray<S>& list, BoxKind home) {
+  auto pass = [&](ItemArray<S>& list, BoxKind home, std::uint32_t tag) {
     for (Item<S>& it : list) {
       if (it.obj == nullptr) continue;
       read(it.obj, b);
@@ -363,6 +376,7 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {
         it.box = b;
+        if (changed) changed->push_back(static_cast<std::uint32_t>(&it - list.data()) | tag);
         if (home == BoxKind::finite && ++moved <= path_limit) refitUp(it.leaf);
       } else if (kind != BoxKind::invalid) {
         movers.emplace_back(it.obj, b);
@@ -372,8 +386,8 @@ const typename Hierarchy<S>::Object* Hierarchy<S>::refitAll(Read&& read) {
       }
     }
   };
-  pass(items_, BoxKind::finite);
-  pass(unbounded_, BoxKind::unbounded);
+  pass(items_, BoxKind::finite, 0);
+  pass(unbounded_, BoxKind::unbounded, kUnboundedBit);
   if (moved > path_limit) refitAllCubes();
   for (const auto& m : movers) move(m.first, m.second);
   return bad_obj;

@@ -3,6 +3,9 @@
 // The traversals over cube hierarchies: one descent engine serves self-collide, pair collide,
 // object queries and all distance queries (a query object is a one-leaf view).
 
+#include <cstdint>
+#include <vector>
+
 #include "cube_collision/detail/hierarchy.h"
 #include "cube_collision/query_stats.h"
 
@@ -20,6 +23,15 @@ using DistanceFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, 
 template <typename S>
 bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
                   QueryStats* stats = nullptr);
+
+/// Appends to `out` every pair of distinct objects x of `a` and y of `b` whose boxes overlap
+/// (closed; with `self`, each unordered pair once) as location(x) << 32 | location(y), where an
+/// object's location is its slot in its view or'ed with that view's tag. In the order and with
+/// the argument order in which a collide would call its callback: collidePairs, or
+/// collideAllPairs for a self view of at most `all_pairs_limit` slots.
+template <typename S>
+void collectPairs(const View<S>& a, std::uint32_t tag_a, const View<S>& b, std::uint32_t tag_b,
+                  bool self, std::size_t all_pairs_limit, std::vector<std::uint64_t>& out);
 
 /// Largest view that collideAllPairs accepts (one 64-bit mask per object).
 inline constexpr std::uint32_t kAllPairsMax = Config::kMaxAllPairsLimit;
