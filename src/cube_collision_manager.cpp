@@ -187,9 +187,18 @@ void CubeCollisionManager<S>::setup() {
 }
 
 template <typename S>
+void CubeCollisionManager<S>::rebuildIfDue(bool was_current) {
+  const std::uint64_t layout = tree_.layoutVersion();
+  std::vector<std::uint32_t> old_slot;  // filled only by a rebuild
+  if (tree_.maybeRebuildAfterUpdate(was_current ? &old_slot : nullptr) && was_current)
+    pairs_.remap(tree_, layout, old_slot, changed_);
+}
+
+template <typename S>
 void CubeCollisionManager<S>::syncPairs(bool was_current) {
-  // A refresh needs the list current before the boxes moved; it lists afresh by itself if the
-  // update also rearranged the objects (a rebuild, or a move to or from the unbounded list).
+  // A refresh needs the list current before the boxes moved (and renumbered after a rebuild);
+  // it lists afresh by itself if the update also rearranged the objects otherwise (a move to
+  // or from the unbounded list).
   if (was_current)
     pairs_.refresh(tree_, changed_);
   else
@@ -204,7 +213,7 @@ void CubeCollisionManager<S>::update() {
   changed_.clear();
   const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); },
                                      was_current ? &changed_ : nullptr);
-  tree_.maybeRebuildAfterUpdate();
+  rebuildIfDue(was_current);
   if (keep) syncPairs(was_current);
   if (bad != nullptr)
     fail("update", indexName(tree_, bad) +
@@ -234,7 +243,7 @@ void CubeCollisionManager<S>::update(const std::vector<Object*>& updated_objs) {
   pairs_.invalidate();
   changed_.clear();
   for (Object* obj : updated_objs) moveOne(tree_, obj, bad, was_current ? &changed_ : nullptr);
-  tree_.maybeRebuildAfterUpdate();
+  rebuildIfDue(was_current);
   if (keep) syncPairs(was_current);
   if (bad != nullptr)
     fail("update", indexName(tree_, bad) +

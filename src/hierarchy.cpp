@@ -476,7 +476,7 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
 }
 
 template <typename S>
-void Hierarchy<S>::rebuild() {
+void Hierarchy<S>::rebuild(std::vector<std::uint32_t>* old_slot) {
   // The records point at the live items where they are; the items are laid out in leaf order
   // once at the end.
   std::uint32_t n = 0;
@@ -542,6 +542,10 @@ void Hierarchy<S>::rebuild() {
       sorted[p] = items_[rec[p].item];
     }
     items_.swap(sorted);
+    if (old_slot) {
+      old_slot->resize(n);
+      for (std::uint32_t p = 0; p < n; ++p) (*old_slot)[p] = rec[p].item;
+    }
     for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
       const Node& node = nodes_[i];
       if (node.isLeaf())
@@ -552,6 +556,7 @@ void Hierarchy<S>::rebuild() {
   } else {
     items_.clear();
     area_ = 0;
+    if (old_slot) old_slot->clear();
   }
   items_.shrink_to_fit();
   nodes_.shrink_to_fit();
@@ -593,8 +598,10 @@ bool Hierarchy<S>::needsRebuild() const {
 }
 
 template <typename S>
-void Hierarchy<S>::maybeRebuildAfterUpdate() {
-  if (config_.update_policy == UpdatePolicy::rebuild || needsRebuild()) rebuild();
+bool Hierarchy<S>::maybeRebuildAfterUpdate(std::vector<std::uint32_t>* old_slot) {
+  if (config_.update_policy != UpdatePolicy::rebuild && !needsRebuild()) return false;
+  rebuild(old_slot);
+  return true;
 }
 
 template <typename S>

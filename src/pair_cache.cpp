@@ -104,6 +104,26 @@ void PairCache<S>::refresh(const Hierarchy<S>& tree, const std::vector<std::uint
 }
 
 template <typename S>
+void PairCache<S>::remap(const Hierarchy<S>& tree, std::uint64_t layout_before,
+                         const std::vector<std::uint32_t>& old_slot,
+                         std::vector<std::uint32_t>& changed) {
+  if (layout_ != layout_before) return;
+  std::uint32_t slots = 0;
+  for (const std::uint32_t s : old_slot) slots = std::max(slots, s + 1);
+  std::vector<std::uint32_t> new_slot(slots, kNone);
+  for (std::uint32_t p = 0; p < old_slot.size(); ++p) new_slot[old_slot[p]] = p;
+  // Every listed or changed object is live, so it has a new slot; unbounded ones stay.
+  const auto renumber = [&](std::uint32_t loc) {
+    return (loc & kUnbounded<S>) ? loc : new_slot[loc];
+  };
+  for (std::uint64_t& p : pairs_)
+    p = std::uint64_t(renumber(static_cast<std::uint32_t>(p >> 32))) << 32 |
+        renumber(static_cast<std::uint32_t>(p));
+  for (std::uint32_t& loc : changed) loc = renumber(loc);
+  layout_ = tree.layoutVersion();
+}
+
+template <typename S>
 bool PairCache<S>::collide(const Hierarchy<S>& tree, void* data, CollideFn<S> fn,
                            QueryStats* stats) const {
   const Item<S>* cubes = tree.cubes().items;

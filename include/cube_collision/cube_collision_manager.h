@@ -190,6 +190,9 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
     }
   }
 
+  // After an update's moves: rebuilds if the policy says so, renumbering the pair list if it
+  // was current before the moves.
+  void rebuildIfDue(bool was_current);
   // Brings the pair list up to date after an update: `was_current` says whether it was before.
   void syncPairs(bool was_current);
 

@@ -244,14 +244,17 @@ class Hierarchy {
   /// location, and changesSinceBuild() with it).
   template <class Read>
   const Object* refitAll(Read&& read, std::vector<std::uint32_t>* changed = nullptr);
-  /// Rebuilds the cubes from scratch over the current objects.
-  void rebuild();
+  /// Rebuilds the cubes from scratch over the current objects. If `old_slot` is given, it gets,
+  /// for each slot of cubes() after the build, the slot the object had before (the unbounded
+  /// list does not move).
+  void rebuild(std::vector<std::uint32_t>* old_slot = nullptr);
   /// The first call (since construction or clear()) builds from scratch if anything changed
   /// since the last build; later calls rebuild only if the automatic policy finds the tree
   /// degraded or, with a forced policy, if objects were added or removed since the last build.
   void setup();
-  /// Rebuilds if the update policy says so; called after every update.
-  void maybeRebuildAfterUpdate();
+  /// Rebuilds if the update policy says so; called after every update. Returns whether it
+  /// rebuilt; `old_slot` as for rebuild().
+  bool maybeRebuildAfterUpdate(std::vector<std::uint32_t>* old_slot = nullptr);
   void clear();
 
   /// Objects in registration order.

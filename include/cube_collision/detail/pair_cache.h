@@ -34,6 +34,12 @@ class PairCache {
   /// moved up to date: drops their pairs and finds theirs anew, one query each. With many
   /// changes a recompute costs less and is done instead.
   void refresh(const Hierarchy<S>& tree, const std::vector<std::uint32_t>& changed);
+  /// Follows a rebuild that took the cubes' objects from `old_slot[p]` to slot p (the boxes
+  /// unchanged), if the list was made for the layout `layout_before` that the rebuild replaced:
+  /// renumbers the pairs and `changed` (locations awaiting a refresh) instead of listing
+  /// afresh. Otherwise does nothing, and the next refresh lists afresh.
+  void remap(const Hierarchy<S>& tree, std::uint64_t layout_before,
+             const std::vector<std::uint32_t>& old_slot, std::vector<std::uint32_t>& changed);
   /// Calls fn(a, b, data) for every pair; stops and returns true as soon as fn does. Requires
   /// current(tree). Right after a listing, the pairs come in the order and argument order of
   /// a self-collide; a refresh puts the moved objects' pairs last.
