@@ -196,6 +196,11 @@ void CubeCollisionManager<S>::rebuildIfDue(bool was_current) {
 
 template <typename S>
 void CubeCollisionManager<S>::syncPairs(bool was_current) {
+  // Past a quarter of the objects moved, keeping the list would cost more than it saves: a
+  // listing is a walk itself, and a query per moved object costs what the walk spends on 25 to
+  // 50 objects. Scenes that move everything every step thus self-collide by walking, as without
+  // the list.
+  if (changed_.size() * 4 > tree_.size()) return;  // the list stays invalid
   // A refresh needs the list current before the boxes moved (and renumbered after a rebuild);
   // it lists afresh by itself if the update also rearranged the objects otherwise (a move to
   // or from the unbounded list).
@@ -211,8 +216,8 @@ void CubeCollisionManager<S>::update() {
   const bool was_current = keep && pairs_.current(tree_);
   pairs_.invalidate();  // until synced: nothing below may leave it claiming to be current
   changed_.clear();
-  const Object* bad = tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); },
-                                     was_current ? &changed_ : nullptr);
+  const Object* bad =
+      tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); }, keep ? &changed_ : nullptr);
   rebuildIfDue(was_current);
   if (keep) syncPairs(was_current);
   if (bad != nullptr)
@@ -242,7 +247,7 @@ void CubeCollisionManager<S>::update(const std::vector<Object*>& updated_objs) {
   const bool was_current = keep && pairs_.current(tree_);
   pairs_.invalidate();
   changed_.clear();
-  for (Object* obj : updated_objs) moveOne(tree_, obj, bad, was_current ? &changed_ : nullptr);
+  for (Object* obj : updated_objs) moveOne(tree_, obj, bad, keep ? &changed_ : nullptr);
   rebuildIfDue(was_current);
   if (keep) syncPairs(was_current);
   if (bad != nullptr)

@@ -58,10 +58,7 @@ void PairCache<S>::recompute(const Hierarchy<S>& tree) {
 
 template <typename S>
 void PairCache<S>::refresh(const Hierarchy<S>& tree, const std::vector<std::uint32_t>& changed) {
-  // A query per changed object costs about what the walk spends on 25 to 50 objects (1,000
-  // queries against 10,000 objects take about a third of a self-collide): past a quarter of
-  // the objects, listing afresh is cheaper.
-  if (layout_ != tree.layoutVersion() || changed.size() * 4 > tree.size()) {
+  if (layout_ != tree.layoutVersion()) {
     recompute(tree);
     return;
   }

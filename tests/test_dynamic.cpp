@@ -605,9 +605,10 @@ TYPED_TEST(Dynamic, ObjectsMoveBetweenCubesAndUnboundedList) {
 // Config::keep_pairs: update() and update(vector) keep the overlapping pairs, which the next
 // self-collide reports without a walk. Along a long run of motions (small, teleports, rotations,
 // objects crossing into and out of the unbounded list, a NaN AABB) mixed with single updates,
-// registrations, removals and setup(), the list is in use exactly when it should be, validate()
-// (which compares the list with a fresh listing) holds, and the pairs equal brute force. Most
-// updates take the incremental path (the list current before, a few objects moved).
+// registrations, removals, setup() and updates moving a third of the objects (which drop the
+// list), the list is in use exactly when it should be, validate() (which compares the list with
+// a fresh listing) holds, and the pairs equal brute force. Most updates take the incremental
+// path (the list current before, a few objects moved).
 template <typename S>
 void pairListRun(std::size_t n, bool keep, std::uint32_t seed) {
   using V = fcl::Vector3<S>;
@@ -680,6 +681,13 @@ void pairListRun(std::size_t n, bool keep, std::uint32_t seed) {
       // A setup() that does not rebuild leaves the list as it was.
       expect_listed = listed_before && cube.hierarchy().buildCount() == builds;
       what = "setup()";
+    } else if (op < 18) {  // a third of the objects move: update() drops the list
+      for (std::size_t k = 0; k < reg.live.size() / 3 + 1; ++k) {
+        Obj<S>* o = reg.live[k * 3 % reg.live.size()];
+        if (o != extra[0].get() && o != extra[1].get()) moveObject(o, rng, 30.0, false);
+      }
+      cube.update();
+      what = "update() after a third moved";
     } else {  // a NaN AABB: update() throws, every other object is updated and listed
       extra[1]->setNaN();
       Obj<S>* o = reg.live[pick(reg.live.size())];

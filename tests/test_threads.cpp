@@ -13,6 +13,7 @@
 #include <atomic>
 #include <limits>
 #include <memory>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -160,6 +161,75 @@ TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
   EXPECT_EQ(mismatches.load(), 0);
   std::string why;
   EXPECT_TRUE(m.validate(&why)) << why;
+}
+
+// Between rounds of concurrent queries the main thread moves objects and calls update() (never
+// during a round: mutation is not concurrent with queries). The self-collides then come from the
+// pair list of Config::keep_pairs, read by all threads at once (but after the step that moves a
+// third of the objects, which drops the list); object queries walk the refitted (and sometimes
+// rebuilt) tree. Every thread gets brute force's answer every round.
+TEST(Threads, ConcurrentQueriesAfterEachUpdate) {
+  cube::scenes::SceneOptions opt;
+  opt.n = 1200;
+  opt.seed = 9;
+  opt.overlaps_per_object = 2;
+  auto scene = cube::scenes::makeScene<S>(opt);
+  const std::vector<Object*> objs = scene.pointers();
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(objs);
+  m.setup();
+  std::mt19937 rng(10);
+  std::uniform_real_distribution<S> step(-60, 60);
+  std::uniform_int_distribution<std::size_t> which(0, objs.size() - 1);
+  constexpr int kThreads = 4, kSteps = 6;
+  for (int s = 0; s < kSteps; ++s) {
+    // Steps 0..2 move a few objects (the list is refreshed), 3 teleports many (rebuild).
+    const std::size_t moves = s == 3 ? objs.size() / 3 : objs.size() / 50;
+    for (std::size_t k = 0; k < moves; ++k) {
+      Object* o = objs[which(rng)];
+      fcl::Transform3<S> tf = o->getTransform();
+      const S scale = s == 3 ? 20 : 1;
+      tf.translation() += fcl::Vector3<S>(step(rng), step(rng), step(rng)) * scale;
+      o->setTransform(tf);
+      o->computeAABB();
+    }
+    m.update();
+    // A third moved drops the list (that round walks); the next update lists afresh.
+    EXPECT_EQ(m.pairsListed(), s != 3) << "step " << s;
+    const std::vector<Pair> want_self = cube::oracle::bruteSelfPairs(objs);
+    std::vector<std::vector<Pair>> want_objects;
+    for (std::size_t q = 0; q < 30; ++q) {
+      std::vector<Pair> p;
+      for (auto* o : objs)
+        if (o != objs[q * 37] && o->getAABB().overlap(objs[q * 37]->getAABB()))
+          p.emplace_back(o, objs[q * 37]);
+      want_objects.push_back(sorted(p));
+    }
+    ASSERT_GT(want_self.size(), 500u);
+    std::atomic<int> mismatches{0};
+    std::atomic<int> go{0};
+    auto worker = [&](int id) {
+      go.fetch_add(1);
+      while (go.load() < kThreads) std::this_thread::yield();
+      for (int round = 0; round < 3; ++round) {
+        if ((id + round) % 2 == 0) {
+          if (cube::oracle::selfPairs(m) != want_self) ++mismatches;
+        } else {
+          for (std::size_t q = 0; q < want_objects.size(); ++q) {
+            std::vector<Pair> got;
+            m.collide(objs[q * 37], &got, record);
+            if (sorted(got) != want_objects[q]) ++mismatches;
+          }
+        }
+      }
+    };
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t) threads.emplace_back(worker, t);
+    for (auto& t : threads) t.join();
+    EXPECT_EQ(mismatches.load(), 0) << "step " << s;
+    std::string why;
+    EXPECT_TRUE(m.validate(&why)) << why;
+  }
 }
 
 }  // namespace

@@ -39,12 +39,14 @@ struct Config {
   /// update() and update(objects) keep the list of overlapping pairs, and a self-collide that
   /// follows calls the callback for those pairs without walking the cubes (as FCL's SaP manager
   /// keeps its pairs). The first such update, and the first after the objects were rearranged
-  /// (registrations, removals, rebuilds, setup() rebuilding, update(obj)), lists every pair
-  /// with one self walk; later ones query only the objects that moved. Trade-off: each update
-  /// costs more (a query per moved object and a pass over the list, or a full listing now and
-  /// then), which a caller who never self-collides pays for nothing; the list takes 8 bytes per
-  /// overlapping pair. update(obj) drops the list instead of refreshing it, so that a loop of
-  /// single updates costs no more than before. Same pairs either way, in another order.
+  /// (registrations, removals, setup() rebuilding, update(obj)), lists every pair with one
+  /// self walk; later ones query only the objects that moved, and a rebuild inside update()
+  /// renumbers the list. An update that moved more than a quarter of the objects drops the list
+  /// (then self-collide walks, as without it), and so does update(obj), so that a loop of
+  /// single updates costs no more than before. Trade-off: each update costs more (a query per
+  /// moved object and a pass over the list, or a listing), which a caller who never
+  /// self-collides pays for nothing; the list takes 8 bytes per overlapping pair. Same pairs
+  /// either way; right after a listing in the same order, later the moved objects' pairs last.
   bool keep_pairs = true;
 
   /// With UpdatePolicy::automatic: rebuild when the total surface area of the cubes per object

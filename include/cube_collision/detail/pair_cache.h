@@ -30,9 +30,9 @@ class PairCache {
   void release();
   /// Lists the pairs of `tree` afresh: one self walk, as a self-collide.
   void recompute(const Hierarchy<S>& tree);
-  /// Brings a list that was current before the boxes at `changed` (locations, layout unchanged)
-  /// moved up to date: drops their pairs and finds theirs anew, one query each. With many
-  /// changes a recompute costs less and is done instead.
+  /// Brings a list that was current before the boxes at `changed` (locations) moved up to date:
+  /// drops their pairs and finds theirs anew, one query each. If the layout changed meanwhile,
+  /// lists afresh instead.
   void refresh(const Hierarchy<S>& tree, const std::vector<std::uint32_t>& changed);
   /// Follows a rebuild that took the cubes' objects from `old_slot[p]` to slot p (the boxes
   /// unchanged), if the list was made for the layout `layout_before` that the rebuild replaced:
