@@ -45,6 +45,28 @@ bool minDistance(Object* a, Object* b, void* d, S& dist) {
   return false;
 }
 
+cube::scenes::Scene<S> sceneOf(std::size_t n, std::uint32_t seed) {
+  cube::scenes::SceneOptions opt;
+  opt.n = n;
+  opt.seed = seed;
+  opt.overlaps_per_object = 2;
+  return cube::scenes::makeScene<S>(opt);
+}
+
+// Runs worker(0) .. worker(threads - 1) on as many threads, released together, and joins them.
+template <class Worker>
+void runTogether(int threads, Worker&& worker) {
+  std::atomic<int> go{0};
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back([&, t] {
+      go.fetch_add(1);
+      while (go.load() < threads) std::this_thread::yield();
+      worker(t);
+    });
+  for (auto& t : pool) t.join();
+}
+
 std::vector<Pair> sorted(std::vector<Pair> v) {
   std::sort(v.begin(), v.end());
   return v;
@@ -60,14 +82,8 @@ struct Expected {
 };
 
 TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
-  cube::scenes::SceneOptions opt;
-  opt.n = 1500;
-  opt.seed = 7;
-  opt.overlaps_per_object = 2;
-  auto scene = cube::scenes::makeScene<S>(opt);
-  opt.n = 300;
-  opt.seed = 8;
-  auto other_scene = cube::scenes::makeScene<S>(opt);
+  auto scene = sceneOf(1500, 7);
+  auto other_scene = sceneOf(300, 8);
   // A plane and a halfspace, so the unbounded list is read concurrently too.
   Object plane(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), 0));
   Object half(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(1, 0, 0), 1500));
@@ -110,10 +126,7 @@ TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
 
   constexpr int kThreads = 4, kRounds = 3;
   std::atomic<int> mismatches{0};
-  std::atomic<int> go{0};
   auto worker = [&](int id) {
-    go.fetch_add(1);
-    while (go.load() < kThreads) std::this_thread::yield();  // start together
     for (int round = 0; round < kRounds; ++round) {
       // Each thread runs the queries in its own order, so different kinds overlap in time.
       for (int k = 0; k < 5; ++k) {
@@ -155,9 +168,7 @@ TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
       }
     }
   };
-  std::vector<std::thread> threads;
-  for (int t = 0; t < kThreads; ++t) threads.emplace_back(worker, t);
-  for (auto& t : threads) t.join();
+  runTogether(kThreads, worker);
   EXPECT_EQ(mismatches.load(), 0);
   std::string why;
   EXPECT_TRUE(m.validate(&why)) << why;
@@ -169,11 +180,7 @@ TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
 // third of the objects, which drops the list); object queries walk the refitted (and sometimes
 // rebuilt) tree. Every thread gets brute force's answer every round.
 TEST(Threads, ConcurrentQueriesAfterEachUpdate) {
-  cube::scenes::SceneOptions opt;
-  opt.n = 1200;
-  opt.seed = 9;
-  opt.overlaps_per_object = 2;
-  auto scene = cube::scenes::makeScene<S>(opt);
+  auto scene = sceneOf(1200, 9);
   const std::vector<Object*> objs = scene.pointers();
   cube::CubeCollisionManager<S> m;
   m.registerObjects(objs);
@@ -207,10 +214,7 @@ TEST(Threads, ConcurrentQueriesAfterEachUpdate) {
     }
     ASSERT_GT(want_self.size(), 500u);
     std::atomic<int> mismatches{0};
-    std::atomic<int> go{0};
     auto worker = [&](int id) {
-      go.fetch_add(1);
-      while (go.load() < kThreads) std::this_thread::yield();
       for (int round = 0; round < 3; ++round) {
         if ((id + round) % 2 == 0) {
           if (cube::oracle::selfPairs(m) != want_self) ++mismatches;
@@ -223,9 +227,7 @@ TEST(Threads, ConcurrentQueriesAfterEachUpdate) {
         }
       }
     };
-    std::vector<std::thread> threads;
-    for (int t = 0; t < kThreads; ++t) threads.emplace_back(worker, t);
-    for (auto& t : threads) t.join();
+    runTogether(kThreads, worker);
     EXPECT_EQ(mismatches.load(), 0) << "step " << s;
     std::string why;
     EXPECT_TRUE(m.validate(&why)) << why;
