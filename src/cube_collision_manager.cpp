@@ -350,6 +350,10 @@ template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
+  if (other_manager == this && pairs_.current(tree_)) {  // a self-collide, as collide(cdata, ...)
+    pairs_.collide(tree_, cdata, callback, stats);
+    return;
+  }
   managerPairs(*this, other_manager, "collide", [&](const View<S>& a, const View<S>& b, bool self) {
     return collideViews(tree_.config(), a, b, self, cdata, callback, stats);
   });

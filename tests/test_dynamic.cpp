@@ -722,8 +722,9 @@ TYPED_TEST(Dynamic, PairListOffNeverListed) {
   pairListRun<TypeParam>(300, false, 33);
 }
 
-// Served from the list, a self-collide makes the same callbacks in the same order and with the
-// same argument order as the walk right after a listing, and stops where the callback says.
+// Served from the list, a self-collide (also as collide(this)) makes the same callbacks in the
+// same order and with the same argument order as the walk right after a listing, and stops
+// where the callback says.
 TYPED_TEST(Dynamic, PairListKeepsWalkOrderAndStops) {
   using S = TypeParam;
   for (std::size_t n : {40, 500}) {
@@ -745,6 +746,9 @@ TYPED_TEST(Dynamic, PairListKeepsWalkOrderAndStops) {
     walked.collide(&b, &Calls<S>::record);
     ASSERT_GT(a.calls.size(), 10u);
     EXPECT_TRUE(a.calls == b.calls);
+    Calls<S> self_as_other;  // collide(this) is the same self query, from the list too
+    listed.collide(&listed, &self_as_other, &Calls<S>::record);
+    EXPECT_TRUE(self_as_other.calls == a.calls);
     std::size_t calls = 0;
     listed.collide([&](Obj<S>*, Obj<S>*) { return ++calls == 3; });
     EXPECT_EQ(calls, 3u);
