@@ -915,11 +915,14 @@ void registerAll() {
                                                  [spec](benchmark::State& st) { run(st, spec); });
           b->Unit(benchmark::kMicrosecond);
           if (manualTime(c)) b->UseManualTime();
-          // A motion case makes a fresh manager per repetition and then steps: a few steps
-          // would show only how each manager starts (a fresh tree, cube's first listing of the
-          // pairs), not how it runs. Half a second per repetition spans at least one of cube's
-          // rebuild cycles (about 23 steps) wherever a step takes under 20 ms.
-          if (isMotion(c) && n >= 10000) b->MinTime(0.5);
+          // A motion case makes a fresh manager per repetition and then steps: the few steps
+          // that the minimum time allows a slow manager show only how it starts (a fresh tree,
+          // cube's first listing of the pairs), not how it runs. Cube and the tree managers,
+          // the contenders, run the same fixed number of steps, which spans at least one of
+          // cube's rebuild cycles (about 23 steps); the others keep the minimum time.
+          if (isMotion(c) && n >= 10000 &&
+              (m == Mgr::cube || m == Mgr::dtree || m == Mgr::dtree_array))
+            b->Iterations(n >= 100000 ? 30 : 100);
         }
 }
 
