@@ -159,8 +159,10 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// in use, that it holds exactly the overlapping pairs; on failure returns false and, if
   /// `why` is given, says which.
   bool validate(std::string* why = nullptr) const;
-  /// Heap bytes owned: the hierarchy and the pair list.
-  std::size_t bytes() const { return tree_.bytes() + pairs_.bytes(); }
+  /// Heap bytes owned: the hierarchy, the pair list and update()'s list of moved objects.
+  std::size_t bytes() const {
+    return tree_.bytes() + pairs_.bytes() + changed_.capacity() * sizeof(std::uint32_t);
+  }
   /// Whether the next self-collide is served from the pair list (Config::keep_pairs).
   bool pairsListed() const { return pairs_.current(tree_); }
   /// Read-only access to the hierarchy, for inspection and export.

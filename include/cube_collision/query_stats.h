@@ -5,7 +5,9 @@
 namespace cube {
 
 /// What one query did, filled by the query overloads that take a QueryStats*. Each query adds to
-/// the counters, so one struct can total several queries; each thread uses its own.
+/// the counters, so one struct can total several queries; each thread uses its own. A
+/// self-collide served from the pair list (Config::keep_pairs) visits no cube and tests no box:
+/// it counts callbacks only.
 struct QueryStats {
   /// Pairs of cubes (or cube and query object) taken from the traversal stack and examined.
   std::size_t cubes_visited = 0;
