@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/inspect.h"
 #include "scenes.h"
 
 namespace {
@@ -101,7 +102,7 @@ void cubeDrift(benchmark::State& state, cube::UpdatePolicy policy, double thresh
   runDrift(
       state, [&] { return std::make_unique<cube::CubeCollisionManagerd>(config); },
       [&](const cube::CubeCollisionManagerd& m) {
-        state.counters["builds"] = double(m.hierarchy().buildCount());
+        state.counters["builds"] = double(cube::HierarchyView<double>(m).stats().builds);
       });
 }
 

@@ -604,7 +604,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
         ck.counters["heap_B_per_obj"] = (liveHeapBytes() - before) / n;
         if (spec.m == Mgr::cube)
           ck.counters["tree_B_per_obj"] =
-              double(static_cast<const cube::CubeCollisionManager<S>&>(*mgr).hierarchy().bytes()) /
+              double(static_cast<const cube::CubeCollisionManager<S>&>(*mgr).bytes()) /
               n;
         const auto got = selfPairs(*mgr);
         compare(got == want, describe(got, want));

@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
   t = Clock::now();
   cube_mgr.collide(&cube_pairs, countPair);
   const double cube_collide = secondsSince(t);
-  const std::size_t bytes = cube_mgr.hierarchy().bytes();
+  const std::size_t bytes = cube_mgr.bytes();
   std::string why;
   const bool valid = cube_mgr.validate(&why);
 

@@ -1,5 +1,6 @@
-// The FCL adapter: checks input, reads AABBs from FCL objects, and maps every query onto the
-// traversals over the cubes and the unbounded list.
+// The FCL adapter: FCL's manager interface over the broadphase core. It reads AABBs from FCL
+// objects, checks input, refuses mutations from inside a query's callbacks, and maps other
+// managers onto the core's queries.
 
 #include "cube_collision/cube_collision_manager.h"
 
@@ -10,15 +11,13 @@
 #include <stdexcept>
 #include <string>
 
-#include "cube_collision/detail/traversal.h"
+#include "core/broadphase.h"
 
 namespace cube {
 
 namespace {
 
 using detail::Box;
-using detail::BoxKind;
-using detail::View;
 
 template <typename S>
 Box<S> boxOf(const fcl::CollisionObject<S>& obj) {
@@ -33,7 +32,7 @@ Box<S> boxOf(const fcl::CollisionObject<S>& obj) {
 
 template <typename S>
 bool isValid(const Box<S>& b) {
-  return detail::classify(b, std::numeric_limits<double>::infinity()) != BoxKind::invalid;
+  return detail::classify(b, std::numeric_limits<double>::infinity()) != detail::BoxKind::invalid;
 }
 
 [[noreturn]] void fail(const char* where, const std::string& what) {
@@ -41,9 +40,9 @@ bool isValid(const Box<S>& b) {
 }
 
 template <typename S>
-std::string indexName(const detail::Hierarchy<S>& tree, const fcl::CollisionObject<S>* obj) {
+std::string indexName(const detail::Broadphase<S>& core, const fcl::CollisionObject<S>* obj) {
   std::vector<fcl::CollisionObject<S>*> all;
-  tree.objects(all);
+  core.objects(all);
   const auto it = std::find(all.begin(), all.end(), obj);
   return "object #" + std::to_string(it - all.begin()) + " (in getObjects() order)";
 }
@@ -56,89 +55,54 @@ Box<S> checkedQueryBox(const fcl::CollisionObject<S>* obj, const char* where) {
   return b;
 }
 
-// Re-reads one object's AABB; unknown objects are ignored, an invalid AABB is remembered. The
-// location of a moved object goes to `changed`, if given.
-template <typename S>
-void moveOne(detail::Hierarchy<S>& tree, const fcl::CollisionObject<S>* obj,
-             const fcl::CollisionObject<S>*& bad, std::vector<std::uint32_t>* changed) {
-  if (obj == nullptr) return;
-  const std::uint32_t loc = tree.locationOf(obj);
-  if (loc == detail::kNone) return;
-  const Box<S> b = boxOf(*obj);
-  if (isValid(b)) {
-    if (changed) changed->push_back(loc);
-    tree.move(obj, b);
-  } else if (bad == nullptr) {
-    bad = obj;
+// The queries running on this thread, innermost first: each query pushes a frame naming the
+// cores it walks, and a mutation of one of them from inside a callback is refused. Per thread,
+// so that const queries share no state and concurrent queries from other threads are unaffected.
+struct QueryFrame {
+  const void* core;
+  const void* other;
+  const QueryFrame* outer;
+};
+thread_local const QueryFrame* t_queries = nullptr;
+
+class QueryScope {
+ public:
+  QueryScope(const void* core, const void* other = nullptr) : frame_{core, other, t_queries} {
+    t_queries = &frame_;
   }
-}
+  ~QueryScope() { t_queries = frame_.outer; }
+  QueryScope(const QueryScope&) = delete;
+  QueryScope& operator=(const QueryScope&) = delete;
 
-// Collide of two views; a small view against itself takes the all-pairs kernel.
-template <typename S>
-bool collideViews(const Config& config, const View<S>& a, const View<S>& b, bool self, void* data,
-                  detail::CollideFn<S> fn, QueryStats* stats) {
-  if (self && a.slots <= config.all_pairs_limit) return detail::collideAllPairs(a, data, fn, stats);
-  return detail::collidePairs(a, b, self, data, fn, stats);
-}
+ private:
+  QueryFrame frame_;
+};
 
-// Every query is a set of view pairs; `run(a, b, self)` traverses one pair of views and returns
-// true when the callback stopped the query. These three functions say which pairs.
-
-template <typename S, class Run>
-void selfPairs(const detail::Hierarchy<S>& tree, Run&& run) {
-  const View<S> cubes = tree.cubes();
-  const View<S> unbounded = tree.unbounded();
-  if (run(cubes, cubes, true) || unbounded.root == detail::kNone) return;
-  if (run(cubes, unbounded, false)) return;
-  run(unbounded, unbounded, true);
-}
-
-template <typename S, class Run>
-void objectPairs(const detail::Hierarchy<S>& tree, fcl::CollisionObject<S>* obj, const Box<S>& box,
-                 Run&& run) {
-  const detail::SingleView<S> query(obj, box);
-  if (run(tree.cubes(), query.view(), false) || tree.unbounded().root == detail::kNone) return;
-  run(tree.unbounded(), query.view(), false);
-}
-
-template <typename S, class Run>
-void managerPairs(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisionManager<S>* other,
-                  const char* where, Run&& run) {
-  if (other == nullptr) fail(where, "null manager");
-  if (other == &self) {
-    selfPairs(self.hierarchy(), run);
-    return;
-  }
-  const detail::Hierarchy<S>& mine = self.hierarchy();
-  if (const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(other)) {
-    const detail::Hierarchy<S>& theirs = cube->hierarchy();
-    for (const View<S>& a : {mine.cubes(), mine.unbounded()})
-      for (const View<S>& b : {theirs.cubes(), theirs.unbounded()})
-        if (run(a, b, false)) return;
-    return;
-  }
-  // Another kind of manager: its objects one by one, without looking at its internals.
-  std::vector<fcl::CollisionObject<S>*> objs;
-  other->getObjects(objs);
-  std::vector<Box<S>> boxes;
-  boxes.reserve(objs.size());
-  for (const auto* o : objs) boxes.push_back(checkedQueryBox(o, where));
-  bool stopped = false;
-  for (std::size_t i = 0; i < objs.size() && !stopped; ++i)
-    objectPairs(mine, objs[i], boxes[i],
-                [&](const View<S>& a, const View<S>& b, bool s) { return stopped = run(a, b, s); });
+void refuseInsideQuery(const void* core, const char* call) {
+  for (const QueryFrame* f = t_queries; f != nullptr; f = f->outer)
+    if (f->core == core || f->other == core)
+      throw std::logic_error(std::string("cube::CubeCollisionManager::") + call +
+                             ": called from inside a callback of a query on this manager; the "
+                             "manager is unchanged");
 }
 
 }  // namespace
 
 template <typename S>
-CubeCollisionManager<S>::CubeCollisionManager(const Config& config) : tree_(config) {}
+CubeCollisionManager<S>::CubeCollisionManager(const Config& config)
+    : core_(std::make_unique<detail::Broadphase<S>>(config)) {}
 
 template <typename S>
 CubeCollisionManager<S>::~CubeCollisionManager() = default;
 
 template <typename S>
+const Config& CubeCollisionManager<S>::config() const {
+  return core_->config();
+}
+
+template <typename S>
 void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_objs) {
+  refuseInsideQuery(core_.get(), "registerObjects");
   std::vector<Box<S>> boxes;
   boxes.reserve(other_objs.size());
   // Each AABB sits in a separate object, usually not in cache: ask for a few ahead.
@@ -150,122 +114,93 @@ void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_
       __builtin_prefetch(&other_objs[i + kAhead]->getAABB());
     boxes.push_back(boxOf(*other_objs[i]));
     // A registered object is left alone, whatever its AABB says now (as registerObject does).
-    if (!isValid(boxes.back()) && !tree_.contains(other_objs[i]))
+    if (!isValid(boxes.back()) && !core_->contains(other_objs[i]))
       fail("registerObjects",
            "entry #" + std::to_string(i) + " has a NaN AABB coordinate; nothing registered");
   }
-  std::size_t fresh = 0;
-  for (const Object* o : other_objs) fresh += tree_.contains(o) ? 0 : 1;
-  // A batch as large as what is registered: one build beats many insertions.
-  if (fresh >= tree_.size()) {
-    tree_.insertAndRebuild(other_objs, boxes);
-  } else {
-    for (std::size_t i = 0; i < other_objs.size(); ++i)
-      if (!tree_.contains(other_objs[i])) tree_.insert(other_objs[i], boxes[i]);
-  }
+  core_->addMany(other_objs.data(), boxes.data(), other_objs.size());
 }
 
 template <typename S>
 void CubeCollisionManager<S>::registerObject(Object* obj) {
+  refuseInsideQuery(core_.get(), "registerObject");
   if (obj == nullptr) fail("registerObject", "null object");
-  if (tree_.contains(obj)) return;
+  if (core_->contains(obj)) return;
   const Box<S> b = boxOf(*obj);
   if (!isValid(b))
-    fail("registerObject", "object #" + std::to_string(tree_.size()) +
+    fail("registerObject", "object #" + std::to_string(core_->size()) +
                                " (the next registration) has a NaN AABB coordinate");
-  tree_.insert(obj, b);
+  core_->add(obj, b);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::unregisterObject(Object* obj) {
-  tree_.remove(obj);
+  refuseInsideQuery(core_.get(), "unregisterObject");
+  core_->remove(obj);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::setup() {
-  tree_.setup();
-}
-
-template <typename S>
-void CubeCollisionManager<S>::rebuildIfDue(bool was_current) {
-  const std::uint64_t layout = tree_.layoutVersion();
-  std::vector<std::uint32_t> old_slot;  // filled only by a rebuild
-  if (tree_.maybeRebuildAfterUpdate(was_current ? &old_slot : nullptr) && was_current)
-    pairs_.remap(tree_, layout, old_slot, changed_);
-}
-
-template <typename S>
-void CubeCollisionManager<S>::syncPairs(bool was_current) {
-  // Past a quarter of the objects moved, keeping the list would cost more than it saves: a
-  // listing is a walk itself, and a query per moved object costs what the walk spends on 25 to
-  // 50 objects. Scenes that move everything every step thus self-collide by walking, as without
-  // the list.
-  if (changed_.size() * 4 > tree_.size()) return;  // the list stays invalid
-  // A refresh needs the list current before the boxes moved (and renumbered after a rebuild);
-  // it lists afresh by itself if the update also rearranged the objects otherwise (a move to
-  // or from the unbounded list).
-  if (was_current)
-    pairs_.refresh(tree_, changed_);
-  else
-    pairs_.recompute(tree_);
+  refuseInsideQuery(core_.get(), "setup");
+  core_->setup();
 }
 
 template <typename S>
 void CubeCollisionManager<S>::update() {
-  const bool keep = tree_.config().keep_pairs;
-  const bool was_current = keep && pairs_.current(tree_);
-  pairs_.invalidate();  // until synced: nothing below may leave it claiming to be current
-  changed_.clear();
-  const Object* bad =
-      tree_.refitAll([](const Object* o, Box<S>& b) { b = boxOf(*o); }, keep ? &changed_ : nullptr);
-  rebuildIfDue(was_current);
-  if (keep) syncPairs(was_current);
+  refuseInsideQuery(core_.get(), "update");
+  const Object* bad = core_->updateAll([](const Object* o, Box<S>& b) { b = boxOf(*o); });
   if (bad != nullptr)
-    fail("update", indexName(tree_, bad) +
+    fail("update", indexName(*core_, bad) +
                        " has a NaN AABB coordinate; it keeps its previous "
                        "AABB, every other object was updated");
 }
 
 template <typename S>
 void CubeCollisionManager<S>::update(Object* updated_obj) {
-  const Object* bad = nullptr;
-  // Dropped rather than refreshed: a refresh passes over the whole list, which a loop of single
-  // updates would repeat for each object. The next update() or update(objects) lists afresh.
-  pairs_.invalidate();
-  moveOne(tree_, updated_obj, bad, nullptr);
-  tree_.maybeRebuildAfterUpdate();
-  if (bad != nullptr)
-    fail("update", indexName(tree_, bad) +
+  refuseInsideQuery(core_.get(), "update");
+  if (updated_obj == nullptr || !core_->contains(updated_obj)) return;
+  const Box<S> b = boxOf(*updated_obj);
+  if (!isValid(b))
+    fail("update", indexName(*core_, updated_obj) +
                        " has a NaN AABB coordinate; it keeps its previous "
                        "AABB");
+  core_->updateSome(&updated_obj, &b, 1, false);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::update(const std::vector<Object*>& updated_objs) {
+  refuseInsideQuery(core_.get(), "update");
   const Object* bad = nullptr;
-  const bool keep = tree_.config().keep_pairs;
-  const bool was_current = keep && pairs_.current(tree_);
-  pairs_.invalidate();
-  changed_.clear();
-  for (Object* obj : updated_objs) moveOne(tree_, obj, bad, keep ? &changed_ : nullptr);
-  rebuildIfDue(was_current);
-  if (keep) syncPairs(was_current);
+  std::vector<Object*> objs;
+  std::vector<Box<S>> boxes;
+  objs.reserve(updated_objs.size());
+  boxes.reserve(updated_objs.size());
+  for (Object* obj : updated_objs) {
+    if (obj == nullptr || !core_->contains(obj)) continue;
+    const Box<S> b = boxOf(*obj);
+    if (isValid(b)) {
+      objs.push_back(obj);
+      boxes.push_back(b);
+    } else if (bad == nullptr) {
+      bad = obj;
+    }
+  }
+  core_->updateSome(objs.data(), boxes.data(), objs.size(), true);
   if (bad != nullptr)
-    fail("update", indexName(tree_, bad) +
+    fail("update", indexName(*core_, bad) +
                        " has a NaN AABB coordinate; it keeps its previous "
                        "AABB, every other object was updated");
 }
 
 template <typename S>
 void CubeCollisionManager<S>::clear() {
-  tree_.clear();
-  pairs_.release();
-  changed_ = {};
+  refuseInsideQuery(core_.get(), "clear");
+  core_->clear();
 }
 
 template <typename S>
 void CubeCollisionManager<S>::getObjects(std::vector<Object*>& objs) const {
-  tree_.objects(objs);
+  core_->objects(objs);
 }
 
 template <typename S>
@@ -307,9 +242,8 @@ void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCa
                                       QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "collide");
   if (callback == nullptr) fail("collide", "null callback");
-  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::collidePairs(a, b, self, cdata, callback, stats);
-  });
+  const QueryScope scope(core_.get());
+  core_->collide(obj, box, cdata, callback, stats);
 }
 
 template <typename S>
@@ -317,46 +251,70 @@ void CubeCollisionManager<S>::distance(Object* obj, void* cdata, fcl::DistanceCa
                                        QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "distance");
   if (callback == nullptr) fail("distance", "null callback");
+  const QueryScope scope(core_.get());
   S best = std::numeric_limits<S>::max();
-  objectPairs(tree_, obj, box, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::distancePairs(a, b, self, cdata, callback, best, stats);
-  });
+  core_->distance(obj, box, cdata, callback, best, stats);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
-  if (pairs_.current(tree_)) {
-    pairs_.collide(tree_, cdata, callback, stats);
-    return;
-  }
-  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
-    return collideViews(tree_.config(), a, b, self, cdata, callback, stats);
-  });
+  const QueryScope scope(core_.get());
+  core_->collideSelf(cdata, callback, stats);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback,
                                        QueryStats* stats) const {
   if (callback == nullptr) fail("distance", "null callback");
+  const QueryScope scope(core_.get());
   S best = std::numeric_limits<S>::max();
-  selfPairs(tree_, [&](const View<S>& a, const View<S>& b, bool self) {
-    return detail::distancePairs(a, b, self, cdata, callback, best, stats);
-  });
+  core_->distanceSelf(cdata, callback, best, stats);
 }
+
+namespace {
+
+// Manager against manager: itself (a self query), another cube manager (tree against tree), or
+// any other kind through its objects, one query each, without looking at its internals.
+// `self_run()`, `cube_run(core)` and `object_run(obj, box)` run the query; each returns true when
+// the callback stopped it.
+template <typename S, class Self, class Cube, class One>
+void againstManager(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisionManager<S>* other,
+                    const char* where, Self&& self_run, Cube&& cube_run, One&& object_run) {
+  if (other == nullptr) fail(where, "null manager");
+  if (other == &self) {
+    const QueryScope scope(&self.core());
+    self_run();
+    return;
+  }
+  if (const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(other)) {
+    const QueryScope scope(&self.core(), &cube->core());
+    cube_run(cube->core());
+    return;
+  }
+  std::vector<fcl::CollisionObject<S>*> objs;
+  other->getObjects(objs);
+  std::vector<Box<S>> boxes;
+  boxes.reserve(objs.size());
+  for (const auto* o : objs) boxes.push_back(checkedQueryBox(o, where));
+  const QueryScope scope(&self.core());
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    if (object_run(objs[i], boxes[i])) return;
+}
+
+}  // namespace
 
 template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
-  if (other_manager == this && pairs_.current(tree_)) {  // a self-collide, as collide(cdata, ...)
-    pairs_.collide(tree_, cdata, callback, stats);
-    return;
-  }
-  managerPairs(*this, other_manager, "collide", [&](const View<S>& a, const View<S>& b, bool self) {
-    return collideViews(tree_.config(), a, b, self, cdata, callback, stats);
-  });
+  againstManager(
+      *this, other_manager, "collide", [&] { core_->collideSelf(cdata, callback, stats); },
+      [&](const detail::Broadphase<S>& other) { core_->collide(other, cdata, callback, stats); },
+      [&](Object* obj, const Box<S>& box) {
+        return core_->collide(obj, box, cdata, callback, stats);
+      });
 }
 
 template <typename S>
@@ -364,25 +322,40 @@ void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
                                        fcl::DistanceCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("distance", "null callback");
   S best = std::numeric_limits<S>::max();
-  managerPairs(*this, other_manager, "distance",
-               [&](const View<S>& a, const View<S>& b, bool self) {
-                 return detail::distancePairs(a, b, self, cdata, callback, best, stats);
-               });
+  againstManager(
+      *this, other_manager, "distance",
+      [&] { core_->distanceSelf(cdata, callback, best, stats); },
+      [&](const detail::Broadphase<S>& other) {
+        core_->distance(other, cdata, callback, best, stats);
+      },
+      [&](Object* obj, const Box<S>& box) {
+        return core_->distance(obj, box, cdata, callback, best, stats);
+      });
 }
 
 template <typename S>
 bool CubeCollisionManager<S>::validate(std::string* why) const {
-  return tree_.validate(why) && pairs_.validate(tree_, why);
+  return core_->validate(why);
+}
+
+template <typename S>
+std::size_t CubeCollisionManager<S>::bytes() const {
+  return core_->bytes();
+}
+
+template <typename S>
+bool CubeCollisionManager<S>::pairsListed() const {
+  return core_->pairsListed();
 }
 
 template <typename S>
 bool CubeCollisionManager<S>::empty() const {
-  return tree_.size() == 0;
+  return core_->size() == 0;
 }
 
 template <typename S>
 size_t CubeCollisionManager<S>::size() const {
-  return tree_.size();
+  return core_->size();
 }
 
 template class CubeCollisionManager<double>;

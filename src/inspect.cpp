@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
 
 namespace cube {
@@ -35,11 +36,9 @@ BoundingBox toBox(const detail::Box<S>& b) {
 }  // namespace
 
 template <typename S>
-HierarchyView<S>::HierarchyView(const CubeCollisionManager<S>& manager)
-    : HierarchyView(manager.hierarchy()) {}
-
-template <typename S>
-HierarchyView<S>::HierarchyView(const detail::Hierarchy<S>& h) {
+HierarchyView<S>::HierarchyView(const CubeCollisionManager<S>& manager) {
+  const detail::Broadphase<S>& core = manager.core();
+  const detail::CubeTree<S>& h = core.tree();
   const detail::NodeArray& nodes = h.nodes();
   const auto& items = h.items();
 
@@ -104,7 +103,7 @@ HierarchyView<S>::HierarchyView(const detail::Hierarchy<S>& h) {
   std::sort(leaf_of_.begin(), leaf_of_.end(), [](const auto& a, const auto& b) {
     return std::less<const Object*>()(a.first, b.first);
   });
-  for (const auto& it : h.unboundedItems()) unbounded_.push_back(it.obj);
+  for (const auto& it : core.unboundedItems()) unbounded_.push_back(it.obj);
 
   // Statistics.
   HierarchyStats& s = stats_;
@@ -127,12 +126,12 @@ HierarchyView<S>::HierarchyView(const detail::Hierarchy<S>& h) {
   }
   s.mean_leaf_size = s.leaves ? double(s.objects) / double(s.leaves) : 0.0;
   s.quality_ratio = h.quality();
-  s.rebuild_threshold = h.config().rebuild_threshold;
+  s.rebuild_threshold = core.config().rebuild_threshold;
   s.dead_cubes = nodes.size() - cubes_.size();
   for (const auto& it : items)
     if (it.obj == nullptr) ++s.dead_object_slots;
   s.builds = h.buildCount();
-  s.bytes = h.bytes();
+  s.bytes = core.bytes();
   const std::size_t all = s.objects + s.unbounded_objects;
   s.bytes_per_object = all ? double(s.bytes) / double(all) : 0.0;
 }

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/inspect.h"
 #include "scenes.h"
@@ -31,7 +32,7 @@ template <typename S>
 HierarchyView<S> checkView(const CubeCollisionManager<S>& m) {
   std::string why;
   EXPECT_TRUE(m.validate(&why)) << why;
-  const auto& h = m.hierarchy();
+  const auto& h = m.core().tree();
   HierarchyView<S> v(m);
   const int n = v.getNumberCells();
 
@@ -197,10 +198,10 @@ HierarchyView<S> checkView(const CubeCollisionManager<S>& m) {
   EXPECT_NEAR(s.volume, volume, 1e-9 * std::max(1.0, volume));
   EXPECT_NEAR(s.surface_area, h.area(), 1e-6 * std::max(1.0, h.area()));
   EXPECT_DOUBLE_EQ(s.quality_ratio, h.quality());
-  EXPECT_EQ(s.bytes, h.bytes());
+  EXPECT_EQ(s.bytes, m.bytes());
   EXPECT_EQ(s.builds, h.buildCount());
   if (!all.empty()) {
-    EXPECT_DOUBLE_EQ(s.bytes_per_object, double(h.bytes()) / double(all.size()));
+    EXPECT_DOUBLE_EQ(s.bytes_per_object, double(m.bytes()) / double(all.size()));
   }
   std::size_t dead_slots = 0;
   for (const auto& it : h.items()) dead_slots += it.obj == nullptr;

@@ -24,7 +24,8 @@
 #include <utility>
 #include <vector>
 
-#include "cube_collision/detail/traversal.h"
+#include "core/broadphase.h"
+#include "core/traversal.h"
 
 namespace {
 
@@ -266,8 +267,8 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
       objs.push_back(it.obj);
       boxes.push_back(it.box);
     }
-    cube::detail::Hierarchy<S> h{cube::Config()};
-    h.insertAndRebuild(objs, boxes);
+    cube::detail::Broadphase<S> h{cube::Config()};
+    h.addMany(objs.data(), boxes.data(), objs.size());
     // Every seventh object removed: its slot stays in the array, dead, until a rebuild.
     std::vector<std::pair<Obj<S>*, Box<S>>> kept;
     for (std::size_t i = 0; i < objs.size(); ++i) {
@@ -278,7 +279,7 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
     }
     std::string why;
     ASSERT_TRUE(h.validate(&why)) << why;
-    ASSERT_GE(h.cubes().slots, 256u);  // where the walk switches to columns
+    ASSERT_GE(h.tree().view().slots, 256u);  // where the walk switches to columns
     Pairs<S> expected;
     for (std::size_t i = 0; i < kept.size(); ++i)
       for (std::size_t j = i + 1; j < kept.size(); ++j) {
@@ -291,7 +292,7 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
                                 std::max(kept[i].first, kept[j].first));
       }
     Recorder<S> r;
-    EXPECT_FALSE(cube::detail::collidePairs(h.cubes(), h.cubes(), true, &r, &Recorder<S>::fn));
+    EXPECT_FALSE(cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &r, &Recorder<S>::fn));
     for (auto& c : r.calls) c = {std::min(c.first, c.second), std::max(c.first, c.second)};
     std::sort(r.calls.begin(), r.calls.end());
     std::sort(expected.begin(), expected.end());
@@ -300,7 +301,7 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
     // A callback that stops the walk is obeyed there.
     Recorder<S> stop;
     stop.stop_after = 3;
-    EXPECT_TRUE(cube::detail::collidePairs(h.cubes(), h.cubes(), true, &stop, &Recorder<S>::fn));
+    EXPECT_TRUE(cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &stop, &Recorder<S>::fn));
     EXPECT_EQ(stop.calls.size(), 3u);
   }
   EXPECT_GT(pairs_seen, 1000u);

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "support/oracle.h"
 
@@ -204,10 +205,10 @@ TEST(Unbounded, PlanesAndHalfspacesStayOutOfTheCubes) {
   Scene s = mixedScene(1, 40, false);
   Manager m;
   m.registerObjects(s.all());
-  EXPECT_EQ(m.hierarchy().unboundedItems().size(), 7u);
-  for (const auto& it : m.hierarchy().unboundedItems()) EXPECT_TRUE(isPlanar(it.obj));
+  EXPECT_EQ(m.core().unboundedItems().size(), 7u);
+  for (const auto& it : m.core().unboundedItems()) EXPECT_TRUE(isPlanar(it.obj));
   // The cubes stay the size of the bounded scene, not of the planes.
-  const auto& root = m.hierarchy().nodes()[m.hierarchy().root()];
+  const auto& root = m.core().tree().nodes()[m.core().tree().root()];
   for (int k = 0; k < 3; ++k) EXPECT_LT(root.hi[k] - root.lo[k], 100.f);
   expectLikeNaive(m, s.all(), s.all());
 }
@@ -287,7 +288,7 @@ TEST(Unbounded, ObjectsCrossBetweenCubesAndUnboundedList) {
       }
       std::size_t far_count = 0;
       for (std::size_t i = 0; i < 30; ++i) far_count += s.owned[i]->getAABB().max_[0] > 1e15;
-      EXPECT_EQ(m.hierarchy().unboundedItems().size(), planes + far_count);
+      EXPECT_EQ(m.core().unboundedItems().size(), planes + far_count);
       expectLikeNaive(m, objs, {s.owned[0].get(), s.owned[31].get()});
       // And in and out of the manager altogether.
       m.unregisterObject(moved[0]);
@@ -308,7 +309,7 @@ TEST(Unbounded, OnlyUnboundedObjects) {
         pose(0, 0, 0));
   Manager m;
   m.registerObjects(s.all());
-  EXPECT_EQ(m.hierarchy().unboundedItems().size(), 3u);
+  EXPECT_EQ(m.core().unboundedItems().size(), 3u);
   expectLikeNaive(m, s.all(), s.all());
   Manager empty;
   expectPairsWith(m, empty, s.all());

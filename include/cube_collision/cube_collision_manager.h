@@ -8,11 +8,14 @@
 #include <vector>
 
 #include "cube_collision/config.h"
-#include "cube_collision/detail/hierarchy.h"
-#include "cube_collision/detail/pair_cache.h"
 #include "cube_collision/query_stats.h"
 
 namespace cube {
+
+namespace detail {
+template <typename S>
+class Broadphase;  // the core (src/core/broadphase.h), private to the library
+}  // namespace detail
 
 /// An FCL broadphase manager backed by the cube hierarchy: a tree of axis-aligned cuboids built
 /// top-down by splitting every cube holding more than `Config::leaf_size` objects at the median
@@ -34,6 +37,12 @@ namespace cube {
 /// nothing; registering a registered object, unregistering or updating an unknown one has no
 /// effect. Objects with an infinite or enormous AABB (planes, halfspaces) are kept in a separate
 /// list that every query tests, so they do not spoil the cubes.
+///
+/// Callbacks: a callback may run any const query, on this manager or another. A mutating call
+/// (register, unregister, update, setup, clear) on a manager from inside a callback of one of
+/// its own queries, on the query's thread, throws std::logic_error naming the call and changes
+/// nothing; let it propagate and the query ends with it. For manager against manager, both
+/// managers count as queried.
 template <typename S>
 class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
  public:
@@ -154,19 +163,18 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   size_t size() const override;
 
   /// The configuration the manager was made with.
-  const Config& config() const { return tree_.config(); }
-  /// Checks every invariant of the hierarchy and, when the pair list of Config::keep_pairs is
-  /// in use, that it holds exactly the overlapping pairs; on failure returns false and, if
-  /// `why` is given, says which.
+  const Config& config() const;
+  /// Checks every invariant of the object table, the cubes, the unbounded list and, when the
+  /// pair list of Config::keep_pairs is in use, that it holds exactly the overlapping pairs; on
+  /// failure returns false and, if `why` is given, says which.
   bool validate(std::string* why = nullptr) const;
-  /// Heap bytes owned: the hierarchy, the pair list and update()'s list of moved objects.
-  std::size_t bytes() const {
-    return tree_.bytes() + pairs_.bytes() + changed_.capacity() * sizeof(std::uint32_t);
-  }
+  /// Heap bytes owned: the object table, the cubes, the pair list and update()'s scratch.
+  std::size_t bytes() const;
   /// Whether the next self-collide is served from the pair list (Config::keep_pairs).
-  bool pairsListed() const { return pairs_.current(tree_); }
-  /// Read-only access to the hierarchy, for inspection and export.
-  const detail::Hierarchy<S>& hierarchy() const { return tree_; }
+  bool pairsListed() const;
+  /// The core behind the manager, for the library's inspection code and its tests; its type is
+  /// defined in the library's private headers only.
+  const detail::Broadphase<S>& core() const { return *core_; }
 
  private:
   template <class F>
@@ -192,15 +200,7 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
     }
   }
 
-  // After an update's moves: rebuilds if the policy says so, renumbering the pair list if it
-  // was current before the moves.
-  void rebuildIfDue(bool was_current);
-  // Brings the pair list up to date after an update: `was_current` says whether it was before.
-  void syncPairs(bool was_current);
-
-  detail::Hierarchy<S> tree_;
-  detail::PairCache<S> pairs_;
-  std::vector<std::uint32_t> changed_;  // update()'s scratch: locations whose box changed
+  std::unique_ptr<detail::Broadphase<S>> core_;
 };
 
 using CubeCollisionManagerd = CubeCollisionManager<double>;

@@ -11,7 +11,10 @@
 #include <utility>
 #include <vector>
 
-#include "cube_collision/detail/hierarchy.h"
+namespace fcl {
+template <typename S>
+class CollisionObject;
+}  // namespace fcl
 
 namespace cube {
 
@@ -99,9 +102,7 @@ class HierarchyView {
     bool empty() const { return first == last; }
   };
 
-  /// Snapshot of a hierarchy.
-  explicit HierarchyView(const detail::Hierarchy<S>& hierarchy);
-  /// Snapshot of a manager's hierarchy (manager.hierarchy()).
+  /// Snapshot of a manager's hierarchy.
   explicit HierarchyView(const CubeCollisionManager<S>& manager);
 
   /// Number of cubes (the seed's getNumberCells).

@@ -31,6 +31,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "oracle.h"
 
@@ -574,7 +575,7 @@ class Runner {
   std::string dump() const {
     std::ostringstream s;
     s.precision(9);
-    const auto& h = mgr_.hierarchy();
+    const auto& h = mgr_.core().tree();
     s << "\n--- hierarchy: root " << h.root() << " ---";
     for (std::size_t i = 0; i < h.nodes().size(); ++i) {
       const auto& n = h.nodes()[i];
@@ -585,7 +586,7 @@ class Runner {
     for (std::size_t i = 0; i < h.items().size(); ++i)
       s << "\n  item " << i << " " << (h.items()[i].obj ? name(h.items()[i].obj) : "dead")
         << " leaf " << h.items()[i].leaf;
-    for (const auto& it : h.unboundedItems()) s << "\n  unbounded " << name(it.obj);
+    for (const auto& it : mgr_.core().unboundedItems()) s << "\n  unbounded " << name(it.obj);
     return s.str();
   }
 

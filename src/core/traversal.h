@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cube_collision/detail/hierarchy.h"
+#include "core/geometry.h"
 #include "cube_collision/query_stats.h"
 
 namespace cube {
@@ -25,13 +25,12 @@ bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, Col
                   QueryStats* stats = nullptr);
 
 /// Appends to `out` every pair of distinct objects x of `a` and y of `b` whose boxes overlap
-/// (closed; with `self`, each unordered pair once) as location(x) << 32 | location(y), where an
-/// object's location is its slot in its view or'ed with that view's tag. In the order and with
+/// (closed; with `self`, each unordered pair once) as id(x) << 32 | id(y). In the order and with
 /// the argument order in which a collide would call its callback: collidePairs, or
 /// collideAllPairs for a self view of at most `all_pairs_limit` slots.
 template <typename S>
-void collectPairs(const View<S>& a, std::uint32_t tag_a, const View<S>& b, std::uint32_t tag_b,
-                  bool self, std::size_t all_pairs_limit, std::vector<std::uint64_t>& out);
+void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
+                  std::vector<std::uint64_t>& out);
 
 /// Largest view that collideAllPairs accepts (one 64-bit mask per object).
 inline constexpr std::uint32_t kAllPairsMax = Config::kMaxAllPairsLimit;
@@ -71,12 +70,42 @@ template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
                    S& best, QueryStats* stats = nullptr);
 
+/// The two views of one broadphase, its cubes and its unbounded list, and where each id is.
+template <typename S>
+struct Scene {
+  View<S> cubes;
+  View<S> unbounded;
+  const std::uint32_t* loc;  ///< per id: slot in cubes, or place in unbounded | kUnboundedBit
+  std::size_t all_pairs_limit;
+  const Item<S>& item(ObjectId id) const {
+    const std::uint32_t l = loc[id];
+    return (l & kUnboundedBit) ? unbounded.items[l & ~kUnboundedBit] : cubes.items[l];
+  }
+};
+
+/// A self query is three view pairs: cubes with cubes, cubes with the unbounded list, the list
+/// with itself. Calls run(a, b, self) for each until one returns true; returns whether one did.
+template <typename S, class Run>
+bool forSelfViews(const Scene<S>& scene, Run&& run) {
+  if (run(scene.cubes, scene.cubes, true)) return true;
+  if (scene.unbounded.root == kNone) return false;
+  return run(scene.cubes, scene.unbounded, false) || run(scene.unbounded, scene.unbounded, true);
+}
+
+/// A query against a view `q` (one object, or another broadphase's cubes or list): the cubes
+/// against q, then the unbounded list against q.
+template <typename S, class Run>
+bool forObjectViews(const Scene<S>& scene, const View<S>& q, Run&& run) {
+  if (run(scene.cubes, q, false)) return true;
+  return scene.unbounded.root != kNone && run(scene.unbounded, q, false);
+}
+
 /// A one-object view for queries: the caller owns the storage.
 template <typename S>
 struct SingleView {
   Node node;
   Item<S> item;
-  SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box);
+  SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box, ObjectId id = kNone);
   View<S> view() const { return View<S>{&node, &item, 0, 1}; }
 };
 

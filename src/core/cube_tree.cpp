@@ -1,33 +1,21 @@
-// The cube hierarchy: build (top-down median split, the seed's rule), refit, rebuild,
-// incremental insertion and removal, compaction, and the invariant check.
+// The cube tree: build (top-down median split, the seed's rule), refit, incremental insertion
+// and removal, compaction, and the invariant check.
 
-#include "cube_collision/detail/hierarchy.h"
+#include "core/cube_tree.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <sstream>
-#include <stdexcept>
 #include <type_traits>
 #include <utility>
 
 namespace cube {
-
-void Config::check() const {
-  if (max_depth < 0) throw std::invalid_argument("cube::Config: max_depth must be >= 0");
-  if (leaf_size < 1) throw std::invalid_argument("cube::Config: leaf_size must be >= 1");
-  if (!(rebuild_threshold > 1.0))
-    throw std::invalid_argument("cube::Config: rebuild_threshold must be > 1");
-  if (!(unbounded_limit > 0.0))
-    throw std::invalid_argument("cube::Config: unbounded_limit must be > 0");
-  if (all_pairs_limit > kMaxAllPairsLimit)
-    throw std::invalid_argument("cube::Config: all_pairs_limit must be <= 64");
-}
-
 namespace detail {
 
 namespace {
+
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
@@ -134,161 +122,8 @@ void fitParent(Node& n, const Node& a, const Node& b) {
 #endif
 }
 
-std::size_t hashPtr(const void* p) {
-  std::uint64_t x = reinterpret_cast<std::uintptr_t>(p);
-  x ^= x >> 33;
-  x *= 0xff51afd7ed558ccdULL;
-  x ^= x >> 33;
-  return static_cast<std::size_t>(x);
-}
-
-// Stores `entry` in the first empty slot of obj's probe chain (the table has room, and obj is not
-// in it yet).
-void putEntry(std::vector<std::uint32_t>& table, const void* obj, std::uint32_t entry) {
-  const std::size_t mask = table.size() - 1;
-  std::size_t i = hashPtr(obj) & mask;
-  while (table[i] != 0) i = (i + 1) & mask;
-  table[i] = entry;
-}
-
 bool isDead(const Node& n) {
   return n.count == 0 && n.first == kNone;
-}
-
-}  // namespace
-
-template <typename S>
-Hierarchy<S>::Hierarchy(const Config& config) : config_(config) {
-  config_.check();
-  for (int k = 0; k < 3; ++k) {
-    unbounded_node_.lo[k] = -kInf;
-    unbounded_node_.hi[k] = kInf;
-  }
-  unbounded_node_.first = 0;
-  unbounded_node_.count = 0;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Object index
-
-template <typename S>
-typename Hierarchy<S>::Object* Hierarchy<S>::objectAt(std::uint32_t loc) const {
-  if (loc & kUnboundedBit) return unbounded_[loc & ~kUnboundedBit].obj;
-  return items_[loc].obj;
-}
-
-template <typename S>
-std::uint32_t Hierarchy<S>::find(const Object* obj) const {
-  if (index_.empty()) return kNone;
-  const std::size_t mask = index_.size() - 1;
-  for (std::size_t i = hashPtr(obj) & mask;; i = (i + 1) & mask) {
-    const std::uint32_t e = index_[i];
-    if (e == 0) return kNone;
-    if (objectAt(e - 1) == obj) return e - 1;
-  }
-}
-
-template <typename S>
-std::size_t Hierarchy<S>::slotOf(const Object* obj) const {
-  const std::size_t mask = index_.size() - 1;
-  std::size_t i = hashPtr(obj) & mask;
-  while (objectAt(index_[i] - 1) != obj) i = (i + 1) & mask;
-  return i;
-}
-
-template <typename S>
-void Hierarchy<S>::indexInsert(const Object* obj, std::uint32_t loc) {
-  // Load factor up to 3/4: linear probing stays short and the table costs about 6 bytes per
-  // object.
-  if ((index_used_ + 1) * 4 > index_.size() * 3) {
-    std::vector<std::uint32_t> old;
-    old.swap(index_);
-    index_.assign(std::max<std::size_t>(16, old.size() * 2), 0);
-    for (std::uint32_t e : old)
-      if (e != 0) putEntry(index_, objectAt(e - 1), e);
-  }
-  putEntry(index_, obj, loc + 1);
-  ++index_used_;
-}
-
-template <typename S>
-void Hierarchy<S>::indexSet(const Object* obj, std::uint32_t loc) {
-  index_[slotOf(obj)] = loc + 1;
-}
-
-template <typename S>
-void Hierarchy<S>::indexErase(const Object* obj) {
-  // Backward-shift deletion keeps probe chains unbroken without tombstones.
-  const std::size_t mask = index_.size() - 1;
-  std::size_t hole = slotOf(obj);
-  for (std::size_t j = (hole + 1) & mask; index_[j] != 0; j = (j + 1) & mask) {
-    const std::size_t home = hashPtr(objectAt(index_[j] - 1)) & mask;
-    // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
-    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
-    if (!stays) {
-      index_[hole] = index_[j];
-      hole = j;
-    }
-  }
-  index_[hole] = 0;
-  --index_used_;
-}
-
-template <typename S>
-void Hierarchy<S>::indexRebuild() {
-  std::size_t cap = 16;
-  while (cap * 3 < 4 * (size() + 1)) cap *= 2;
-  index_.assign(cap, 0);
-  // Sized for everything: no growth check, no comparison (each object is there once).
-  for (std::size_t p = 0; p < items_.size(); ++p)
-    if (items_[p].obj) putEntry(index_, items_[p].obj, static_cast<std::uint32_t>(p) + 1);
-  for (std::size_t p = 0; p < unbounded_.size(); ++p)
-    putEntry(index_, unbounded_[p].obj, (static_cast<std::uint32_t>(p) | kUnboundedBit) + 1);
-  index_used_ = size();
-}
-
-// ---------------------------------------------------------------------------------------------
-// Build
-
-template <typename S>
-std::uint32_t Hierarchy<S>::newSeq() {
-  if (next_seq_ == kNone) {
-    // Renumber in registration order; happens once every four billion registrations.
-    std::vector<std::pair<std::uint32_t, Item<S>*>> all;
-    for (auto& it : items_)
-      if (it.obj) all.emplace_back(it.seq, &it);
-    for (auto& it : unbounded_) all.emplace_back(it.seq, &it);
-    std::sort(all.begin(), all.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (std::size_t i = 0; i < all.size(); ++i) all[i].second->seq = std::uint32_t(i);
-    next_seq_ = static_cast<std::uint32_t>(all.size());
-  }
-  return next_seq_++;
-}
-
-template <typename S>
-bool Hierarchy<S>::canSplit(std::uint32_t depth) const {
-  return config_.max_depth == 0 || depth < static_cast<std::uint32_t>(config_.max_depth);
-}
-
-template <typename S>
-std::uint32_t Hierarchy<S>::addChildren(std::uint32_t cube, std::uint32_t begin,
-                                        std::uint32_t middle, std::uint32_t end) {
-  const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
-  Node left{}, right{};
-  setEmpty(left);
-  setEmpty(right);
-  left.first = begin;
-  left.count = middle - begin;
-  right.first = middle;
-  right.count = end - middle;
-  nodes_.push_back(left);
-  nodes_.push_back(right);
-  parent_.push_back(cube);
-  parent_.push_back(cube);
-  nodes_[cube].first = c;
-  nodes_[cube].count = 0;
-  return c;
 }
 
 // What the build permutes: 32 bytes per object (the float bounds the cubes are made of), so that
@@ -475,24 +310,78 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
   rankSort(home + lo_off, home + hi_off, axis);
 }
 
+
+// The seed's split rule, written once for the build and for a leaf that overflows: along the
+// longest side of `bounds` (the union of the records), the records ordered by centre (ties by
+// registration order), the first `mid - first` of them for the lower child.
+void splitRecords(BuildRecord* first, BuildRecord* mid, BuildRecord* last, const Node& bounds,
+                  BuildRecord* scratch) {
+  selectNth(first, mid, last, longestAxis(bounds), scratch);
+}
+
+// Within a leaf, registration order: the callback order does not depend on history.
+void sortLeaf(BuildRecord* first, BuildRecord* last) {
+  if (last - first <= kRankMax)
+    rankSort(first, last, -1);
+  else
+    std::sort(first, last, [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
+}
+
+}  // namespace
+
 template <typename S>
-void Hierarchy<S>::rebuild(std::vector<std::uint32_t>* old_slot) {
-  // The records point at the live items where they are; the items are laid out in leaf order
-  // once at the end.
-  std::uint32_t n = 0;
+bool CubeTree<S>::canSplit(std::uint32_t depth) const {
+  return config_.max_depth == 0 || depth < static_cast<std::uint32_t>(config_.max_depth);
+}
+
+template <typename S>
+std::uint32_t CubeTree<S>::addChildren(std::uint32_t cube, std::uint32_t begin,
+                                       std::uint32_t middle, std::uint32_t end) {
+  const std::uint32_t c = static_cast<std::uint32_t>(nodes_.size());
+  Node left{}, right{};
+  setEmpty(left);
+  setEmpty(right);
+  left.first = begin;
+  left.count = middle - begin;
+  right.first = middle;
+  right.count = end - middle;
+  nodes_.push_back(left);
+  nodes_.push_back(right);
+  parent_.push_back(cube);
+  parent_.push_back(cube);
+  nodes_[cube].first = c;
+  nodes_[cube].count = 0;
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Build
+
+template <typename S>
+void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
+  // The records point at the live items where they are (extra ones past the end); the items are
+  // laid out in leaf order once at the end.
+  const std::uint32_t old_slots = static_cast<std::uint32_t>(items_.size());
+  std::uint32_t n = static_cast<std::uint32_t>(extra.size());
   for (const Item<S>& it : items_) n += it.obj != nullptr;
+  const auto itemAt = [&](std::uint32_t i) -> const Item<S>& {
+    return i < old_slots ? items_[i] : extra[i - old_slots];
+  };
   nodes_.clear();
   parent_.clear();
   dead_nodes_ = 0;
   root_ = kNone;
+  area_ = 0;
   if (n > 0) {
     std::vector<BuildRecord> rec(n), scratch(n);
-    for (std::uint32_t p = 0, i = 0; p < items_.size(); ++p) {
-      if (items_[p].obj == nullptr) continue;
-      roundOut(items_[p].box, rec[i].lo, rec[i].hi);
-      rec[i].seq = items_[p].seq;
-      rec[i].item = p;
-      ++i;
+    std::uint32_t r = 0;
+    for (std::uint32_t p = 0; p < old_slots + extra.size(); ++p) {
+      const Item<S>& it = itemAt(p);
+      if (it.obj == nullptr) continue;
+      roundOut(it.box, rec[r].lo, rec[r].hi);
+      rec[r].seq = ids.seq[it.id];
+      rec[r].item = p;
+      ++r;
     }
     // Every lower child holds a multiple of leaf_size objects (splitCount), so the leaves are
     // full but one: at most 2 ceil(n / leaf_size) - 1 cubes, fewer under max_depth. Reserving
@@ -517,19 +406,12 @@ void Hierarchy<S>::rebuild(std::vector<std::uint32_t>* old_slot) {
       // makes of them (rounding out is monotonic), so no refit follows the build.
       unionOf(rec.data() + b, rec.data() + e, nodes_[cube]);
       if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
-        // Within a leaf, registration order: the callback order does not depend on history.
-        if (e - b <= kRankMax)
-          rankSort(rec.data() + b, rec.data() + e, -1);
-        else
-          std::sort(rec.begin() + b, rec.begin() + e,
-                    [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
+        sortLeaf(rec.data() + b, rec.data() + e);
         continue;
       }
-      const int axis = longestAxis(nodes_[cube]);
       const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
-      // Median by centre along that side (the sum of the float bounds: exact order is not
-      // needed, only a deterministic one), ties by registration order, in O(n).
-      selectNth(rec.data() + b, rec.data() + m, rec.data() + e, axis, scratch.data() + b);
+      splitRecords(rec.data() + b, rec.data() + m, rec.data() + e, nodes_[cube],
+                   scratch.data() + b);
       const std::uint32_t child = addChildren(cube, b, m, e);
       stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
       stack.push_back((std::uint64_t(depth + 1) << 32) | child);
@@ -538,138 +420,77 @@ void Hierarchy<S>::rebuild(std::vector<std::uint32_t>* old_slot) {
     // A gather from all over the old array: fetch a few records ahead.
     constexpr std::uint32_t kAhead = 8;
     for (std::uint32_t p = 0; p < n; ++p) {
-      if (p + kAhead < n) __builtin_prefetch(&items_[rec[p + kAhead].item]);
-      sorted[p] = items_[rec[p].item];
+      if (p + kAhead < n && rec[p + kAhead].item < old_slots)
+        __builtin_prefetch(&items_[rec[p + kAhead].item]);
+      sorted[p] = itemAt(rec[p].item);
     }
     items_.swap(sorted);
-    if (old_slot) {
-      old_slot->resize(n);
-      for (std::uint32_t p = 0; p < n; ++p) (*old_slot)[p] = rec[p].item;
-    }
     for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
       const Node& node = nodes_[i];
       if (node.isLeaf())
-        for (std::uint32_t p = node.first; p < node.first + node.count; ++p) items_[p].leaf = i;
+        for (std::uint32_t p = node.first; p < node.first + node.count; ++p) {
+          items_[p].leaf = i;
+          ids.loc[items_[p].id] = p;
+        }
     }
-    area_ = 0;
     for (const Node& node : nodes_) area_ += surfaceArea(node);
   } else {
     items_.clear();
-    area_ = 0;
-    if (old_slot) old_slot->clear();
   }
   items_.shrink_to_fit();
   nodes_.shrink_to_fit();
   parent_.shrink_to_fit();
+  live_ = n;
   dead_items_ = 0;
-  indexRebuild();
+  area_churn_ = 0;
+  area_steps_ = 0;
   built_area_ = area_;
   built_live_ = live_;
   changes_ = 0;
   ++builds_;
-  ++layout_version_;
   built_ = true;
 }
 
 template <typename S>
-void Hierarchy<S>::setup() {
-  // The first setup() gives the canonical tree (the same objects always give the same tree).
-  // Later ones keep the incremental work, as FCL's tree manager does: only a degraded hierarchy
-  // is rebuilt, or any changed one under a forced policy.
-  const bool changed = changes_ > 0;
-  const bool forced = config_.update_policy != UpdatePolicy::automatic;
-  if (!built_ || (changed && (!setup_done_ || forced)) || needsRebuild()) rebuild();
-  setup_done_ = true;
-}
-
-template <typename S>
-double Hierarchy<S>::quality() const {
+double CubeTree<S>::quality() const {
   if (live_ == 0 || built_live_ == 0) return 1.0;
   if (built_area_ <= 0) return area_ > 0 ? std::numeric_limits<double>::infinity() : 1.0;
   return (area_ * double(built_live_)) / (built_area_ * double(live_));
 }
 
 template <typename S>
-bool Hierarchy<S>::needsRebuild() const {
-  if (config_.update_policy != UpdatePolicy::automatic) return false;
-  // Many insertions or removals since the last build, or cubes grown loose.
-  if (changes_ > std::max<std::size_t>(64, live_ / 2)) return true;
-  return built_ && quality() > config_.rebuild_threshold;
-}
-
-template <typename S>
-bool Hierarchy<S>::maybeRebuildAfterUpdate(std::vector<std::uint32_t>* old_slot) {
-  if (config_.update_policy != UpdatePolicy::rebuild && !needsRebuild()) return false;
-  rebuild(old_slot);
-  return true;
-}
-
-template <typename S>
-void Hierarchy<S>::clear() {
-  nodes_.clear();
-  parent_.clear();
-  items_.clear();
-  unbounded_.clear();
-  unbounded_node_.count = 0;
-  index_.clear();
-  index_used_ = 0;
+void CubeTree<S>::clear() {
+  nodes_ = {};
+  parent_ = {};
+  items_ = {};
   root_ = kNone;
   live_ = dead_items_ = dead_nodes_ = 0;
-  next_seq_ = 0;
-  area_ = built_area_ = 0;
+  area_ = area_churn_ = built_area_ = 0;
+  area_steps_ = 0;
   built_live_ = 0;
   changes_ = 0;
-  ++layout_version_;
   built_ = false;
-  setup_done_ = false;
-}
-
-template <typename S>
-void Hierarchy<S>::insertAndRebuild(const std::vector<Object*>& objs,
-                                    const std::vector<Box<S>>& boxes) {
-  // rebuild() indexes every object afresh, so the batch is not indexed one by one here; each
-  // such insertion (and each lookup in a growing index) loaded a random item to compare
-  // pointers. Duplicates within the batch are caught by a set of the pointers themselves.
-  const bool empty = live_ == 0 && unbounded_.empty();
-  std::size_t cap = 16;
-  while (cap < 2 * objs.size()) cap *= 2;
-  std::vector<const Object*> seen(cap, nullptr);
-  const std::size_t mask = cap - 1;
-  items_.reserve(items_.size() + objs.size());
-  for (std::size_t i = 0; i < objs.size(); ++i) {
-    if (!empty && find(objs[i]) != kNone) continue;  // registered already
-    std::size_t h = hashPtr(objs[i]) & mask;
-    while (seen[h] != nullptr && seen[h] != objs[i]) h = (h + 1) & mask;
-    if (seen[h] != nullptr) continue;  // earlier in this batch
-    seen[h] = objs[i];
-    Item<S> it{boxes[i], objs[i], kNone, newSeq()};
-    if (classify(boxes[i], config_.unbounded_limit) == BoxKind::unbounded) {
-      unbounded_.push_back(it);
-    } else {
-      items_.push_back(it);
-      ++live_;
-    }
-  }
-  unbounded_node_.count = static_cast<std::uint32_t>(unbounded_.size());
-  rebuild();
 }
 
 // ---------------------------------------------------------------------------------------------
 // Refit
 
 template <typename S>
-double Hierarchy<S>::refitCube(std::uint32_t cube) {
+double CubeTree<S>::refitCube(std::uint32_t cube) {
   Node& n = nodes_[cube];
   const double before = surfaceArea(n);
   if (n.isLeaf())
     fitLeaf(n, items_.data());
   else
     fitParent(n, nodes_[n.first], nodes_[n.first + 1]);
-  return surfaceArea(n) - before;
+  const double change = surfaceArea(n) - before;
+  area_churn_ += std::fabs(change);
+  ++area_steps_;
+  return change;
 }
 
 template <typename S>
-void Hierarchy<S>::refitUp(std::uint32_t cube) {
+void CubeTree<S>::refitPath(std::uint32_t cube) {
   while (cube != kNone) {
     const Node before = nodes_[cube];
     area_ += refitCube(cube);
@@ -679,7 +500,7 @@ void Hierarchy<S>::refitUp(std::uint32_t cube) {
 }
 
 template <typename S>
-void Hierarchy<S>::refitAllCubes() {
+void CubeTree<S>::refitAll() {
   // Children always have larger indices than their parent, so one backward pass is bottom-up.
   double total = 0;
   for (std::size_t i = nodes_.size(); i-- > 0;) {
@@ -688,13 +509,15 @@ void Hierarchy<S>::refitAllCubes() {
     total += surfaceArea(nodes_[i]);
   }
   area_ = total;
+  area_churn_ = 0;
+  area_steps_ = 0;
 }
 
 // ---------------------------------------------------------------------------------------------
 // Incremental changes
 
 template <typename S>
-std::uint32_t Hierarchy<S>::chooseLeaf(const Box<S>& box) const {
+std::uint32_t CubeTree<S>::chooseLeaf(const Box<S>& box) const {
   float lo[3], hi[3];
   roundOut(box, lo, hi);
   std::uint32_t cube = root_;
@@ -716,7 +539,7 @@ std::uint32_t Hierarchy<S>::chooseLeaf(const Box<S>& box) const {
 }
 
 template <typename S>
-std::uint32_t Hierarchy<S>::depthOf(std::uint32_t cube) const {
+std::uint32_t CubeTree<S>::depthOf(std::uint32_t cube) const {
   std::uint32_t depth = 0;
   while (parent_[cube] != kNone) {
     cube = parent_[cube];
@@ -726,7 +549,7 @@ std::uint32_t Hierarchy<S>::depthOf(std::uint32_t cube) const {
 }
 
 template <typename S>
-void Hierarchy<S>::growLeaf(std::uint32_t leaf, const Item<S>& item) {
+void CubeTree<S>::growLeaf(std::uint32_t leaf, const Item<S>& item, IdArrays ids) {
   const std::uint32_t first = nodes_[leaf].first;
   const std::uint32_t end = first + nodes_[leaf].count;
   std::uint32_t pos;
@@ -742,10 +565,9 @@ void Hierarchy<S>::growLeaf(std::uint32_t leaf, const Item<S>& item) {
     // are reclaimed by the next compaction or build.
     const std::uint32_t moved_to = static_cast<std::uint32_t>(items_.size());
     for (std::uint32_t p = first; p < end; ++p) {
-      const std::size_t slot = slotOf(items_[p].obj);
       items_.push_back(items_[p]);
       items_[p].obj = nullptr;
-      index_[slot] = moved_to + (p - first) + 1;
+      ids.loc[items_.back().id] = moved_to + (p - first);
     }
     dead_items_ += end - first;
     nodes_[leaf].first = moved_to;
@@ -753,123 +575,110 @@ void Hierarchy<S>::growLeaf(std::uint32_t leaf, const Item<S>& item) {
     items_.push_back(item);
   }
   items_[pos].leaf = leaf;
+  ids.loc[item.id] = pos;
   ++nodes_[leaf].count;
-  indexInsert(item.obj, pos);
 }
 
 template <typename S>
-void Hierarchy<S>::splitLeaf(std::uint32_t leaf) {
+void CubeTree<S>::splitLeaf(std::uint32_t leaf, IdArrays ids) {
   const std::uint32_t b = nodes_[leaf].first;
   const std::uint32_t e = b + nodes_[leaf].count;
-  // Remember each object's index slot before the range is permuted.
-  std::vector<std::pair<Item<S>, std::size_t>> range;
-  range.reserve(e - b);
-  Box<S> box = emptyBox<S>();
+  std::vector<BuildRecord> rec(e - b), scratch(e - b);
   for (std::uint32_t p = b; p < e; ++p) {
-    range.emplace_back(items_[p], slotOf(items_[p].obj));
-    grow(box, items_[p].box);
+    BuildRecord& r = rec[p - b];
+    roundOut(items_[p].box, r.lo, r.hi);
+    r.seq = ids.seq[items_[p].id];
+    r.item = p;
   }
-  const int axis = longestAxis(box);
+  Node bounds = nodes_[leaf];
+  unionOf(rec.data(), rec.data() + rec.size(), bounds);
   const std::uint32_t half = (e - b) / 2;
-  std::nth_element(range.begin(), range.begin() + half, range.end(),
-                   [axis](const auto& x, const auto& y) {
-                     const S cx = x.first.box.lo[axis] + x.first.box.hi[axis];
-                     const S cy = y.first.box.lo[axis] + y.first.box.hi[axis];
-                     return cx < cy || (cx == cy && x.first.seq < y.first.seq);
-                   });
+  splitRecords(rec.data(), rec.data() + half, rec.data() + rec.size(), bounds, scratch.data());
+  sortLeaf(rec.data(), rec.data() + half);
+  sortLeaf(rec.data() + half, rec.data() + rec.size());
   const std::uint32_t c = addChildren(leaf, b, b + half, e);
+  ItemArray<S> range(e - b);
+  for (std::uint32_t i = 0; i < e - b; ++i) range[i] = items_[rec[i].item];
   for (std::uint32_t i = 0; i < e - b; ++i) {
-    items_[b + i] = range[i].first;
+    items_[b + i] = range[i];
     items_[b + i].leaf = i < half ? c : c + 1;
-    index_[range[i].second] = b + i + 1;
+    ids.loc[range[i].id] = b + i;
   }
   area_ += refitCube(c);
   area_ += refitCube(c + 1);
 }
 
 template <typename S>
-void Hierarchy<S>::place(Item<S> item) {
-  if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded) {
-    unbounded_.push_back(item);
-    unbounded_node_.count = static_cast<std::uint32_t>(unbounded_.size());
-    indexInsert(item.obj, static_cast<std::uint32_t>(unbounded_.size() - 1) | kUnboundedBit);
-    return;
-  }
+void CubeTree<S>::startRoot(Item<S> item, IdArrays ids) {
+  nodes_.clear();
+  parent_.clear();
+  items_.clear();
+  dead_items_ = dead_nodes_ = 0;
+  Node root{};
+  setEmpty(root);
+  root.first = 0;
+  root.count = 1;
+  nodes_.push_back(root);
+  parent_.push_back(kNone);
+  root_ = 0;
+  item.leaf = 0;
+  items_.push_back(item);
+  ids.loc[item.id] = 0;
+  area_ = refitCube(0);
+  area_churn_ = 0;
+  area_steps_ = 0;
+}
+
+template <typename S>
+void CubeTree<S>::insert(Item<S> item, IdArrays ids) {
   ++live_;
+  ++changes_;
   if (root_ == kNone) {
-    nodes_.clear();
-    parent_.clear();
-    items_.clear();
-    dead_items_ = dead_nodes_ = 0;
-    Node root{};
-    setEmpty(root);
-    root.first = 0;
-    root.count = 1;
-    nodes_.push_back(root);
-    parent_.push_back(kNone);
-    root_ = 0;
-    item.leaf = 0;
-    items_.push_back(item);
-    indexInsert(item.obj, 0);
-    area_ = refitCube(0);
+    startRoot(item, ids);
     return;
   }
   const std::uint32_t leaf = chooseLeaf(item.box);
-  growLeaf(leaf, item);
+  growLeaf(leaf, item, ids);
   if (nodes_[leaf].count > static_cast<std::uint32_t>(config_.leaf_size) && canSplit(depthOf(leaf)))
-    splitLeaf(leaf);
-  refitUp(leaf);
+    splitLeaf(leaf, ids);
+  refitPath(leaf);
 }
 
 template <typename S>
-void Hierarchy<S>::afterChange() {
+void CubeTree<S>::remove(std::uint32_t pos, IdArrays ids) {
   ++changes_;
-  ++layout_version_;
-  if (needsRebuild()) {
-    rebuild();
-  } else {
-    maybeCompact();
-  }
-}
-
-template <typename S>
-void Hierarchy<S>::insert(Object* obj, const Box<S>& box) {
-  place(Item<S>{box, obj, kNone, newSeq()});
-  afterChange();
-}
-
-template <typename S>
-void Hierarchy<S>::removeFromTree(std::uint32_t pos) {
   const std::uint32_t leaf = items_[pos].leaf;
-  indexErase(items_[pos].obj);
+  ids.loc[items_[pos].id] = kNone;
   const std::uint32_t last = nodes_[leaf].first + nodes_[leaf].count - 1;
   if (pos != last) {
-    const std::size_t slot = slotOf(items_[last].obj);
     items_[pos] = items_[last];
-    index_[slot] = pos + 1;
+    ids.loc[items_[pos].id] = pos;
   }
   items_[last].obj = nullptr;
   ++dead_items_;
   --live_;
   if (--nodes_[leaf].count > 0) {
-    refitUp(leaf);
+    refitPath(leaf);
     return;
   }
   // The leaf is empty: it and its sibling die, the sibling's content moves up into the parent.
   area_ -= surfaceArea(nodes_[leaf]);
+  area_churn_ += surfaceArea(nodes_[leaf]);
   if (leaf == root_) {
     nodes_.clear();
     parent_.clear();
     items_.clear();
     root_ = kNone;
     dead_items_ = dead_nodes_ = 0;
-    area_ = 0;
+    area_ = area_churn_ = 0;
+    area_steps_ = 0;
     return;
   }
   const std::uint32_t up = parent_[leaf];
   const std::uint32_t c = nodes_[up].first;
   const std::uint32_t sibling = leaf == c ? c + 1 : c;
   area_ -= surfaceArea(nodes_[up]);
+  area_churn_ += surfaceArea(nodes_[up]);
   nodes_[up] = nodes_[sibling];
   const Node& moved = nodes_[up];
   if (moved.isLeaf()) {
@@ -887,12 +696,12 @@ void Hierarchy<S>::removeFromTree(std::uint32_t pos) {
   dead_nodes_ += 2;
   // With a depth cap, the sibling's subtree moved one level up: leaves that were full because
   // they sat at the cap may now be split further.
-  if (config_.max_depth > 0) splitCrowded(up);
-  if (parent_[up] != kNone) refitUp(parent_[up]);
+  if (config_.max_depth > 0) splitCrowded(up, ids);
+  if (parent_[up] != kNone) refitPath(parent_[up]);
 }
 
 template <typename S>
-void Hierarchy<S>::splitCrowded(std::uint32_t top) {
+void CubeTree<S>::splitCrowded(std::uint32_t top, IdArrays ids) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{top, depthOf(top)}};
   while (!stack.empty()) {
     const auto [cube, depth] = stack.back();
@@ -900,7 +709,7 @@ void Hierarchy<S>::splitCrowded(std::uint32_t top) {
     const Node n = nodes_[cube];
     if (n.isLeaf()) {
       if (n.count <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) continue;
-      splitLeaf(cube);
+      splitLeaf(cube, ids);
       area_ += refitCube(cube);
     }
     stack.emplace_back(nodes_[cube].first, depth + 1);
@@ -909,60 +718,7 @@ void Hierarchy<S>::splitCrowded(std::uint32_t top) {
 }
 
 template <typename S>
-void Hierarchy<S>::removeUnbounded(std::uint32_t pos) {
-  indexErase(unbounded_[pos].obj);
-  const std::uint32_t last = static_cast<std::uint32_t>(unbounded_.size() - 1);
-  if (pos != last) {
-    const std::size_t slot = slotOf(unbounded_[last].obj);
-    unbounded_[pos] = unbounded_[last];
-    index_[slot] = (pos | kUnboundedBit) + 1;
-  }
-  unbounded_.pop_back();
-  unbounded_node_.count = static_cast<std::uint32_t>(unbounded_.size());
-}
-
-template <typename S>
-bool Hierarchy<S>::remove(const Object* obj) {
-  const std::uint32_t loc = find(obj);
-  if (loc == kNone) return false;
-  if (loc & kUnboundedBit) {
-    removeUnbounded(loc & ~kUnboundedBit);
-  } else {
-    removeFromTree(loc);
-  }
-  afterChange();
-  return true;
-}
-
-template <typename S>
-bool Hierarchy<S>::move(const Object* obj, const Box<S>& box) {
-  const std::uint32_t loc = find(obj);
-  if (loc == kNone) return false;
-  const bool was_unbounded = (loc & kUnboundedBit) != 0;
-  const bool is_unbounded = classify(box, config_.unbounded_limit) == BoxKind::unbounded;
-  if (was_unbounded && is_unbounded) {
-    unbounded_[loc & ~kUnboundedBit].box = box;
-  } else if (!was_unbounded && !is_unbounded) {
-    items_[loc].box = box;
-    refitUp(items_[loc].leaf);
-  } else {
-    // Crossing between the cubes and the unbounded list: remove and insert, keeping the
-    // registration number so that getObjects() order is unchanged.
-    Item<S> item = was_unbounded ? unbounded_[loc & ~kUnboundedBit] : items_[loc];
-    item.box = box;
-    if (was_unbounded) {
-      removeUnbounded(loc & ~kUnboundedBit);
-    } else {
-      removeFromTree(loc);
-    }
-    place(item);
-    afterChange();
-  }
-  return true;
-}
-
-template <typename S>
-void Hierarchy<S>::maybeCompact() {
+void CubeTree<S>::compactIfSparse(IdArrays ids) {
   const std::size_t live_nodes = nodes_.size() - dead_nodes_;
   if (!(dead_items_ > 64 && dead_items_ > live_) && !(dead_nodes_ > 64 && dead_nodes_ > live_nodes))
     return;
@@ -983,6 +739,7 @@ void Hierarchy<S>::maybeCompact() {
     if (n.isLeaf()) {
       nodes[to].first = static_cast<std::uint32_t>(items.size());
       for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+        ids.loc[items_[p].id] = static_cast<std::uint32_t>(items.size());
         items.push_back(items_[p]);
         items.back().leaf = to;
       }
@@ -1002,33 +759,19 @@ void Hierarchy<S>::maybeCompact() {
   items_.swap(items);
   root_ = 0;
   dead_items_ = dead_nodes_ = 0;
-  indexRebuild();
 }
 
 template <typename S>
-void Hierarchy<S>::objects(std::vector<Object*>& out) const {
-  std::vector<std::pair<std::uint32_t, Object*>> all;
-  all.reserve(size());
-  for (const Item<S>& it : items_)
-    if (it.obj) all.emplace_back(it.seq, it.obj);
-  for (const Item<S>& it : unbounded_) all.emplace_back(it.seq, it.obj);
-  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  out.resize(all.size());
-  for (std::size_t i = 0; i < all.size(); ++i) out[i] = all[i].second;
-}
-
-template <typename S>
-std::size_t Hierarchy<S>::bytes() const {
+std::size_t CubeTree<S>::bytes() const {
   return nodes_.capacity() * sizeof(Node) + parent_.capacity() * sizeof(std::uint32_t) +
-         items_.capacity() * sizeof(Item<S>) + unbounded_.capacity() * sizeof(Item<S>) +
-         index_.capacity() * sizeof(std::uint32_t);
+         items_.capacity() * sizeof(Item<S>);
 }
 
 // ---------------------------------------------------------------------------------------------
 // Invariants
 
 template <typename S>
-bool Hierarchy<S>::validate(std::string* why) const {
+bool CubeTree<S>::validate(const std::uint32_t* loc, std::string* why) const {
   std::ostringstream msg;
   auto fail = [&]() {
     if (why) *why = msg.str();
@@ -1073,9 +816,7 @@ bool Hierarchy<S>::validate(std::string* why) const {
           float lo[3], hi[3];
           roundOut(it.box, lo, hi);
           if (!contains(n, lo, hi)) return msg << "leaf " << i << " misses object " << p, fail();
-          if (classify(it.box, config_.unbounded_limit) != BoxKind::finite)
-            return msg << "object " << p << " should not be in the cubes", fail();
-          if (find(it.obj) != p) return msg << "index wrong for object " << p, fail();
+          if (loc[it.id] != p) return msg << "location wrong for object slot " << p, fail();
         }
       } else {
         const std::uint32_t c = n.first;
@@ -1105,22 +846,17 @@ bool Hierarchy<S>::validate(std::string* why) const {
   for (std::size_t i = 0; i < nodes_.size(); ++i)
     if (!seen_node[i] && !isDead(nodes_[i]))
       return msg << "unreachable cube " << i << " not marked dead", fail();
-  if (unbounded_node_.count != unbounded_.size()) return msg << "unbounded count wrong", fail();
-  for (std::size_t p = 0; p < unbounded_.size(); ++p) {
-    if (classify(unbounded_[p].box, config_.unbounded_limit) != BoxKind::unbounded)
-      return msg << "bounded object in the unbounded list", fail();
-    if (find(unbounded_[p].obj) != (std::uint32_t(p) | kUnboundedBit))
-      return msg << "index wrong for unbounded object " << p, fail();
-  }
-  if (index_used_ != size())
-    return msg << "index holds " << index_used_ << " entries, expected " << size(), fail();
-  if (std::fabs(total_area - area_) > 1e-6 * std::max(1.0, total_area))
+  // The running total carries the rounding of every change added to it: a few ulps of the
+  // largest magnitudes it has seen since it was last summed afresh, not of its current value
+  // (a far object's cubes removed leave the error of their large areas behind).
+  const double scale = std::max({1e-300, total_area, area_churn_});
+  if (std::fabs(total_area - area_) > (1e-9 + 4e-16 * double(area_steps_)) * scale)
     return msg << "tracked area " << area_ << " differs from " << total_area, fail();
   return true;
 }
 
-template class Hierarchy<float>;
-template class Hierarchy<double>;
+template class CubeTree<float>;
+template class CubeTree<double>;
 
 }  // namespace detail
 }  // namespace cube

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Before/after: builds cube_bench at two commits, runs the cube manager's cases of both in turn,
+# several rounds, and prints each case's median time at each commit and the ratio.
+#   bash benchmarks/compare.sh BASE [HEAD]      (HEAD defaults to the work tree as it is)
+# CUBE_COMPARE_FILTER (default: every cube case but the drift study), CUBE_COMPARE_ROUNDS
+# (default 5) and CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) set the work.
+# Rounds alternate the two binaries, so that a change in the machine's load hits both alike.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+base=${1:?usage: compare.sh BASE [HEAD]}
+head=${2:-}
+rounds=${CUBE_COMPARE_ROUNDS:-5}
+min_time=${CUBE_COMPARE_MIN_TIME:-0.05}
+filter=${CUBE_COMPARE_FILTER:-^[^d].*/cube(/manual_time)?$}
+work=${CUBE_COMPARE_DIR:-/tmp/cube-compare}
+mkdir -p "$work"
+
+# build NAME REV: a Release cube_bench of REV (empty: the work tree) in $work/NAME.
+build() {
+  local name=$1 rev=$2 src
+  if [ -n "$rev" ]; then
+    src="$work/src-$name"
+    rm -rf "$src"
+    git worktree remove --force "$src" 2>/dev/null || true
+    git worktree add --detach "$src" "$rev" >/dev/null
+  else
+    src=$(pwd)
+  fi
+  cmake -S "$src" -B "$work/build-$name" -DCMAKE_BUILD_TYPE=Release \
+    -DCUBE_COLLISION_BUILD_TESTS=OFF -DCUBE_COLLISION_BUILD_EXAMPLES=OFF >/dev/null
+  cmake --build "$work/build-$name" -j2 --target cube_bench >/dev/null
+  echo "$work/build-$name/benchmarks/cube_bench"
+}
+
+before=$(build before "$base")
+after=$(build after "$head")
+echo "before: $base ($before)"
+echo "after:  ${head:-work tree} ($after)"
+for r in $(seq 1 "$rounds"); do
+  for side in before after; do
+    bin=$before
+    [ "$side" = after ] && bin=$after
+    "$bin" --benchmark_filter="$filter" --benchmark_min_time="$min_time" \
+      --benchmark_format=json >"$work/$side-$r.json" 2>/dev/null
+  done
+  echo "round $r of $rounds done"
+done
+
+python3 - "$work" "$rounds" <<'EOF'
+import json, statistics, sys
+work, rounds = sys.argv[1], int(sys.argv[2])
+times = {"before": {}, "after": {}}
+for side in times:
+    for r in range(1, rounds + 1):
+        with open(f"{work}/{side}-{r}.json") as f:
+            for b in json.load(f)["benchmarks"]:
+                if b.get("run_type") == "aggregate" or "error_occurred" in b:
+                    continue
+                scale = {"ns": 1e-3, "us": 1.0, "ms": 1e3, "s": 1e6}[b["time_unit"]]
+                times[side].setdefault(b["name"], []).append(b["real_time"] * scale)
+names = [n for n in times["before"] if n in times["after"]]
+print(f"\n| case | before (us, median of {rounds}) | after | after / before |")
+print("|---|---|---|---|")
+worst = 0.0
+for n in names:
+    a = statistics.median(times["before"][n])
+    b = statistics.median(times["after"][n])
+    worst = max(worst, b / a)
+    print(f"| {n.replace('/manual_time', '')} | {a:.2f} | {b:.2f} | {b / a:.3f} |")
+print(f"\nslowest change: after / before = {worst:.3f}")
+missing = sorted(set(times["before"]) ^ set(times["after"]))
+if missing:
+    print("cases in one run only:", ", ".join(missing))
+EOF

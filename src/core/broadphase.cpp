@@ -1,0 +1,340 @@
+// The broadphase core: registrations, motions and queries over the object table, the cube tree
+// and the unbounded list, with the rebuild policy asked between operations.
+
+#include "core/broadphase.h"
+
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+namespace cube {
+
+void Config::check() const {
+  if (max_depth < 0) throw std::invalid_argument("cube::Config: max_depth must be >= 0");
+  if (leaf_size < 1) throw std::invalid_argument("cube::Config: leaf_size must be >= 1");
+  if (!(rebuild_threshold > 1.0))
+    throw std::invalid_argument("cube::Config: rebuild_threshold must be > 1");
+  if (!(unbounded_limit > 0.0))
+    throw std::invalid_argument("cube::Config: unbounded_limit must be > 0");
+  if (all_pairs_limit > kMaxAllPairsLimit)
+    throw std::invalid_argument("cube::Config: all_pairs_limit must be <= 64");
+}
+
+namespace detail {
+
+namespace {
+
+// Collide of two views; a small view against itself takes the all-pairs kernel.
+template <typename S>
+bool collideViews(std::size_t all_pairs_limit, const View<S>& a, const View<S>& b, bool self,
+                  void* data, CollideFn<S> fn, QueryStats* stats) {
+  if (self && a.slots <= all_pairs_limit) return collideAllPairs(a, data, fn, stats);
+  return collidePairs(a, b, self, data, fn, stats);
+}
+
+}  // namespace
+
+template <typename S>
+Broadphase<S>::Broadphase(const Config& config)
+    : config_((config.check(), config)), tree_(config_), policy_(config_) {
+  for (int k = 0; k < 3; ++k) {
+    unbounded_node_.lo[k] = -std::numeric_limits<float>::infinity();
+    unbounded_node_.hi[k] = std::numeric_limits<float>::infinity();
+  }
+  unbounded_node_.first = 0;
+  unbounded_node_.count = 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Placement
+
+template <typename S>
+void Broadphase<S>::place(ObjectId id, Object* obj, const Box<S>& box) {
+  const Item<S> item{box, obj, kNone, id};
+  if (classify(box, config_.unbounded_limit) == BoxKind::unbounded) {
+    table_.setLocation(id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
+    unbounded_.push_back(item);
+    unbounded_node_.count = std::uint32_t(unbounded_.size());
+  } else {
+    tree_.insert(item, ids());
+  }
+}
+
+template <typename S>
+void Broadphase<S>::unplace(ObjectId id) {
+  const std::uint32_t loc = table_.location(id);
+  if (!(loc & kUnboundedBit)) {
+    tree_.remove(loc, ids());
+    return;
+  }
+  const std::uint32_t pos = loc & ~kUnboundedBit;
+  if (pos + 1 != unbounded_.size()) {
+    unbounded_[pos] = unbounded_.back();
+    table_.setLocation(unbounded_[pos].id, pos | kUnboundedBit);
+  }
+  unbounded_.pop_back();
+  unbounded_node_.count = std::uint32_t(unbounded_.size());
+  table_.setLocation(id, kNone);
+}
+
+template <typename S>
+void Broadphase<S>::maintain() {
+  if (policy_.dueAfterChange(tree_))
+    tree_.rebuild(ids());
+  else
+    tree_.compactIfSparse(ids());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mutations
+
+template <typename S>
+void Broadphase<S>::add(Object* obj, const Box<S>& box) {
+  pairs_.invalidate();
+  place(table_.add(obj), obj, box);
+  maintain();
+}
+
+template <typename S>
+void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_t n) {
+  // Entries registered already, or earlier in the batch, are skipped.
+  std::vector<std::size_t> fresh;
+  fresh.reserve(n);
+  {
+    std::size_t cap = 16;
+    while (cap < 2 * n) cap *= 2;
+    std::vector<const Object*> seen(cap, nullptr);  // a set of the batch's pointers
+    const std::size_t mask = cap - 1;
+    const bool empty = size() == 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!empty && contains(objs[i])) continue;
+      std::size_t h = (reinterpret_cast<std::uintptr_t>(objs[i]) >> 4) * 0x9E3779B97F4A7C15ull >> 20;
+      h &= mask;
+      while (seen[h] != nullptr && seen[h] != objs[i]) h = (h + 1) & mask;
+      if (seen[h] != nullptr) continue;
+      seen[h] = objs[i];
+      fresh.push_back(i);
+    }
+  }
+  if (fresh.empty()) return;
+  pairs_.invalidate();
+  if (fresh.size() < size()) {
+    // A small batch into a large manager: insertions beat a build.
+    for (std::size_t i : fresh) add(objs[i], boxes[i]);
+    return;
+  }
+  // One build over everything.
+  std::vector<Object*> batch(fresh.size());
+  for (std::size_t k = 0; k < fresh.size(); ++k) batch[k] = objs[fresh[k]];
+  std::vector<ObjectId> new_ids;
+  table_.addBatch(batch.data(), batch.size(), new_ids);
+  std::vector<Item<S>> extra;
+  extra.reserve(fresh.size());
+  for (std::size_t k = 0; k < fresh.size(); ++k) {
+    const Box<S>& box = boxes[fresh[k]];
+    const Item<S> item{box, batch[k], kNone, new_ids[k]};
+    if (classify(box, config_.unbounded_limit) == BoxKind::unbounded) {
+      table_.setLocation(item.id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
+      unbounded_.push_back(item);
+    } else {
+      extra.push_back(item);
+    }
+  }
+  unbounded_node_.count = std::uint32_t(unbounded_.size());
+  tree_.rebuild(ids(), extra);
+}
+
+template <typename S>
+bool Broadphase<S>::remove(const Object* obj) {
+  const ObjectId id = table_.find(obj);
+  if (id == kNone) return false;
+  pairs_.invalidate();
+  unplace(id);
+  table_.remove(id);
+  maintain();
+  return true;
+}
+
+template <typename S>
+bool Broadphase<S>::move(const Object* obj, const Box<S>& box) {
+  const ObjectId id = table_.find(obj);
+  if (id == kNone) return false;
+  const std::uint32_t loc = table_.location(id);
+  const bool was_unbounded = (loc & kUnboundedBit) != 0;
+  const bool is_unbounded = classify(box, config_.unbounded_limit) == BoxKind::unbounded;
+  if (was_unbounded && is_unbounded) {
+    unbounded_[loc & ~kUnboundedBit].box = box;
+  } else if (!was_unbounded && !is_unbounded) {
+    Item<S>& it = tree_.slots()[loc];
+    it.box = box;
+    tree_.refitPath(it.leaf);
+  } else {
+    // Crossing between the cubes and the unbounded list: out and in again, same id.
+    Object* const o = table_.object(id);
+    unplace(id);
+    place(id, o, box);
+  }
+  return true;
+}
+
+template <typename S>
+void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::size_t n,
+                               bool keep_list) {
+  const bool keep = keep_list && config_.keep_pairs;
+  const bool was_valid = keep && pairs_.valid();
+  pairs_.invalidate();
+  moved_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const ObjectId id = table_.find(objs[i]);
+    if (id == kNone) continue;
+    move(objs[i], boxes[i]);
+    if (keep) moved_.push_back(id);
+  }
+  if (keep) {
+    // Each id once: a refresh queries every entry.
+    std::sort(moved_.begin(), moved_.end());
+    moved_.erase(std::unique(moved_.begin(), moved_.end()), moved_.end());
+  }
+  afterMotion(keep, was_valid);
+}
+
+template <typename S>
+void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
+  if (policy_.dueAfterUpdate(tree_))
+    tree_.rebuild(ids());
+  else
+    tree_.compactIfSparse(ids());
+  if (!keep) return;
+  // Past a quarter of the objects moved, keeping the list would cost more than it saves: a
+  // listing is a walk itself, and a query per moved object costs what the walk spends on 25 to
+  // 50 objects. Scenes that move everything every step thus self-collide by walking.
+  if (moved_.size() * 4 > size()) return;  // the list stays invalid
+  if (was_valid)
+    pairs_.refresh(scene(), moved_, table_.idBound());
+  else
+    pairs_.list(scene());
+}
+
+template <typename S>
+void Broadphase<S>::setup() {
+  if (policy_.dueAtSetup(tree_, !setup_done_)) tree_.rebuild(ids());
+  setup_done_ = true;
+}
+
+template <typename S>
+void Broadphase<S>::clear() {
+  table_.clear();
+  tree_.clear();
+  unbounded_ = {};
+  unbounded_node_.count = 0;
+  pairs_.release();
+  moved_ = {};
+  setup_done_ = false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Queries
+
+template <typename S>
+bool Broadphase<S>::collide(Object* obj, const Box<S>& box, void* data, CollideFn<S> fn,
+                            QueryStats* stats) const {
+  const SingleView<S> query(obj, box);
+  return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
+    return collidePairs(a, b, false, data, fn, stats);
+  });
+}
+
+template <typename S>
+bool Broadphase<S>::collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) const {
+  if (pairs_.valid()) return pairs_.collide(table_, data, fn, stats);
+  return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
+    return collideViews(config_.all_pairs_limit, a, b, self, data, fn, stats);
+  });
+}
+
+template <typename S>
+bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn,
+                            QueryStats* stats) const {
+  const Scene<S> mine = scene();
+  for (const View<S>& b : {other.tree_.view(), other.unboundedView()})
+    if (forObjectViews(mine, b, [&](const View<S>& x, const View<S>& y, bool) {
+          return collidePairs(x, y, false, data, fn, stats);
+        }))
+      return true;
+  return false;
+}
+
+template <typename S>
+bool Broadphase<S>::distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn,
+                             S& best, QueryStats* stats) const {
+  const SingleView<S> query(obj, box);
+  return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
+    return distancePairs(a, b, false, data, fn, best, stats);
+  });
+}
+
+template <typename S>
+bool Broadphase<S>::distanceSelf(void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const {
+  return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
+    return distancePairs(a, b, self, data, fn, best, stats);
+  });
+}
+
+template <typename S>
+bool Broadphase<S>::distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
+                             QueryStats* stats) const {
+  const Scene<S> mine = scene();
+  for (const View<S>& b : {other.tree_.view(), other.unboundedView()})
+    if (forObjectViews(mine, b, [&](const View<S>& x, const View<S>& y, bool) {
+          return distancePairs(x, y, false, data, fn, best, stats);
+        }))
+      return true;
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Inspection
+
+template <typename S>
+std::size_t Broadphase<S>::bytes() const {
+  return table_.bytes() + tree_.bytes() + unbounded_.capacity() * sizeof(Item<S>) +
+         pairs_.bytes() + moved_.capacity() * sizeof(ObjectId);
+}
+
+template <typename S>
+bool Broadphase<S>::validate(std::string* why) const {
+  if (!table_.validate(why) || !tree_.validate(table_.locations(), why)) return false;
+  std::ostringstream msg;
+  auto fail = [&]() {
+    if (why) *why = msg.str();
+    return false;
+  };
+  for (const Item<S>& it : tree_.items()) {
+    if (it.obj == nullptr) continue;
+    if (it.id >= table_.idBound() || table_.object(it.id) != it.obj)
+      return msg << "a slot of the cubes names the wrong id", fail();
+    if (classify(it.box, config_.unbounded_limit) != BoxKind::finite)
+      return msg << "an unbounded object sits in the cubes", fail();
+  }
+  if (unbounded_node_.count != unbounded_.size()) return msg << "unbounded count wrong", fail();
+  for (std::size_t p = 0; p < unbounded_.size(); ++p) {
+    const Item<S>& it = unbounded_[p];
+    if (it.id >= table_.idBound() || table_.object(it.id) != it.obj)
+      return msg << "an entry of the unbounded list names the wrong id", fail();
+    if (classify(it.box, config_.unbounded_limit) != BoxKind::unbounded)
+      return msg << "bounded object in the unbounded list", fail();
+    if (table_.location(it.id) != (std::uint32_t(p) | kUnboundedBit))
+      return msg << "location wrong for unbounded object " << p, fail();
+  }
+  if (tree_.size() + unbounded_.size() != table_.size())
+    return msg << "the cubes and the list hold " << tree_.size() + unbounded_.size()
+               << " objects, the table " << table_.size(),
+           fail();
+  return pairs_.validate(scene(), why);
+}
+
+template class Broadphase<float>;
+template class Broadphase<double>;
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,171 @@
+#pragma once
+
+// The broadphase core: the object table, the cube tree, the list of unbounded objects, the
+// rebuild policy and the pair list, behind one interface of registrations, motions and queries.
+// It knows FCL's objects only as pointers it hands back to callbacks; FCL's manager class, the
+// reading of AABBs and the checking of input are the adapter's (src/cube_collision_manager.cpp).
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/cube_tree.h"
+#include "core/object_table.h"
+#include "core/pair_list.h"
+#include "core/rebuild_policy.h"
+#include "core/traversal.h"
+#include "cube_collision/config.h"
+#include "cube_collision/query_stats.h"
+
+namespace cube {
+namespace detail {
+
+template <typename S>
+class Broadphase {
+ public:
+  using Object = fcl::CollisionObject<S>;
+
+  /// Throws std::invalid_argument if a knob is out of range.
+  explicit Broadphase(const Config& config);
+
+  const Config& config() const { return config_; }
+  std::size_t size() const { return table_.size(); }
+  bool contains(const Object* obj) const { return table_.find(obj) != kNone; }
+
+  // Mutations. Boxes are checked by the caller: none is invalid (NaN).
+
+  /// Registers an object that is not registered yet.
+  void add(Object* obj, const Box<S>& box);
+  /// Registers a batch; registered or repeated entries are skipped. A batch at least as large as
+  /// what is registered is placed by one build.
+  void addMany(Object* const* objs, const Box<S>* boxes, std::size_t n);
+  /// Unregisters; false if not registered.
+  bool remove(const Object* obj);
+  /// update(): reads every object's box through read(obj, box), refits, rebuilds if due and
+  /// brings the pair list up to date. An object whose new box is invalid keeps its old one;
+  /// returns the earliest registered such object, or nullptr.
+  template <class Read>
+  const Object* updateAll(Read&& read);
+  /// update(objects) and update(obj): sets the boxes of the given objects (unknown ones are
+  /// ignored), then rebuilds if due. With `keep_list` the pair list is brought up to date, else
+  /// dropped (a loop of single updates would pass over the whole list for each object).
+  void updateSome(Object* const* objs, const Box<S>* boxes, std::size_t n, bool keep_list);
+  /// setup(): builds or rebuilds as RebuildPolicy::dueAtSetup says.
+  void setup();
+  void clear();
+
+  // Queries: const, no state touched, safe from any number of threads at once.
+
+  /// Objects whose box overlaps `box`: fn(managed, obj, data).
+  bool collide(Object* obj, const Box<S>& box, void* data, CollideFn<S> fn,
+               QueryStats* stats) const;
+  /// Every overlapping pair of managed objects; from the pair list when it is valid.
+  bool collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) const;
+  /// Pairs (object of this, object of other) whose boxes overlap.
+  bool collide(const Broadphase& other, void* data, CollideFn<S> fn, QueryStats* stats) const;
+  /// Branch and bound from `best` (lowered by fn) over the objects near `box`.
+  bool distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
+                QueryStats* stats) const;
+  bool distanceSelf(void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const;
+  bool distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
+                QueryStats* stats) const;
+
+  /// Registered objects in registration order.
+  void objects(std::vector<Object*>& out) const { table_.objects(out); }
+  /// Whether the next self-collide reads the pair list.
+  bool pairsListed() const { return pairs_.valid(); }
+
+  // Inspection.
+  const CubeTree<S>& tree() const { return tree_; }
+  const ItemArray<S>& unboundedItems() const { return unbounded_; }
+  const ObjectTable<S>& table() const { return table_; }
+  std::size_t bytes() const;
+  /// Checks every component's invariants and how they agree; on failure says why.
+  bool validate(std::string* why) const;
+
+ private:
+  Scene<S> scene() const {
+    return Scene<S>{tree_.view(), unboundedView(), table_.locations(), config_.all_pairs_limit};
+  }
+  View<S> unboundedView() const {
+    return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u,
+                   std::uint32_t(unbounded_.size())};
+  }
+  IdArrays ids() { return IdArrays{table_.seqs(), table_.locations()}; }
+  /// Puts a registered id with a valid box where its kind says: the cubes or the unbounded list.
+  void place(ObjectId id, Object* obj, const Box<S>& box);
+  /// Takes an id out of wherever it is.
+  void unplace(ObjectId id);
+  /// Sets one registered object's box, moving it between the cubes and the list if its kind
+  /// changed; false if not registered. Rebuilds nothing: the caller asks the policy after.
+  bool move(const Object* obj, const Box<S>& box);
+  /// Between operations: rebuild if the policy says so, else compact a sparse tree.
+  void maintain();
+  /// After motions: rebuild if due, then, with `keep`, keep the pair list (moved_ holds the ids
+  /// whose box changed; `was_valid` whether the list was valid before).
+  void afterMotion(bool keep, bool was_valid);
+
+  Config config_;
+  ObjectTable<S> table_;
+  CubeTree<S> tree_;
+  RebuildPolicy policy_;
+  ItemArray<S> unbounded_;  // objects too large for the cubes, tested by every query
+  Node unbounded_node_{};   // the list seen as one leaf of infinite extent
+  PairList<S> pairs_;
+  std::vector<ObjectId> moved_;  // update()'s scratch: ids whose box changed
+  bool setup_done_ = false;
+};
+
+template <typename S>
+template <class Read>
+const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
+  const bool keep = config_.keep_pairs;
+  const bool was_valid = keep && pairs_.valid();
+  pairs_.invalidate();  // until brought up to date below
+  moved_.clear();
+  std::uint32_t bad_seq = kNone;
+  const Object* bad = nullptr;
+  std::vector<std::pair<ObjectId, Box<S>>> crossers;  // change of kind: rare, allocation is fine
+  Box<S> b;
+  // A few moved objects refit their paths to the root (stopping where nothing changes); many
+  // refit every cube in one pass, which costs about as much as refitting 1/32 of the paths.
+  const std::size_t path_limit = std::max<std::size_t>(8, tree_.size() / 32);
+  std::size_t refits = 0;
+  const auto pass = [&](Item<S>* items, std::uint32_t n, BoxKind home) {
+    for (std::uint32_t p = 0; p < n; ++p) {
+      Item<S>& it = items[p];
+      if (it.obj == nullptr) continue;
+      read(it.obj, b);
+      if (sameBox(it.box, b)) continue;  // unmoved: same kind, nothing to refit
+      const BoxKind kind = classify(b, config_.unbounded_limit);
+      if (kind == home) {
+        it.box = b;
+        if (keep) moved_.push_back(it.id);
+        if (home == BoxKind::finite && ++refits <= path_limit) tree_.refitPath(it.leaf);
+      } else if (kind != BoxKind::invalid) {
+        crossers.emplace_back(it.id, b);
+      } else if (table_.seq(it.id) < bad_seq) {
+        bad_seq = table_.seq(it.id);
+        bad = it.obj;
+      }
+    }
+  };
+  pass(tree_.slots(), tree_.slotCount(), BoxKind::finite);
+  pass(unbounded_.data(), std::uint32_t(unbounded_.size()), BoxKind::unbounded);
+  if (refits > path_limit) tree_.refitAll();
+  for (const auto& [id, box] : crossers) {
+    Object* const obj = table_.object(id);
+    unplace(id);
+    place(id, obj, box);
+    if (keep) moved_.push_back(id);
+  }
+  afterMotion(keep, was_valid);
+  return bad;
+}
+
+extern template class Broadphase<float>;
+extern template class Broadphase<double>;
+
+}  // namespace detail
+}  // namespace cube

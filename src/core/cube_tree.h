@@ -1,0 +1,121 @@
+#pragma once
+
+// The cube tree: the seed's hierarchy of cuboids over object slots. Build (longest side, median
+// object), refit, incremental insertion and removal, compaction, and the invariant check. It
+// decides nothing: when to rebuild is RebuildPolicy's call, made by the core between operations.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/geometry.h"
+
+namespace cube {
+namespace detail {
+
+/// The object table's per-id arrays that the tree reads (registration numbers: the build's
+/// tie-breaker, and the order within a leaf) and writes (each id's slot, whenever a slot moves).
+struct IdArrays {
+  const std::uint32_t* seq;
+  std::uint32_t* loc;
+};
+
+template <typename S>
+class CubeTree {
+ public:
+  /// Uses Config::max_depth and Config::leaf_size (checked by the caller).
+  explicit CubeTree(const Config& config) : config_(config) {}
+
+  /// Objects in the cubes.
+  std::size_t size() const { return live_; }
+  bool empty() const { return live_ == 0; }
+  /// What the traversals walk.
+  View<S> view() const {
+    return View<S>{nodes_.data(), items_.data(), root_, std::uint32_t(items_.size())};
+  }
+
+  /// Builds the cubes from scratch over the live slots plus `extra` (items not yet in the tree,
+  /// whose ids have no slot yet). The same objects always give the same tree.
+  void rebuild(IdArrays ids, const std::vector<Item<S>>& extra = {});
+  /// Puts one item (finite box, id without a slot) into the leaf it enlarges least, splitting
+  /// the leaf if it overflows.
+  void insert(Item<S> item, IdArrays ids);
+  /// Takes the object at `slot` out of its leaf; an emptied leaf merges its sibling upwards.
+  void remove(std::uint32_t slot, IdArrays ids);
+  /// Re-lays the tree without its dead cubes and slots when they outnumber the live ones.
+  void compactIfSparse(IdArrays ids);
+  /// Forgets everything.
+  void clear();
+
+  /// The slots, for the core's update loop: it may change boxes in place, then must refit.
+  Item<S>* slots() { return items_.data(); }
+  std::uint32_t slotCount() const { return std::uint32_t(items_.size()); }
+  /// Refits the cubes from `leaf` up to the root, stopping where nothing changes.
+  void refitPath(std::uint32_t leaf);
+  /// Refits every cube bottom-up, and recomputes the total area exactly.
+  void refitAll();
+
+  // Inspection.
+  const NodeArray& nodes() const { return nodes_; }
+  const ItemArray<S>& items() const { return items_; }
+  std::uint32_t root() const { return root_; }
+  std::uint32_t parent(std::uint32_t cube) const { return parent_[cube]; }
+  /// Total surface area of the live cubes, kept up to date by refits.
+  double area() const { return area_; }
+  /// Area right after the last build.
+  double builtArea() const { return built_area_; }
+  /// Objects in the cubes right after the last build.
+  std::size_t builtSize() const { return built_live_; }
+  /// Tree quality: cube area per object now over the same right after the last build (1 after
+  /// a build; grows as objects wander or land badly).
+  double quality() const;
+  /// Insertions and removals since the last build.
+  std::size_t changesSinceBuild() const { return changes_; }
+  /// Builds so far, and whether there was one since the last clear().
+  std::size_t buildCount() const { return builds_; }
+  bool built() const { return built_; }
+  std::size_t deadCubes() const { return dead_nodes_; }
+  std::size_t deadSlots() const { return dead_items_; }
+  /// Heap bytes owned.
+  std::size_t bytes() const;
+  /// Checks every invariant of the cubes and that `loc` points each live id at its slot.
+  bool validate(const std::uint32_t* loc, std::string* why) const;
+
+ private:
+  void growLeaf(std::uint32_t leaf, const Item<S>& item, IdArrays ids);
+  std::uint32_t addChildren(std::uint32_t cube, std::uint32_t begin, std::uint32_t middle,
+                            std::uint32_t end);
+  void splitLeaf(std::uint32_t leaf, IdArrays ids);
+  void splitCrowded(std::uint32_t top, IdArrays ids);
+  std::uint32_t chooseLeaf(const Box<S>& box) const;
+  std::uint32_t depthOf(std::uint32_t cube) const;
+  bool canSplit(std::uint32_t depth) const;
+  double refitCube(std::uint32_t cube);
+  void startRoot(Item<S> item, IdArrays ids);
+
+  Config config_;
+  NodeArray nodes_;
+  std::vector<std::uint32_t> parent_;  // per cube; kNone for the root and dead cubes
+  std::uint32_t root_ = kNone;
+  ItemArray<S> items_;  // leaf order; dead slots have obj == nullptr
+  std::size_t live_ = 0;
+  std::size_t dead_items_ = 0;
+  std::size_t dead_nodes_ = 0;
+  double area_ = 0;
+  // Sum of the magnitudes of the area changes since the area was last summed afresh: the scale
+  // of the rounding error that the running total may carry (see validate()).
+  double area_churn_ = 0;
+  std::size_t area_steps_ = 0;  // changes added since then
+  double built_area_ = 0;
+  std::size_t built_live_ = 0;
+  std::size_t changes_ = 0;
+  std::size_t builds_ = 0;
+  bool built_ = false;
+};
+
+extern template class CubeTree<float>;
+extern template class CubeTree<double>;
+
+}  // namespace detail
+}  // namespace cube

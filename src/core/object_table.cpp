@@ -1,0 +1,215 @@
+// The object table: ids, the pointer map (open addressing with backward-shift deletion), and
+// the registration numbers.
+
+#include "core/object_table.h"
+
+#include <algorithm>
+#include <numeric>
+#include <sstream>
+
+namespace cube {
+namespace detail {
+
+namespace {
+
+std::size_t hashPtr(const void* p) {
+  std::uint64_t x = reinterpret_cast<std::uintptr_t>(p);
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdULL;
+  x ^= x >> 33;
+  return static_cast<std::size_t>(x);
+}
+
+}  // namespace
+
+template <typename S>
+ObjectId ObjectTable<S>::find(const Object* obj) const {
+  if (index_.empty()) return kNone;
+  const std::size_t mask = index_.size() - 1;
+  for (std::size_t i = hashPtr(obj) & mask;; i = (i + 1) & mask) {
+    const std::uint32_t e = index_[i];
+    if (e == 0) return kNone;
+    if (obj_[e - 1] == obj) return e - 1;
+  }
+}
+
+template <typename S>
+void ObjectTable<S>::put(ObjectId id) {
+  const std::size_t mask = index_.size() - 1;
+  std::size_t i = hashPtr(obj_[id]) & mask;
+  while (index_[i] != 0) i = (i + 1) & mask;
+  index_[i] = id + 1;
+}
+
+template <typename S>
+void ObjectTable<S>::grow() {
+  // Load factor up to 3/4: linear probing stays short, about 6 bytes per object.
+  std::size_t cap = 16;
+  while (cap * 3 < 4 * (live_ + 1)) cap *= 2;
+  if (cap <= index_.size()) return;
+  index_.assign(cap, 0);
+  for (ObjectId id = 0; id < obj_.size(); ++id)
+    if (obj_[id] != nullptr) put(id);
+}
+
+template <typename S>
+std::uint32_t ObjectTable<S>::nextSeq() {
+  if (next_seq_ == kNone) {
+    // Renumber in registration order; happens once every four billion registrations.
+    std::vector<ObjectId> live;
+    for (ObjectId id = 0; id < obj_.size(); ++id)
+      if (obj_[id] != nullptr) live.push_back(id);
+    std::sort(live.begin(), live.end(), [&](ObjectId a, ObjectId b) { return seq_[a] < seq_[b]; });
+    for (std::size_t i = 0; i < live.size(); ++i) seq_[live[i]] = static_cast<std::uint32_t>(i);
+    next_seq_ = static_cast<std::uint32_t>(live.size());
+  }
+  return next_seq_++;
+}
+
+template <typename S>
+ObjectId ObjectTable<S>::add(Object* obj) {
+  ObjectId id;
+  if (!free_.empty()) {
+    id = free_.back();
+    free_.pop_back();
+  } else {
+    id = static_cast<ObjectId>(obj_.size());
+    obj_.push_back(nullptr);
+    seq_.push_back(0);
+    loc_.push_back(kNone);
+  }
+  obj_[id] = obj;
+  seq_[id] = nextSeq();
+  loc_[id] = kNone;
+  ++live_;
+  if (live_ * 4 > index_.size() * 3)
+    grow();  // puts every live id, this one included
+  else
+    put(id);
+  return id;
+}
+
+template <typename S>
+void ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, std::vector<ObjectId>& ids) {
+  ids.resize(n);
+  const std::size_t fresh = n > free_.size() ? n - free_.size() : 0;
+  obj_.reserve(obj_.size() + fresh);
+  seq_.reserve(seq_.size() + fresh);
+  loc_.reserve(loc_.size() + fresh);
+  for (std::size_t i = 0; i < n; ++i) {
+    ObjectId id;
+    if (!free_.empty()) {
+      id = free_.back();
+      free_.pop_back();
+    } else {
+      id = static_cast<ObjectId>(obj_.size());
+      obj_.push_back(nullptr);
+      seq_.push_back(0);
+      loc_.push_back(kNone);
+    }
+    obj_[id] = objs[i];
+    seq_[id] = nextSeq();
+    loc_[id] = kNone;
+    ids[i] = id;
+  }
+  live_ += n;
+  const std::size_t before = index_.size();
+  grow();
+  if (index_.size() == before)  // no regrowth: the batch is not in the map yet
+    for (ObjectId id : ids) put(id);
+}
+
+template <typename S>
+void ObjectTable<S>::remove(ObjectId id) {
+  // Backward-shift deletion keeps probe chains unbroken without tombstones.
+  const std::size_t mask = index_.size() - 1;
+  std::size_t hole = hashPtr(obj_[id]) & mask;
+  while (index_[hole] != id + 1) hole = (hole + 1) & mask;
+  for (std::size_t j = (hole + 1) & mask; index_[j] != 0; j = (j + 1) & mask) {
+    const std::size_t home = hashPtr(obj_[index_[j] - 1]) & mask;
+    // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
+    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+    if (!stays) {
+      index_[hole] = index_[j];
+      hole = j;
+    }
+  }
+  index_[hole] = 0;
+  obj_[id] = nullptr;
+  loc_[id] = kNone;
+  free_.push_back(id);
+  --live_;
+  if (live_ == 0) clear();  // ids start again from 0
+}
+
+template <typename S>
+void ObjectTable<S>::clear() {
+  obj_ = {};
+  seq_ = {};
+  loc_ = {};
+  free_ = {};
+  index_ = {};
+  live_ = 0;
+  next_seq_ = 0;
+}
+
+template <typename S>
+void ObjectTable<S>::objects(std::vector<Object*>& out) const {
+  std::vector<ObjectId> live;
+  live.reserve(live_);
+  for (ObjectId id = 0; id < obj_.size(); ++id)
+    if (obj_[id] != nullptr) live.push_back(id);
+  std::sort(live.begin(), live.end(), [&](ObjectId a, ObjectId b) { return seq_[a] < seq_[b]; });
+  out.resize(live.size());
+  for (std::size_t i = 0; i < live.size(); ++i) out[i] = obj_[live[i]];
+}
+
+template <typename S>
+std::size_t ObjectTable<S>::bytes() const {
+  return obj_.capacity() * sizeof(Object*) +
+         (seq_.capacity() + loc_.capacity() + free_.capacity() + index_.capacity()) *
+             sizeof(std::uint32_t);
+}
+
+template <typename S>
+bool ObjectTable<S>::validate(std::string* why) const {
+  std::ostringstream msg;
+  auto fail = [&]() {
+    if (why) *why = msg.str();
+    return false;
+  };
+  if (seq_.size() != obj_.size() || loc_.size() != obj_.size())
+    return msg << "object table: per-id arrays differ in length", fail();
+  std::size_t live = 0;
+  std::vector<char> is_free(obj_.size(), 0);
+  for (ObjectId id : free_) {
+    if (id >= obj_.size() || obj_[id] != nullptr || is_free[id])
+      return msg << "object table: bad free id " << id, fail();
+    is_free[id] = 1;
+  }
+  std::vector<std::uint32_t> seqs;
+  for (ObjectId id = 0; id < obj_.size(); ++id) {
+    if (obj_[id] == nullptr) {
+      if (!is_free[id]) return msg << "object table: id " << id << " lost", fail();
+      continue;
+    }
+    ++live;
+    if (find(obj_[id]) != id) return msg << "object table: map misses id " << id, fail();
+    if (seq_[id] >= next_seq_) return msg << "object table: id " << id << " seq ahead", fail();
+    seqs.push_back(seq_[id]);
+  }
+  std::sort(seqs.begin(), seqs.end());
+  if (std::adjacent_find(seqs.begin(), seqs.end()) != seqs.end())
+    return msg << "object table: two objects share a registration number", fail();
+  if (live != live_) return msg << "object table: live count " << live_ << " != " << live, fail();
+  std::size_t entries = 0;
+  for (std::uint32_t e : index_) entries += e != 0;
+  if (entries != live_) return msg << "object table: map holds " << entries << " entries", fail();
+  return true;
+}
+
+template class ObjectTable<float>;
+template class ObjectTable<double>;
+
+}  // namespace detail
+}  // namespace cube

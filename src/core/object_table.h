@@ -1,0 +1,76 @@
+#pragma once
+
+// The object table: one stable ObjectId per registered object, the map from the user's pointer
+// to it, and what the core keeps per object outside the walks (registration order, location).
+// Ids are dense and reused through a free list (as Box2D's proxy ids): registering and
+// unregistering are O(1), and nothing ever renumbers them, so the pair list and anything else
+// keyed by id survives rebuilds and compactions of the cubes untouched.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/geometry.h"
+
+namespace cube {
+namespace detail {
+
+template <typename S>
+class ObjectTable {
+ public:
+  using Object = fcl::CollisionObject<S>;
+
+  /// The id of a registered object, or kNone. Never inserts.
+  ObjectId find(const Object* obj) const;
+  /// Registers `obj` (not registered yet): a fresh or recycled id, the next registration number.
+  ObjectId add(Object* obj);
+  /// Registers a batch of objects known to be distinct and unregistered, the map sized once.
+  void addBatch(Object* const* objs, std::size_t n, std::vector<ObjectId>& ids);
+  /// Forgets a registered id; it will be handed out again.
+  void remove(ObjectId id);
+  /// Forgets everything (keeps no memory).
+  void clear();
+
+  /// Registered objects.
+  std::size_t size() const { return live_; }
+  /// One past the largest id ever handed out since the last clear(): the length of per-id arrays.
+  std::size_t idBound() const { return obj_.size(); }
+  /// The object of a live id (nullptr for a free one).
+  Object* object(ObjectId id) const { return obj_[id]; }
+  /// Registration order: a later registration has a larger number.
+  std::uint32_t seq(ObjectId id) const { return seq_[id]; }
+  const std::uint32_t* seqs() const { return seq_.data(); }
+  /// Where the object is: its slot in the cubes, or its place in the unbounded list or'ed with
+  /// kUnboundedBit. Kept by the core as the cubes move their slots.
+  std::uint32_t location(ObjectId id) const { return loc_[id]; }
+  void setLocation(ObjectId id, std::uint32_t loc) { loc_[id] = loc; }
+  std::uint32_t* locations() { return loc_.data(); }
+  const std::uint32_t* locations() const { return loc_.data(); }
+
+  /// Registered objects in registration order.
+  void objects(std::vector<Object*>& out) const;
+  /// Heap bytes owned.
+  std::size_t bytes() const;
+  /// Checks the map, the free list and the registration numbers; on failure says why.
+  bool validate(std::string* why) const;
+
+ private:
+  std::uint32_t nextSeq();
+  void put(ObjectId id);
+  void grow();
+
+  std::vector<Object*> obj_;         // per id; nullptr: free
+  std::vector<std::uint32_t> seq_;   // per id: registration number
+  std::vector<std::uint32_t> loc_;   // per id: location (see location())
+  std::vector<ObjectId> free_;       // ids to hand out again, last freed first
+  std::vector<std::uint32_t> index_;  // open addressing: 0 empty, else id + 1 (key: obj_[id])
+  std::size_t live_ = 0;
+  std::uint32_t next_seq_ = 0;
+};
+
+extern template class ObjectTable<float>;
+extern template class ObjectTable<double>;
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,58 @@
+#pragma once
+
+// The overlapping pairs of a broadphase's objects, kept from one update() to the next so that a
+// self-collide after a small motion need not walk the cubes (Config::keep_pairs). Keyed by
+// ObjectId: rebuilds and compactions of the cubes leave it untouched.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/object_table.h"
+#include "core/traversal.h"
+#include "cube_collision/query_stats.h"
+
+namespace cube {
+namespace detail {
+
+/// Every pair of distinct objects whose boxes overlap (closed), as two ids, valid for the boxes
+/// the objects had when the list was last made valid. 8 bytes per pair, plus a bit per id while
+/// refreshing.
+template <typename S>
+class PairList {
+ public:
+  /// Whether the list holds the overlapping pairs; the owner invalidates it whenever an object
+  /// comes, goes or moves without a refresh.
+  bool valid() const { return valid_; }
+  /// Forgets the pairs (keeps the memory for the next listing).
+  void invalidate() { valid_ = false; }
+  /// Frees the memory too.
+  void release();
+  /// Lists the pairs of `scene` afresh: one self walk, as a self-collide.
+  void list(const Scene<S>& scene);
+  /// Brings a valid list up to date after the objects `moved` (ids, each once) changed boxes:
+  /// drops their pairs and finds theirs anew, one query each. `id_bound`: one past the largest id.
+  void refresh(const Scene<S>& scene, const std::vector<ObjectId>& moved, std::size_t id_bound);
+  /// Calls fn(a, b, data) for every pair; stops and returns true as soon as fn does. Requires
+  /// valid(). Right after a listing, the pairs come in the order and argument order of a
+  /// self-collide; a refresh puts the moved objects' pairs last.
+  bool collide(const ObjectTable<S>& table, void* data, CollideFn<S> fn, QueryStats* stats) const;
+  /// Pairs listed.
+  std::size_t size() const { return pairs_.size(); }
+  /// Bytes of heap memory owned.
+  std::size_t bytes() const;
+  /// If valid(): whether the list equals a fresh listing (as a set, each pair once).
+  bool validate(const Scene<S>& scene, std::string* why) const;
+
+ private:
+  std::vector<std::uint64_t> pairs_;  // id of the callback's first object << 32 | second's
+  std::vector<std::uint64_t> marks_;  // refresh: one bit per id, the moved ones set
+  std::vector<std::uint64_t> found_;  // refresh: the moved objects' pairs
+  bool valid_ = false;
+};
+
+extern template class PairList<float>;
+extern template class PairList<double>;
+
+}  // namespace detail
+}  // namespace cube
