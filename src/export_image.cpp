@@ -14,15 +14,6 @@
 
 #include "cube_collision/export.h"
 
-#if defined(CUBE_COLLISION_SANITIZED)
-// Cairo's text goes through fontconfig, which keeps its caches until the process exits: not a
-// leak of ours, so LeakSanitizer is told to ignore it in sanitized builds (tests and programs
-// that draw pictures link this file).
-extern "C" const char* __lsan_default_suppressions() {
-  return "leak:libfontconfig\n";
-}
-#endif
-
 namespace cube {
 
 namespace {

@@ -4,6 +4,7 @@
 #include "core/broadphase.h"
 
 #include <algorithm>
+#include <cassert>
 #include <sstream>
 #include <stdexcept>
 
@@ -50,6 +51,7 @@ Broadphase<S>::Broadphase(const Config& config)
 
 template <typename S>
 void Broadphase<S>::place(ObjectId id, Object* obj, const Box<S>& box) {
+  assert(classify(box, config_.unbounded_limit) != BoxKind::invalid);
   const Item<S> item{box, obj, kNone, id};
   if (classify(box, config_.unbounded_limit) == BoxKind::unbounded) {
     table_.setLocation(id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
@@ -90,6 +92,7 @@ void Broadphase<S>::maintain() {
 
 template <typename S>
 void Broadphase<S>::add(Object* obj, const Box<S>& box) {
+  assert(!contains(obj));
   pairs_.invalidate();
   place(table_.add(obj), obj, box);
   maintain();

@@ -4,6 +4,7 @@
 #include "core/cube_tree.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -631,6 +632,7 @@ void CubeTree<S>::startRoot(Item<S> item, IdArrays ids) {
 
 template <typename S>
 void CubeTree<S>::insert(Item<S> item, IdArrays ids) {
+  assert(item.obj != nullptr && ids.loc[item.id] == kNone);
   ++live_;
   ++changes_;
   if (root_ == kNone) {
@@ -646,6 +648,7 @@ void CubeTree<S>::insert(Item<S> item, IdArrays ids) {
 
 template <typename S>
 void CubeTree<S>::remove(std::uint32_t pos, IdArrays ids) {
+  assert(pos < items_.size() && items_[pos].obj != nullptr);
   ++changes_;
   const std::uint32_t leaf = items_[pos].leaf;
   ids.loc[items_[pos].id] = kNone;

@@ -4,6 +4,7 @@
 #include "core/object_table.h"
 
 #include <algorithm>
+#include <cassert>
 #include <numeric>
 #include <sstream>
 
@@ -68,6 +69,7 @@ std::uint32_t ObjectTable<S>::nextSeq() {
 
 template <typename S>
 ObjectId ObjectTable<S>::add(Object* obj) {
+  assert(obj != nullptr && find(obj) == kNone);
   ObjectId id;
   if (!free_.empty()) {
     id = free_.back();
@@ -121,6 +123,7 @@ void ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, std::vector<Ob
 
 template <typename S>
 void ObjectTable<S>::remove(ObjectId id) {
+  assert(id < obj_.size() && obj_[id] != nullptr);
   // Backward-shift deletion keeps probe chains unbroken without tombstones.
   const std::size_t mask = index_.size() - 1;
   std::size_t hole = hashPtr(obj_[id]) & mask;
