@@ -12,9 +12,12 @@ install(TARGETS cube_collision EXPORT CubeCollisionTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+# Public headers only: include/cube_collision/detail/ is the library's own and is not installed.
+# (This needs public headers that do not include detail/ headers.)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/cube_collision
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-  FILES_MATCHING PATTERN "*.h")
+  FILES_MATCHING PATTERN "*.h"
+  PATTERN "detail" EXCLUDE)
 install(EXPORT CubeCollisionTargets
   NAMESPACE CubeCollision::
   DESTINATION ${CUBE_COLLISION_CMAKE_DIR})
@@ -51,15 +54,32 @@ else()
   string(REGEX REPLACE "/$" "" _cube_up "${_cube_up}")
   set(CUBE_COLLISION_PC_PREFIX "\${pcfiledir}/${_cube_up}")
 endif()
-set(CUBE_COLLISION_PC_REQUIRES_PRIVATE "")
+# The file names no other package in Requires: pkg-config would then add that package's Cflags,
+# and Debian's fcl.pc says -std=c++11, which comes after the user's -std=c++17 in
+# `c++ -std=c++17 main.cpp $(pkg-config --cflags --libs cube_collision)` and wins. Instead, FCL's
+# flags (and those of what it needs: Eigen's include directory; ccd and octomap to link) are
+# written into our Cflags/Libs here, less any -std=.
+include(${PROJECT_SOURCE_DIR}/cmake/CubePkgConfigFlags.cmake)
+cube_pc_flags_of_fcl(_cube_fcl_cflags _cube_fcl_libs)
 set(CUBE_COLLISION_PC_CFLAGS "")
-if(CUBE_COLLISION_NEEDS_CAIRO)
-  set(CUBE_COLLISION_PC_REQUIRES_PRIVATE "cairo")
+if(_cube_fcl_cflags)
+  set(CUBE_COLLISION_PC_CFLAGS " ${_cube_fcl_cflags}")
 endif()
+set(CUBE_COLLISION_PC_LIBS "${_cube_fcl_libs}")
 if(CUBE_COLLISION_HAS_CAIRO)
   # Public compile definition of the target: the headers declare the image export under it.
-  set(CUBE_COLLISION_PC_CFLAGS " -DCUBE_COLLISION_HAS_CAIRO")
+  string(APPEND CUBE_COLLISION_PC_CFLAGS " -DCUBE_COLLISION_HAS_CAIRO")
 endif()
+if(CUBE_COLLISION_NEEDS_CAIRO)
+  # A static library linked with Cairo: every consumer's link needs Cairo (-lcairo), with or
+  # without --static.
+  cube_pc_flags_of_module(cairo _cube_cairo_cflags _cube_cairo_libs _cube_cairo_static_libs)
+  if(NOT CUBE_PC_MODULE_FOUND)
+    set(_cube_cairo_libs "-lcairo")
+  endif()
+  set(CUBE_COLLISION_PC_LIBS "${_cube_cairo_libs} ${CUBE_COLLISION_PC_LIBS}")
+endif()
+string(STRIP "${CUBE_COLLISION_PC_LIBS}" CUBE_COLLISION_PC_LIBS)
 configure_file(${PROJECT_SOURCE_DIR}/cmake/cube_collision.pc.in
   ${PROJECT_BINARY_DIR}/cube_collision.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/cube_collision.pc DESTINATION ${_cube_pc_dir})

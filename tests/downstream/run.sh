@@ -5,6 +5,7 @@
 #                                                only calls find_package(CubeCollision), run it;
 #                                                check that an incompatible version is refused
 #   run.sh pkg_config   <build dir> <work dir>   install, compile main.cpp with pkg-config's flags
+#                                                exactly as the README shows, run it
 #   run.sh subdirectory <source dir> <work dir>  configure a project that add_subdirectory()s the
 #                                                source tree: the library target is there, the
 #                                                tests, examples and benchmarks are not (set
@@ -47,23 +48,21 @@ case "$mode" in
     cmake --install "$from" --prefix "$prefix"
     pc=$(find "$prefix" -name cube_collision.pc)
     export PKG_CONFIG_PATH="$(dirname "$pc")${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}"
-    # A static library needs its private dependencies (Cairo, if built with it) at link time.
-    static=""
-    if [ -z "$(find "$prefix" -name 'libcube_collision.so*')" ]; then static="--static"; fi
-    # fcl.pc says -std=c++11: our -std=c++17 must come after pkg-config's flags.
+    # Exactly the README's command, `c++ -std=c++17 main.cpp $(pkg-config --cflags --libs
+    # cube_collision)`, in that order (the .pc file carries no -std= of its own or of FCL's):
+    # only the sanitizer flags come before it, and an rpath for a shared build after it.
     # shellcheck disable=SC2046,SC2086
-    ${CXX:-c++} ${CXXFLAGS:-} $(pkg-config --cflags cube_collision) -std=c++17 -O1 \
-      "$here/main.cpp" -o "$work/downstream" \
-      $(pkg-config --libs $static cube_collision) ${LDFLAGS:-} \
-      -Wl,-rpath,"$(pkg-config --variable=libdir cube_collision)"
-    "$work/downstream" "$work/hierarchy.svg"
+    (cd "$work" && ${CXX:-c++} ${CXXFLAGS:-} ${LDFLAGS:-} \
+      -std=c++17 "$here/main.cpp" $(pkg-config --cflags --libs cube_collision) \
+      -Wl,-rpath,"$(pkg-config --variable=libdir cube_collision)")
+    "$work/a.out" "$work/hierarchy.svg"
     ;;
   subdirectory)
     cmake -S "$here/subdirectory" -B "$work/build" -DCMAKE_BUILD_TYPE=Release \
       -DCUBE_COLLISION_SOURCE_DIR="$from"
     targets=$(cmake --build "$work/build" --target help)
     grep -qw "cube_collision" <<<"$targets" || { echo "no cube_collision target" >&2; exit 1; }
-    for t in cube_scenes demo test_queries cube_bench; do
+    for t in cube_scenes cube_fcl_float demo cube_tests_api cube_tests_core cube_bench; do
       if grep -qw "$t" <<<"$targets"; then
         echo "target $t is built although cube-collision is not the top-level project" >&2
         exit 1
