@@ -323,8 +323,7 @@ void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
   if (callback == nullptr) fail("distance", "null callback");
   S best = std::numeric_limits<S>::max();
   againstManager(
-      *this, other_manager, "distance",
-      [&] { core_->distanceSelf(cdata, callback, best, stats); },
+      *this, other_manager, "distance", [&] { core_->distanceSelf(cdata, callback, best, stats); },
       [&](const detail::Broadphase<S>& other) {
         core_->distance(other, cdata, callback, best, stats);
       },

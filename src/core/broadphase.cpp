@@ -111,7 +111,8 @@ void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_
     const bool empty = size() == 0;
     for (std::size_t i = 0; i < n; ++i) {
       if (!empty && contains(objs[i])) continue;
-      std::size_t h = (reinterpret_cast<std::uintptr_t>(objs[i]) >> 4) * 0x9E3779B97F4A7C15ull >> 20;
+      std::size_t h =
+          (reinterpret_cast<std::uintptr_t>(objs[i]) >> 4) * 0x9E3779B97F4A7C15ull >> 20;
       h &= mask;
       while (seen[h] != nullptr && seen[h] != objs[i]) h = (h + 1) & mask;
       if (seen[h] != nullptr) continue;
@@ -268,8 +269,8 @@ bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn
 }
 
 template <typename S>
-bool Broadphase<S>::distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn,
-                             S& best, QueryStats* stats) const {
+bool Broadphase<S>::distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
+                             QueryStats* stats) const {
   const SingleView<S> query(obj, box);
   return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
     return distancePairs(a, b, false, data, fn, best, stats);
@@ -300,8 +301,8 @@ bool Broadphase<S>::distance(const Broadphase& other, void* data, DistanceFn<S> 
 
 template <typename S>
 std::size_t Broadphase<S>::bytes() const {
-  return table_.bytes() + tree_.bytes() + unbounded_.capacity() * sizeof(Item<S>) +
-         pairs_.bytes() + moved_.capacity() * sizeof(ObjectId);
+  return table_.bytes() + tree_.bytes() + unbounded_.capacity() * sizeof(Item<S>) + pairs_.bytes() +
+         moved_.capacity() * sizeof(ObjectId);
 }
 
 template <typename S>

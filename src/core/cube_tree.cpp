@@ -17,7 +17,6 @@ namespace detail {
 
 namespace {
 
-
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 void setEmpty(Node& n) {
@@ -311,7 +310,6 @@ void selectNth(BuildRecord* first, BuildRecord* nth, BuildRecord* last, int axis
   rankSort(home + lo_off, home + hi_off, axis);
 }
 
-
 // The seed's split rule, written once for the build and for a leaf that overflows: along the
 // longest side of `bounds` (the union of the records), the records ordered by centre (ties by
 // registration order), the first `mid - first` of them for the lower child.
@@ -325,7 +323,8 @@ void sortLeaf(BuildRecord* first, BuildRecord* last) {
   if (last - first <= kRankMax)
     rankSort(first, last, -1);
   else
-    std::sort(first, last, [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
+    std::sort(first, last,
+              [](const BuildRecord& x, const BuildRecord& y) { return x.seq < y.seq; });
 }
 
 }  // namespace

@@ -222,6 +222,5 @@ inline void roundOut(const Box<S>& b, float lo[3], float hi[3]) {
   }
 }
 
-
 }  // namespace detail
 }  // namespace cube

@@ -68,8 +68,8 @@ std::uint32_t ObjectTable<S>::nextSeq() {
 }
 
 template <typename S>
-ObjectId ObjectTable<S>::add(Object* obj) {
-  assert(obj != nullptr && find(obj) == kNone);
+ObjectId ObjectTable<S>::take(Object* obj) {
+  const std::uint32_t seq = nextSeq();  // before obj is in: a renumbering counts live ids only
   ObjectId id;
   if (!free_.empty()) {
     id = free_.back();
@@ -81,9 +81,16 @@ ObjectId ObjectTable<S>::add(Object* obj) {
     loc_.push_back(kNone);
   }
   obj_[id] = obj;
-  seq_[id] = nextSeq();
+  seq_[id] = seq;
   loc_[id] = kNone;
   ++live_;
+  return id;
+}
+
+template <typename S>
+ObjectId ObjectTable<S>::add(Object* obj) {
+  assert(obj != nullptr && find(obj) == kNone);
+  const ObjectId id = take(obj);
   if (live_ * 4 > index_.size() * 3)
     grow();  // puts every live id, this one included
   else
@@ -98,23 +105,7 @@ void ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, std::vector<Ob
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
-  for (std::size_t i = 0; i < n; ++i) {
-    ObjectId id;
-    if (!free_.empty()) {
-      id = free_.back();
-      free_.pop_back();
-    } else {
-      id = static_cast<ObjectId>(obj_.size());
-      obj_.push_back(nullptr);
-      seq_.push_back(0);
-      loc_.push_back(kNone);
-    }
-    obj_[id] = objs[i];
-    seq_[id] = nextSeq();
-    loc_[id] = kNone;
-    ids[i] = id;
-  }
-  live_ += n;
+  for (std::size_t i = 0; i < n; ++i) ids[i] = take(objs[i]);
   const std::size_t before = index_.size();
   grow();
   if (index_.size() == before)  // no regrowth: the batch is not in the map yet

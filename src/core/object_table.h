@@ -57,13 +57,14 @@ class ObjectTable {
 
  private:
   std::uint32_t nextSeq();
+  ObjectId take(Object* obj);  // a fresh or recycled id for obj, not yet in the map
   void put(ObjectId id);
   void grow();
 
-  std::vector<Object*> obj_;         // per id; nullptr: free
-  std::vector<std::uint32_t> seq_;   // per id: registration number
-  std::vector<std::uint32_t> loc_;   // per id: location (see location())
-  std::vector<ObjectId> free_;       // ids to hand out again, last freed first
+  std::vector<Object*> obj_;          // per id; nullptr: free
+  std::vector<std::uint32_t> seq_;    // per id: registration number
+  std::vector<std::uint32_t> loc_;    // per id: location (see location())
+  std::vector<ObjectId> free_;        // ids to hand out again, last freed first
   std::vector<std::uint32_t> index_;  // open addressing: 0 empty, else id + 1 (key: obj_[id])
   std::size_t live_ = 0;
   std::uint32_t next_seq_ = 0;
