@@ -30,9 +30,16 @@ elseif(NOT CUBE_COLLISION_SANITIZE STREQUAL "")
   message(FATAL_ERROR "CUBE_COLLISION_SANITIZE must be empty, address or thread, not '${CUBE_COLLISION_SANITIZE}'")
 endif()
 
+# Debug information of sanitizer builds. Line tables (-g1) give the reports' stack traces their
+# files and lines; full -g (variables, for a debugger) makes FCL's float narrow phase, which
+# src/callbacks.cpp instantiates, much slower to compile (GCC's variable tracking gives up on
+# its largest functions after trying, and the assembler then reads a huge file).
+set(CUBE_COLLISION_SANITIZE_DEBUG "-g1" CACHE STRING "Debug-information flag of sanitizer builds (-g1 line tables; -g for a debugger)")
+
 if(_cube_san_flags)
   # Any report is a failure: no recovering from undefined behaviour, and frames kept for traces.
-  add_compile_options(${_cube_san_flags} -fno-sanitize-recover=all -fno-omit-frame-pointer -g)
+  add_compile_options(${_cube_san_flags} -fno-sanitize-recover=all -fno-omit-frame-pointer
+                      ${CUBE_COLLISION_SANITIZE_DEBUG})
   add_link_options(${_cube_san_flags} -fno-sanitize-recover=all)
   # Lets the longest randomized tests run fewer sequences, to keep sanitized runs in CI's time.
   add_compile_definitions(CUBE_COLLISION_SANITIZED=1)
