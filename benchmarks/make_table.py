@@ -160,7 +160,7 @@ def target_table(medians):
 
 
 def memory_table(counters, sizes):
-    out = ["| n | " + " | ".join(SHORT[m] for m in MANAGERS) + " | cube hierarchy().bytes() |",
+    out = ["| n | " + " | ".join(SHORT[m] for m in MANAGERS) + " | cube bytes() |",
            "|---|" + "---|" * (len(MANAGERS) + 1)]
     for n in sizes:
         cells = []
