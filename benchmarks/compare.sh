@@ -3,7 +3,8 @@
 # several rounds, and prints each case's median time at each commit and the ratio.
 #   bash benchmarks/compare.sh BASE [HEAD]      (HEAD defaults to the work tree as it is)
 # CUBE_COMPARE_FILTER (default: every cube case but the drift study), CUBE_COMPARE_ROUNDS
-# (default 5) and CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) set the work.
+# (default 5) and CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) set the work;
+# CUBE_COMPARE_REUSE=1 runs the binaries of the last run again without building.
 # Rounds alternate the two binaries, so that a change in the machine's load hits both alike.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -32,8 +33,13 @@ build() {
   echo "$work/build-$name/benchmarks/cube_bench"
 }
 
-before=$(build before "$base")
-after=$(build after "$head")
+if [ "${CUBE_COMPARE_REUSE:-0}" = 1 ]; then  # the binaries of the last run, not rebuilt
+  before="$work/build-before/benchmarks/cube_bench"
+  after="$work/build-after/benchmarks/cube_bench"
+else
+  before=$(build before "$base")
+  after=$(build after "$head")
+fi
 echo "before: $base ($before)"
 echo "after:  ${head:-work tree} ($after)"
 for r in $(seq 1 "$rounds"); do
