@@ -5,7 +5,9 @@
 // - the leaf kernels of the walks (detail::leafOverlapMask) on the same kinds of boxes;
 // - self-collide of trees large enough to test their leaves on float columns, against brute
 //   force;
-// - the outward rounding of boxes to float (detail::roundOut) against floatBelow.
+// - the outward rounding of boxes to float (detail::roundOut) against floatBelow;
+// - the SSE2 per-box operations (src/core/kernels/box_ops_sse2.h) against the portable ones,
+//   bit for bit.
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/narrowphase/collision_object.h>
@@ -25,7 +27,11 @@
 #include <vector>
 
 #include "core/broadphase.h"
+#include "core/kernels/box_ops_portable.h"
 #include "core/traversal.h"
+#if defined(__SSE2__)
+#include "core/kernels/box_ops_sse2.h"
+#endif
 
 namespace {
 
@@ -292,7 +298,8 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
                                 std::max(kept[i].first, kept[j].first));
       }
     Recorder<S> r;
-    EXPECT_FALSE(cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &r, &Recorder<S>::fn));
+    EXPECT_FALSE(
+        cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &r, &Recorder<S>::fn));
     for (auto& c : r.calls) c = {std::min(c.first, c.second), std::max(c.first, c.second)};
     std::sort(r.calls.begin(), r.calls.end());
     std::sort(expected.begin(), expected.end());
@@ -301,7 +308,8 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
     // A callback that stops the walk is obeyed there.
     Recorder<S> stop;
     stop.stop_after = 3;
-    EXPECT_TRUE(cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &stop, &Recorder<S>::fn));
+    EXPECT_TRUE(cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &stop,
+                                           &Recorder<S>::fn));
     EXPECT_EQ(stop.calls.size(), 3u);
   }
   EXPECT_GT(pairs_seen, 1000u);
@@ -347,5 +355,93 @@ TEST(RoundOut, EqualsTheScalarRoundingAndContainsTheBox) {
   }
   EXPECT_EQ(checked, 60000u);
 }
+
+#if defined(__SSE2__)
+// Every SSE2 per-box operation gives the portable one's result bit for bit (a union's zero may
+// differ in sign only, which roundOut maps to the same bound), on boxes with touching faces,
+// infinities, signed zeros and sizes from 1e-30 to 1e30.
+TEST(BoxOps, Sse2EqualsPortableBitForBit) {
+  namespace pt = cube::detail::portable;
+  namespace s2 = cube::detail::sse2;
+  using cube::detail::BuildRecord;
+  using cube::detail::Node;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  std::uniform_int_distribution<int> exponent(-100, 100);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double special[] = {0.0, -0.0, inf, -inf, 1e39, -1e39, 1.0, -1.0};
+  auto coordinate = [&]() {
+    if (rng() % 6 == 0) return special[rng() % std::size(special)];
+    return std::ldexp(unit(rng), exponent(rng) % 100);
+  };
+  auto randomBox = [&]() {
+    Box<double> b;
+    for (int k = 0; k < 3; ++k) {
+      double x = coordinate(), y = coordinate();
+      if (x > y) std::swap(x, y);
+      b.lo[k] = x;
+      b.hi[k] = y;
+    }
+    return b;
+  };
+  auto bits = [](auto x) {
+    std::uint64_t u = 0;
+    std::memcpy(&u, &x, sizeof x);
+    return u;
+  };
+  auto nodeOf = [](const Box<double>& b) {
+    Node n{};
+    pt::roundOut(b, n.lo, n.hi);
+    return n;
+  };
+  std::size_t overlaps = 0, gaps = 0;
+  for (int rep = 0; rep < 20000; ++rep) {
+    const Box<double> a = randomBox();
+    Box<double> b = randomBox();
+    if (rep % 5 == 0) {  // touching faces along one axis
+      const int k = rep / 5 % 3;
+      b.lo[k] = a.hi[k];
+      b.hi[k] = std::max(b.hi[k], b.lo[k]);
+    }
+    const Node na = nodeOf(a), nb = nodeOf(b);
+    ASSERT_EQ(s2::overlap(a, b), pt::overlap(a, b)) << rep;
+    ASSERT_EQ(s2::overlap(na, nb), pt::overlap(na, nb)) << rep;
+    ASSERT_EQ(bits(s2::boxGap2(a, b)), bits(pt::boxGap2(a, b))) << rep;
+    ASSERT_EQ(bits(s2::cubeGap2(na, nb)), bits(pt::cubeGap2(na, nb))) << rep;
+    ASSERT_TRUE(s2::sameBox(a, a) && pt::sameBox(a, a));
+    ASSERT_EQ(s2::sameBox(a, b), pt::sameBox(a, b)) << rep;
+    ASSERT_EQ(s2::sameBounds(na, nb), pt::sameBounds(na, nb)) << rep;
+    ASSERT_TRUE(s2::sameBounds(na, na));
+    overlaps += pt::overlap(a, b);
+    gaps += pt::boxGap2(a, b) > 0;
+    float lo[2][3], hi[2][3];
+    s2::roundOut(a, lo[0], hi[0]);
+    pt::roundOut(a, lo[1], hi[1]);
+    ASSERT_EQ(std::memcmp(lo[0], lo[1], sizeof lo[0]), 0) << rep;
+    ASSERT_EQ(std::memcmp(hi[0], hi[1], sizeof hi[0]), 0) << rep;
+    // Unions of items, of cubes and of build records, compared through their float bounds.
+    Item<double> items[3] = {{a, nullptr, 0, 0}, {b, nullptr, 0, 1}, {randomBox(), nullptr, 0, 2}};
+    Box<double> u[2];
+    s2::unionOfItems(items, 0, 3, u[0]);
+    pt::unionOfItems(items, 0, 3, u[1]);
+    Node un[2] = {Node{}, Node{}};
+    for (int i = 0; i < 2; ++i) pt::roundOut(u[i], un[i].lo, un[i].hi);
+    ASSERT_TRUE(pt::sameBounds(un[0], un[1])) << rep;
+    Node c[2] = {Node{}, Node{}};
+    c[0].first = c[1].first = 7;
+    s2::unionOfCubes(c[0], na, nb);
+    pt::unionOfCubes(c[1], na, nb);
+    ASSERT_TRUE(pt::sameBounds(c[0], c[1])) << rep;
+    ASSERT_EQ(c[0].first, 7u);  // first/count untouched
+    BuildRecord r[2];
+    for (int i = 0; i < 2; ++i) pt::roundOut(i ? b : a, r[i].lo, r[i].hi);
+    s2::unionOfRecords(r, r + 2, c[0]);
+    pt::unionOfRecords(r, r + 2, c[1]);
+    ASSERT_TRUE(pt::sameBounds(c[0], c[1])) << rep;
+  }
+  EXPECT_GT(overlaps, 1000u);  // both outcomes are common enough to mean something
+  EXPECT_GT(gaps, 1000u);
+}
+#endif
 
 }  // namespace

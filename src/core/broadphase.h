@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/cube_tree.h"
+#include "core/kernels/box_ops.h"
 #include "core/object_table.h"
 #include "core/pair_list.h"
 #include "core/rebuild_policy.h"

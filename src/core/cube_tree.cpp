@@ -12,6 +12,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/kernels/box_ops.h"
+
 namespace cube {
 namespace detail {
 
@@ -24,24 +26,6 @@ void setEmpty(Node& n) {
     n.lo[k] = kInf;
     n.hi[k] = -kInf;
   }
-}
-
-template <typename S>
-void grow(Box<S>& acc, const Box<S>& b) {
-  for (int k = 0; k < 3; ++k) {
-    acc.lo[k] = std::min(acc.lo[k], b.lo[k]);
-    acc.hi[k] = std::max(acc.hi[k], b.hi[k]);
-  }
-}
-
-template <typename S>
-Box<S> emptyBox() {
-  Box<S> b;
-  for (int k = 0; k < 3; ++k) {
-    b.lo[k] = std::numeric_limits<S>::infinity();
-    b.hi[k] = -std::numeric_limits<S>::infinity();
-  }
-  return b;
 }
 
 // Of an object box or a cube; sides in double, exact for float bounds.
@@ -62,79 +46,22 @@ std::uint32_t splitCount(std::uint32_t count, int leaf_size) {
   return m < count ? m : count / 2;
 }
 
-bool sameBounds(const Node& a, const Node& b) {
-#if defined(__SSE2__)
-  const __m128 lo = _mm_cmpeq_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.lo));
-  const __m128 hi = _mm_cmpeq_ps(_mm_loadu_ps(a.hi), _mm_loadu_ps(b.hi));
-  return (_mm_movemask_ps(_mm_and_ps(lo, hi)) & 7) == 7;  // lane 3 is first/count
-#else
-  for (int k = 0; k < 3; ++k)
-    if (a.lo[k] != b.lo[k] || a.hi[k] != b.hi[k]) return false;
-  return true;
-#endif
-}
-
 // A leaf's bounds: the union of its objects' exact boxes, rounded out.
 template <typename S>
 void fitLeaf(Node& n, const Item<S>* items) {
-  Box<S> box = emptyBox<S>();
-  for (std::uint32_t p = n.first; p < n.first + n.count; ++p) grow(box, items[p].box);
+  Box<S> box;
+  unionOfItems(items, n.first, n.count, box);
   roundOut(box, n.lo, n.hi);
 }
-
-#if defined(__SSE2__)
-// Two lanes at a time: every update() refits the leaves of the objects that moved. A zero's sign
-// may differ from the scalar union's, which roundOut maps to the same bound.
-void fitLeaf(Node& n, const Item<double>* items) {
-  const double inf = std::numeric_limits<double>::infinity();
-  __m128d lo01 = _mm_set1_pd(inf), lo2 = lo01;
-  __m128d hi01 = _mm_set1_pd(-inf), hi2 = hi01;
-  for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
-    const double* b = items[p].box.lo;  // lo0 lo1 lo2 hi0 hi1 hi2, contiguous
-    lo01 = _mm_min_pd(lo01, _mm_loadu_pd(b));
-    lo2 = _mm_min_sd(lo2, _mm_load_sd(b + 2));
-    hi01 = _mm_max_pd(hi01, _mm_loadu_pd(b + 3));
-    hi2 = _mm_max_sd(hi2, _mm_load_sd(b + 5));
-  }
-  Box<double> box;
-  _mm_storeu_pd(box.lo, lo01);
-  _mm_store_sd(box.lo + 2, lo2);
-  _mm_storeu_pd(box.hi, hi01);
-  _mm_store_sd(box.hi + 2, hi2);
-  roundOut(box, n.lo, n.hi);
-}
-#endif
 
 // An internal cube's bounds: the union of its two children's.
 void fitParent(Node& n, const Node& a, const Node& b) {
-#if defined(__SSE2__)
-  // Lane 3 holds first/count: n keeps its own.
-  const __m128 own = _mm_castsi128_ps(_mm_set_epi32(-1, 0, 0, 0));
-  const __m128 lo = _mm_min_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.lo));
-  const __m128 hi = _mm_max_ps(_mm_loadu_ps(a.hi), _mm_loadu_ps(b.hi));
-  _mm_storeu_ps(n.lo, _mm_or_ps(_mm_andnot_ps(own, lo), _mm_and_ps(own, _mm_loadu_ps(n.lo))));
-  _mm_storeu_ps(n.hi, _mm_or_ps(_mm_andnot_ps(own, hi), _mm_and_ps(own, _mm_loadu_ps(n.hi))));
-#else
-  for (int k = 0; k < 3; ++k) {
-    n.lo[k] = std::min(a.lo[k], b.lo[k]);
-    n.hi[k] = std::max(a.hi[k], b.hi[k]);
-  }
-#endif
+  unionOfCubes(n, a, b);
 }
 
 bool isDead(const Node& n) {
   return n.count == 0 && n.first == kNone;
 }
-
-// What the build permutes: 32 bytes per object (the float bounds the cubes are made of), so that
-// median selection streams through one array instead of chasing indices into the items.
-struct BuildRecord {
-  float lo[3];
-  float hi[3];
-  std::uint32_t seq;
-  std::uint32_t item;
-};
-static_assert(sizeof(BuildRecord) == 32, "two records per cache line");
 
 // Twice a record's centre along an axis (the sum of its bounds: only the order matters). A box
 // reaching both infinities has no centre; it counts as 0, so that the order stays total.
@@ -162,38 +89,6 @@ inline std::uint64_t orderKey(const BuildRecord& r, int axis) {
 
 inline bool before(const BuildRecord& x, const BuildRecord& y, int axis) {
   return orderKey(x, axis) < orderKey(y, axis);
-}
-
-// Sets n's bounds (not first/count) to the union of the records' bounds.
-void unionOf(const BuildRecord* first, const BuildRecord* last, Node& n) {
-#if defined(__SSE2__)
-  // A record's two halves: lo0 lo1 lo2 hi0 and hi1 hi2 seq item.
-  const float inf = std::numeric_limits<float>::infinity();
-  __m128 a_min = _mm_set1_ps(inf), a_max = _mm_set1_ps(-inf), b_max = a_max;
-  for (const BuildRecord* r = first; r < last; ++r) {
-    const __m128 a = _mm_loadu_ps(r->lo);
-    a_min = _mm_min_ps(a_min, a);
-    a_max = _mm_max_ps(a_max, a);
-    b_max = _mm_max_ps(b_max, _mm_loadu_ps(r->hi + 1));
-  }
-  float lo[4], hi[4], b[4];
-  _mm_storeu_ps(lo, a_min);
-  _mm_storeu_ps(hi, a_max);
-  _mm_storeu_ps(b, b_max);
-  n.lo[0] = lo[0];
-  n.lo[1] = lo[1];
-  n.lo[2] = lo[2];
-  n.hi[0] = hi[3];
-  n.hi[1] = b[0];
-  n.hi[2] = b[1];
-#else
-  setEmpty(n);  // keeps first/count
-  for (const BuildRecord* r = first; r < last; ++r)
-    for (int k = 0; k < 3; ++k) {
-      n.lo[k] = std::min(n.lo[k], r->lo[k]);
-      n.hi[k] = std::max(n.hi[k], r->hi[k]);
-    }
-#endif
 }
 
 // Runs this short are sorted by rank.
@@ -404,7 +299,7 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
       const std::uint32_t e = b + nodes_[cube].count;
       // The cube's sides: the union of its objects' rounded bounds, which is what refitting
       // makes of them (rounding out is monotonic), so no refit follows the build.
-      unionOf(rec.data() + b, rec.data() + e, nodes_[cube]);
+      unionOfRecords(rec.data() + b, rec.data() + e, nodes_[cube]);
       if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
         sortLeaf(rec.data() + b, rec.data() + e);
         continue;
@@ -591,7 +486,7 @@ void CubeTree<S>::splitLeaf(std::uint32_t leaf, IdArrays ids) {
     r.item = p;
   }
   Node bounds = nodes_[leaf];
-  unionOf(rec.data(), rec.data() + rec.size(), bounds);
+  unionOfRecords(rec.data(), rec.data() + rec.size(), bounds);
   const std::uint32_t half = (e - b) / 2;
   splitRecords(rec.data(), rec.data() + half, rec.data() + rec.size(), bounds, scratch.data());
   sortLeaf(rec.data(), rec.data() + half);

@@ -17,10 +17,6 @@
 
 #include "cube_collision/config.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>  // baseline on x86-64: no -m flag, so no effect on Eigen's ABI
-#endif
-
 namespace fcl {
 template <typename S>
 class CollisionObject;
@@ -152,75 +148,15 @@ struct View {
   std::uint32_t slots = 0;     ///< length of `items`, dead slots (obj == nullptr) included
 };
 
-/// Whether two boxes are equal coordinate by coordinate. Without branches: update() asks this
-/// of every object, and the answer is "yes" for most.
-template <typename S>
-bool sameBox(const Box<S>& a, const Box<S>& b) {
-  return (a.lo[0] == b.lo[0]) & (a.lo[1] == b.lo[1]) & (a.lo[2] == b.lo[2]) & (a.hi[0] == b.hi[0]) &
-         (a.hi[1] == b.hi[1]) & (a.hi[2] == b.hi[2]);
-}
-
-#if defined(__SSE2__)
-inline bool sameBox(const Box<double>& a, const Box<double>& b) {
-  // The six coordinates are contiguous: three two-lane compares.
-  const __m128d e0 = _mm_cmpeq_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.lo));
-  const __m128d e1 = _mm_cmpeq_pd(_mm_loadu_pd(a.lo + 2), _mm_loadu_pd(b.lo + 2));
-  const __m128d e2 = _mm_cmpeq_pd(_mm_loadu_pd(a.hi + 1), _mm_loadu_pd(b.hi + 1));
-  return _mm_movemask_pd(_mm_and_pd(_mm_and_pd(e0, e1), e2)) == 3;
-}
-#endif
-
-/// A float no greater than x (x not NaN), within a few float ulps of it. Branch-free instead of
-/// exact: a cube may be a hair larger than needed, never smaller. Values beyond float's range
-/// become infinite (the clamp keeps the conversion defined).
-inline float floatBelow(double x) {
-  constexpr double kMax = std::numeric_limits<float>::max();
-  const float f = static_cast<float>(std::min(std::max(x, -kMax), kMax));
-  return f - (std::fabs(f) * 0x1p-22f + std::numeric_limits<float>::min());
-}
-
-/// Outward-rounded float copy of an exact box (lo by floatBelow, hi the mirror image).
-template <typename S>
-inline void roundOut(const Box<S>& b, float lo[3], float hi[3]) {
-  if constexpr (std::is_same_v<S, float>) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = b.lo[k];
-      hi[k] = b.hi[k];
-    }
-  } else {
-#if defined(__SSE2__)
-    // The same float operations as floatBelow, four and two lanes at a time (the results are
-    // bit for bit the same): builds and refits round every box.
-    const __m128d kMax = _mm_set1_pd(std::numeric_limits<float>::max());
-    const __m128d kMin = _mm_set1_pd(-std::numeric_limits<float>::max());
-    auto narrow = [&](const double* p) {
-      return _mm_cvtpd_ps(_mm_min_pd(_mm_max_pd(_mm_loadu_pd(p), kMin), kMax));
-    };
-    const __m128 a = _mm_movelh_ps(narrow(b.lo), narrow(b.lo + 2));  // lo0 lo1 lo2 hi0
-    const __m128 c = narrow(b.hi + 1);                               // hi1 hi2 0 0
-    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128 scale = _mm_set1_ps(0x1p-22f);
-    const __m128 tiny = _mm_set1_ps(std::numeric_limits<float>::min());
-    const __m128 da = _mm_add_ps(_mm_mul_ps(_mm_and_ps(a, abs_mask), scale), tiny);
-    const __m128 dc = _mm_add_ps(_mm_mul_ps(_mm_and_ps(c, abs_mask), scale), tiny);
-    alignas(16) float down[4], up[4], up2[4];
-    _mm_store_ps(down, _mm_sub_ps(a, da));
-    _mm_store_ps(up, _mm_add_ps(a, da));
-    _mm_store_ps(up2, _mm_add_ps(c, dc));
-    lo[0] = down[0];
-    lo[1] = down[1];
-    lo[2] = down[2];
-    hi[0] = up[3];
-    hi[1] = up2[0];
-    hi[2] = up2[1];
-#else
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = floatBelow(double(b.lo[k]));
-      hi[k] = -floatBelow(-double(b.hi[k]));
-    }
-#endif
-  }
-}
+/// What the build permutes: 32 bytes per object (the float bounds the cubes are made of), so that
+/// median selection streams through one array instead of chasing indices into the items.
+struct BuildRecord {
+  float lo[3];
+  float hi[3];
+  std::uint32_t seq;   ///< registration number: ties in the build's order go by it
+  std::uint32_t item;  ///< where the object's Item is
+};
+static_assert(sizeof(BuildRecord) == 32, "two records per cache line");
 
 }  // namespace detail
 }  // namespace cube

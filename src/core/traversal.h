@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/geometry.h"
+#include "core/kernels/pair_kernels.h"
 #include "cube_collision/query_stats.h"
 
 namespace cube {
@@ -32,16 +33,6 @@ template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
                   std::vector<std::uint64_t>& out);
 
-/// Largest view that collideAllPairs accepts (one 64-bit mask per object).
-inline constexpr std::uint32_t kAllPairsMax = Config::kMaxAllPairsLimit;
-
-/// Instruction set of the pair kernels (collideAllPairs, leafOverlapMask). Queries use `best`
-/// (AVX2 where the CPU has it); tests force each one in turn.
-enum class PairKernel { best, portable, sse2, avx2 };
-
-/// Whether this build and this CPU can run kernel `k`.
-bool pairKernelAvailable(PairKernel k);
-
 /// Self-collide of one view without its cubes: every pair of objects is tested, several at a
 /// time in float, and pairs that pass are tested again exactly before fn is called. For small
 /// scenes, where the cubes' fixed cost per call outweighs their pruning. Same pairs as
@@ -49,9 +40,6 @@ bool pairKernelAvailable(PairKernel k);
 template <typename S>
 bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats = nullptr,
                      PairKernel kernel = PairKernel::best);
-
-/// Longest run of objects whose box tests against another run go into one 64-bit mask.
-inline constexpr std::uint32_t kMaskLeaf = 8;
 
 /// The box tests the walks make between two leaves (each at most kMaskLeaf objects): bit
 /// kMaskLeaf i + j of the result is set where xs[i] and ys[j] overlap (closed). With `self`, xs

@@ -1,0 +1,112 @@
+// The column storage, the portable kernels, and the one choice of kernel table.
+
+#include "core/kernels/pair_kernels.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace cube {
+namespace detail {
+
+ColumnStore::ColumnStore(std::uint32_t n) {
+  const std::uint32_t stride = (n + kMaskLeaf + 7) & ~7u;
+  if (stride <= kLocal) {
+    cols_.c = local_;
+  } else {
+    // 32-byte alignment by hand: 7 floats of slack.
+    heap_.reset(new float[6 * std::size_t(stride) + 7]);
+    const auto addr = reinterpret_cast<std::uintptr_t>(heap_.get());
+    cols_.c = heap_.get() + ((32 - addr % 32) % 32) / sizeof(float);
+  }
+  cols_.stride = stride;
+  for (int k = 0; k < 6; ++k)
+    std::fill(cols_.c + std::size_t(k) * stride + n, cols_.c + std::size_t(k + 1) * stride, 0.0f);
+}
+
+namespace {
+
+template <typename S>
+void fillPortable(const Item<S>* items, const std::uint32_t* slot, std::uint32_t count,
+                  const Columns& cols, std::uint32_t at) {
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const Box<S>& b = items[slot ? slot[i] : i].box;
+    for (int k = 0; k < 3; ++k) {
+      cols.lo(k)[at + i] = static_cast<float>(b.lo[k]);
+      cols.hi(k)[at + i] = static_cast<float>(b.hi[k]);
+    }
+  }
+}
+
+void rowMasksPortable(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
+  for (std::uint32_t i = 0; i < n; ++i) {
+    std::uint64_t m = 0;
+    for (std::uint32_t j = i + 1; j < n; ++j) {
+      bool hit = true;
+      for (int k = 0; k < 3; ++k) hit &= (f.lo(k)[i] <= f.hi(k)[j]) & (f.lo(k)[j] <= f.hi(k)[i]);
+      m |= std::uint64_t(hit) << j;
+    }
+    rows[i] = m;
+  }
+}
+
+template <typename S>
+const PairKernels<S> kPortable = {PairKernel::portable,
+                                  &fillPortable<S>,
+                                  &rowMasksPortable,
+                                  {&leafHitsPortable<false, S>, &leafHitsPortable<true, S>},
+                                  {nullptr, nullptr}};
+
+PairKernel resolveBest() {
+  if (pairKernelAvailable(PairKernel::avx2)) return PairKernel::avx2;
+  if (pairKernelAvailable(PairKernel::sse2)) return PairKernel::sse2;
+  return PairKernel::portable;
+}
+
+}  // namespace
+
+template <typename S>
+const PairKernels<S>* portableKernels() {
+  return &kPortable<S>;
+}
+
+bool pairKernelAvailable(PairKernel k) {
+  switch (k) {
+    case PairKernel::best:
+    case PairKernel::portable:
+      return true;
+    case PairKernel::sse2:
+      return sse2Kernels<double>() != nullptr;
+    case PairKernel::avx2:
+      return avx2Kernels<double>() != nullptr;
+  }
+  return false;
+}
+
+template <typename S>
+const PairKernels<S>& pairKernels(PairKernel k) {
+  static const PairKernel best = resolveBest();  // thread-safe, once, read-only afterwards
+  if (k == PairKernel::best) k = best;
+  const PairKernels<S>* table = nullptr;
+  switch (k) {
+    case PairKernel::best:
+    case PairKernel::portable:
+      table = portableKernels<S>();
+      break;
+    case PairKernel::sse2:
+      table = sse2Kernels<S>();
+      break;
+    case PairKernel::avx2:
+      table = avx2Kernels<S>();
+      break;
+  }
+  if (table == nullptr) throw std::logic_error("pairKernels: this CPU or build lacks the kernel");
+  return *table;
+}
+
+template const PairKernels<float>* portableKernels<float>();
+template const PairKernels<double>* portableKernels<double>();
+template const PairKernels<float>& pairKernels<float>(PairKernel);
+template const PairKernels<double>& pairKernels<double>(PairKernel);
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,106 @@
+#pragma once
+
+// The batch box tests: many pairs per call, as bit masks. One layout (float columns, see
+// Columns) and one table of kernels per instruction set (pair_kernels_<isa>.cpp), chosen once
+// at the first call by what the CPU has. The walks call through the table; nothing outside
+// src/core/kernels/ contains an intrinsic or an instruction-set conditional.
+
+#include <cstdint>
+#include <memory>
+
+#include "core/geometry.h"
+#include "core/kernels/box_ops.h"
+
+namespace cube {
+namespace detail {
+
+/// Longest run of objects whose box tests against another run go into one 64-bit mask.
+inline constexpr std::uint32_t kMaskLeaf = 8;
+
+/// Largest number of objects whose all-pairs masks (one 64-bit row each) rowMasks computes.
+inline constexpr std::uint32_t kAllPairsMax = Config::kMaxAllPairsLimit;
+static_assert(kAllPairsMax <= 64, "one 64-bit row per object");
+
+/// Instruction set of a kernel table. `best` is what the CPU runs fastest, resolved once.
+enum class PairKernel { best, portable, sse2, avx2 };
+
+/// Boxes in float, one column per bound (structure of arrays): entry i of bound lo[k] at
+/// c[k * stride + i], of hi[k] at c[(3 + k) * stride + i]. `c` is 32-byte aligned and `stride`
+/// a multiple of 8, so that 8 entries from a multiple of 8 are one aligned AVX load. Boxes are
+/// rounded to nearest: rounding is monotone (a <= b gives float(a) <= float(b)), so boxes that
+/// overlap exactly overlap in float too, and a float test gives a superset of the exact pairs.
+struct Columns {
+  float* c = nullptr;
+  std::uint32_t stride = 0;
+  float* lo(int k) const { return c + std::size_t(k) * stride; }
+  float* hi(int k) const { return c + std::size_t(3 + k) * stride; }
+};
+
+/// Owns the storage of a Columns for at least n entries plus kMaskLeaf of padding (read by the
+/// lanes of a leaf past its end), padding zeroed. Small sizes live in the object itself.
+class ColumnStore {
+ public:
+  explicit ColumnStore(std::uint32_t n);
+  ColumnStore(const ColumnStore&) = delete;
+  ColumnStore& operator=(const ColumnStore&) = delete;
+  const Columns& columns() const { return cols_; }
+
+ private:
+  static constexpr std::uint32_t kLocal = kAllPairsMax + kMaskLeaf;
+  alignas(32) float local_[6 * kLocal];
+  std::unique_ptr<float[]> heap_;
+  Columns cols_;
+};
+
+/// One instruction set's kernels. Bit kMaskLeaf i + j of a leaf mask stands for the pair
+/// (xs[i], ys[j]); with Self, xs and ys are the same run and only j > i counts.
+template <typename S>
+struct PairKernels {
+  PairKernel isa;
+  /// Entries [at, at + count) of `cols` get the boxes of items[slot[i]] (slot null:
+  /// items[i]), rounded to nearest.
+  void (*fill)(const Item<S>* items, const std::uint32_t* slot, std::uint32_t count,
+               const Columns& cols, std::uint32_t at);
+  /// rows[i] for i < n <= kAllPairsMax: bit j set for every j > i whose column box overlaps
+  /// box i's; bits from n to the next multiple of 8 may be set too (the caller masks them).
+  void (*rowMasks)(const Columns& cols, std::uint32_t n, std::uint64_t* rows);
+  /// Exact masks between two runs of at most kMaskLeaf objects: [0] pairs, [1] Self.
+  std::uint64_t (*leafHits[2])(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys,
+                               std::uint32_t ny);
+  /// The same from columns [x0, x0 + nx) and [y0, y0 + ny): a superset of the exact mask, to be
+  /// rechecked. Null where the instruction set gains nothing over leafHits.
+  std::uint64_t (*columnHits[2])(const Columns& cols, std::uint32_t x0, std::uint32_t nx,
+                                 std::uint32_t y0, std::uint32_t ny);
+};
+
+/// Whether this build and this CPU can run kernel `k`.
+bool pairKernelAvailable(PairKernel k);
+
+/// The table of kernel `k` (best: the fastest available, chosen at the first call). Throws
+/// std::logic_error if the CPU or the build lacks it.
+template <typename S>
+const PairKernels<S>& pairKernels(PairKernel k = PairKernel::best);
+
+/// The exact leaf mask one pair at a time: the portable table's leafHits, and what the walks
+/// use inline against a single object, where a batch would not pay for its set-up.
+template <bool Self, typename S>
+inline std::uint64_t leafHitsPortable(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys,
+                                      std::uint32_t ny) {
+  std::uint64_t hits = 0;
+  for (std::uint32_t i = 0; i < nx; ++i)
+    for (std::uint32_t j = Self ? i + 1 : 0; j < ny; ++j)
+      hits |= std::uint64_t(overlap(xs[i].box, ys[j].box)) << (kMaskLeaf * i + j);
+  return hits;
+}
+
+/// Each instruction set's table, or null where this build or this CPU lacks it (only
+/// pairKernels() calls these).
+template <typename S>
+const PairKernels<S>* portableKernels();
+template <typename S>
+const PairKernels<S>* sse2Kernels();
+template <typename S>
+const PairKernels<S>* avx2Kernels();
+
+}  // namespace detail
+}  // namespace cube
