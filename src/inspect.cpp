@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/broadphase.h"
+#include "core/walk.h"
 #include "cube_collision/cube_collision_manager.h"
 
 namespace cube {
@@ -72,27 +73,25 @@ HierarchyView<S>::HierarchyView(const CubeCollisionManager<S>& manager) {
   }
   level_begin_.push_back(static_cast<int>(cubes_.size()));
 
-  // Depth-first, first child first: the leaves' objects, each subtree contiguous.
-  std::vector<int> stack;
-  if (!cubes_.empty()) stack.push_back(0);
-  while (!stack.empty()) {
-    const int k = stack.back();
-    stack.pop_back();
-    CubeData& c = cubes_[static_cast<std::size_t>(k)];
-    if (c.first_child != c.end_child) {
-      stack.push_back(c.first_child + 1);
-      stack.push_back(c.first_child);
-      continue;
-    }
-    const detail::Node& n = nodes[raw[static_cast<std::size_t>(k)]];
-    c.first_object = static_cast<int>(objects_.size());
-    for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
-      objects_.push_back(items[p].obj);
-      object_boxes_.push_back(toBox(items[p].box));
-      leaf_of_.emplace_back(items[p].obj, k);
-    }
-    c.end_object = static_cast<int>(objects_.size());
-  }
+  // Depth-first, first child first: the leaves' objects, each subtree contiguous. The state is
+  // the cube's breadth-first number.
+  if (!cubes_.empty())
+    detail::walkPreorder(
+        nodes, h.root(), 0,
+        [&](std::uint32_t cube, int k) {
+          CubeData& c = cubes_[static_cast<std::size_t>(k)];
+          if (c.first_child != c.end_child) return detail::Step::open;
+          const detail::Node& n = nodes[cube];
+          c.first_object = static_cast<int>(objects_.size());
+          for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+            objects_.push_back(items[p].obj);
+            object_boxes_.push_back(toBox(items[p].box));
+            leaf_of_.emplace_back(items[p].obj, k);
+          }
+          c.end_object = static_cast<int>(objects_.size());
+          return detail::Step::skip;
+        },
+        [&](int which, int k) { return cubes_[static_cast<std::size_t>(k)].first_child + which; });
   // Children are numbered after their parent: a reverse sweep sees them first.
   for (std::size_t k = cubes_.size(); k-- > 0;) {
     CubeData& c = cubes_[k];

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "core/kernels/box_ops.h"
+#include "core/walk.h"
 
 namespace cube {
 namespace detail {
@@ -290,27 +291,27 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
     nodes_.push_back(root);
     parent_.push_back(kNone);
     root_ = 0;
-    std::vector<std::uint64_t> stack{0};  // (depth << 32) | cube
-    while (!stack.empty()) {
-      const std::uint32_t cube = static_cast<std::uint32_t>(stack.back());
-      const std::uint32_t depth = static_cast<std::uint32_t>(stack.back() >> 32);
-      stack.pop_back();
-      const std::uint32_t b = nodes_[cube].first;
-      const std::uint32_t e = b + nodes_[cube].count;
-      // The cube's sides: the union of its objects' rounded bounds, which is what refitting
-      // makes of them (rounding out is monotonic), so no refit follows the build.
-      unionOfRecords(rec.data() + b, rec.data() + e, nodes_[cube]);
-      if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
-        sortLeaf(rec.data() + b, rec.data() + e);
-        continue;
-      }
-      const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
-      splitRecords(rec.data() + b, rec.data() + m, rec.data() + e, nodes_[cube],
-                   scratch.data() + b);
-      const std::uint32_t child = addChildren(cube, b, m, e);
-      stack.push_back((std::uint64_t(depth + 1) << 32) | (child + 1));
-      stack.push_back((std::uint64_t(depth + 1) << 32) | child);
-    }
+    // Top-down, preorder: a cube's children are appended as it is split, so that each pair of
+    // siblings follows its parent's subtree order. The state is the depth.
+    walkPreorder(
+        nodes_, 0u, 0u,
+        [&](std::uint32_t cube, std::uint32_t depth) {
+          const std::uint32_t b = nodes_[cube].first;
+          const std::uint32_t e = b + nodes_[cube].count;
+          // The cube's sides: the union of its objects' rounded bounds, which is what refitting
+          // makes of them (rounding out is monotonic), so no refit follows the build.
+          unionOfRecords(rec.data() + b, rec.data() + e, nodes_[cube]);
+          if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
+            sortLeaf(rec.data() + b, rec.data() + e);
+            return Step::skip;
+          }
+          const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
+          splitRecords(rec.data() + b, rec.data() + m, rec.data() + e, nodes_[cube],
+                       scratch.data() + b);
+          addChildren(cube, b, m, e);
+          return Step::open;
+        },
+        [](int, std::uint32_t depth) { return depth + 1; });
     ItemArray<S> sorted(n);
     // A gather from all over the old array: fetch a few records ahead.
     constexpr std::uint32_t kAhead = 8;
@@ -599,19 +600,19 @@ void CubeTree<S>::remove(std::uint32_t pos, IdArrays ids) {
 
 template <typename S>
 void CubeTree<S>::splitCrowded(std::uint32_t top, IdArrays ids) {
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{top, depthOf(top)}};
-  while (!stack.empty()) {
-    const auto [cube, depth] = stack.back();
-    stack.pop_back();
-    const Node n = nodes_[cube];
-    if (n.isLeaf()) {
-      if (n.count <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) continue;
-      splitLeaf(cube, ids);
-      area_ += refitCube(cube);
-    }
-    stack.emplace_back(nodes_[cube].first, depth + 1);
-    stack.emplace_back(nodes_[cube].first + 1, depth + 1);
-  }
+  walkPreorder(
+      nodes_, top, depthOf(top),
+      [&](std::uint32_t cube, std::uint32_t depth) {
+        const Node& n = nodes_[cube];
+        if (n.isLeaf()) {
+          if (n.count <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth))
+            return Step::skip;
+          splitLeaf(cube, ids);
+          area_ += refitCube(cube);
+        }
+        return Step::open;
+      },
+      [](int, std::uint32_t depth) { return depth + 1; });
 }
 
 template <typename S>
@@ -628,29 +629,28 @@ void CubeTree<S>::compactIfSparse(IdArrays ids) {
   items.reserve(live_);
   nodes.push_back(nodes_[root_]);
   parents.push_back(kNone);
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root_, 0}};
-  while (!stack.empty()) {
-    const auto [from, to] = stack.back();
-    stack.pop_back();
-    const Node n = nodes_[from];
-    if (n.isLeaf()) {
-      nodes[to].first = static_cast<std::uint32_t>(items.size());
-      for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
-        ids.loc[items_[p].id] = static_cast<std::uint32_t>(items.size());
-        items.push_back(items_[p]);
-        items.back().leaf = to;
-      }
-    } else {
-      const std::uint32_t c = static_cast<std::uint32_t>(nodes.size());
-      nodes.push_back(nodes_[n.first]);
-      nodes.push_back(nodes_[n.first + 1]);
-      parents.push_back(to);
-      parents.push_back(to);
-      nodes[to].first = c;
-      stack.emplace_back(n.first + 1, c + 1);
-      stack.emplace_back(n.first, c);
-    }
-  }
+  // The state is the cube's index in the new array.
+  walkPreorder(
+      nodes_, root_, 0u,
+      [&](std::uint32_t from, std::uint32_t to) {
+        const Node n = nodes_[from];
+        if (n.isLeaf()) {
+          nodes[to].first = static_cast<std::uint32_t>(items.size());
+          for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+            ids.loc[items_[p].id] = static_cast<std::uint32_t>(items.size());
+            items.push_back(items_[p]);
+            items.back().leaf = to;
+          }
+          return Step::skip;
+        }
+        nodes[to].first = static_cast<std::uint32_t>(nodes.size());
+        nodes.push_back(nodes_[n.first]);
+        nodes.push_back(nodes_[n.first + 1]);
+        parents.push_back(to);
+        parents.push_back(to);
+        return Step::open;
+      },
+      [&](int which, std::uint32_t to) { return nodes[to].first + std::uint32_t(which); });
   nodes_.swap(nodes);
   parent_.swap(parents);
   items_.swap(items);
@@ -687,47 +687,52 @@ bool CubeTree<S>::validate(const std::uint32_t* loc, std::string* why) const {
   double total_area = 0;
   if (root_ != kNone) {
     if (root_ >= nodes_.size() || parent_[root_] != kNone) return msg << "bad root", fail();
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{root_, 0}};
-    while (!stack.empty()) {
-      const auto [i, depth] = stack.back();
-      stack.pop_back();
-      if (seen_node[i]) return msg << "cube " << i << " reached twice", fail();
-      seen_node[i] = 1;
-      ++reached_nodes;
-      const Node& n = nodes_[i];
-      total_area += surfaceArea(n);
-      if (config_.max_depth > 0 && depth > std::uint32_t(config_.max_depth))
-        return msg << "cube " << i << " deeper than max_depth", fail();
-      if (n.isLeaf()) {
-        if (n.first > items_.size() || n.count > items_.size() - n.first)
-          return msg << "leaf " << i << " range out of bounds", fail();
-        if (n.count > std::uint32_t(config_.leaf_size) && canSplit(depth))
-          return msg << "leaf " << i << " holds " << n.count << " > leaf_size objects", fail();
-        for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
-          const Item<S>& it = items_[p];
-          if (!it.obj) return msg << "leaf " << i << " holds dead slot " << p, fail();
-          if (seen_item[p]) return msg << "object slot " << p << " in two leaves", fail();
-          seen_item[p] = 1;
-          ++reached_items;
-          if (it.leaf != i) return msg << "object " << p << " has wrong leaf", fail();
-          float lo[3], hi[3];
-          roundOut(it.box, lo, hi);
-          if (!contains(n, lo, hi)) return msg << "leaf " << i << " misses object " << p, fail();
-          if (loc[it.id] != p) return msg << "location wrong for object slot " << p, fail();
-        }
-      } else {
-        const std::uint32_t c = n.first;
-        if (c == kNone || c + 1 >= nodes_.size() || c <= i)
-          return msg << "cube " << i << " has bad children " << c, fail();
-        if (c % 2 != 1) return msg << "children of " << i << " not at an odd index", fail();
-        for (std::uint32_t ch : {c, c + 1}) {
-          if (parent_[ch] != i) return msg << "parent of " << ch << " is not " << i, fail();
-          if (!contains(n, nodes_[ch].lo, nodes_[ch].hi))
-            return msg << "cube " << i << " does not contain child " << ch, fail();
-          stack.emplace_back(ch, depth + 1);
-        }
-      }
-    }
+    // Each check that fails stops the walk with its message in `msg`.
+    const bool failed = walkPreorder(
+        nodes_, root_, 0u,
+        [&](std::uint32_t i, std::uint32_t depth) {
+          if (seen_node[i]) return msg << "cube " << i << " reached twice", Step::stop;
+          seen_node[i] = 1;
+          ++reached_nodes;
+          const Node& n = nodes_[i];
+          total_area += surfaceArea(n);
+          if (config_.max_depth > 0 && depth > std::uint32_t(config_.max_depth))
+            return msg << "cube " << i << " deeper than max_depth", Step::stop;
+          if (n.isLeaf()) {
+            if (n.first > items_.size() || n.count > items_.size() - n.first)
+              return msg << "leaf " << i << " range out of bounds", Step::stop;
+            if (n.count > std::uint32_t(config_.leaf_size) && canSplit(depth))
+              return msg << "leaf " << i << " holds " << n.count << " > leaf_size objects",
+                     Step::stop;
+            for (std::uint32_t p = n.first; p < n.first + n.count; ++p) {
+              const Item<S>& it = items_[p];
+              if (!it.obj) return msg << "leaf " << i << " holds dead slot " << p, Step::stop;
+              if (seen_item[p]) return msg << "object slot " << p << " in two leaves", Step::stop;
+              seen_item[p] = 1;
+              ++reached_items;
+              if (it.leaf != i) return msg << "object " << p << " has wrong leaf", Step::stop;
+              float lo[3], hi[3];
+              roundOut(it.box, lo, hi);
+              if (!contains(n, lo, hi))
+                return msg << "leaf " << i << " misses object " << p, Step::stop;
+              if (loc[it.id] != p) return msg << "location wrong for object slot " << p, Step::stop;
+            }
+            return Step::skip;
+          }
+          // Children after their parent, so that the walk cannot cycle.
+          const std::uint32_t c = n.first;
+          if (c == kNone || c + 1 >= nodes_.size() || c <= i)
+            return msg << "cube " << i << " has bad children " << c, Step::stop;
+          if (c % 2 != 1) return msg << "children of " << i << " not at an odd index", Step::stop;
+          for (std::uint32_t ch : {c, c + 1}) {
+            if (parent_[ch] != i) return msg << "parent of " << ch << " is not " << i, Step::stop;
+            if (!contains(n, nodes_[ch].lo, nodes_[ch].hi))
+              return msg << "cube " << i << " does not contain child " << ch, Step::stop;
+          }
+          return Step::open;
+        },
+        [](int, std::uint32_t depth) { return depth + 1; });
+    if (failed) return fail();
   }
   if (reached_items != live_)
     return msg << "leaves hold " << reached_items << " objects, expected " << live_, fail();

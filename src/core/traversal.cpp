@@ -1,5 +1,5 @@
-// One iterative descent for every query: an explicit stack of cube pairs, policies for
-// "overlap" (collide) and "closer than the best so far" (distance).
+// The queries as visitors of the two walks (core/walk.h): policies for "overlap" (collide) and
+// "closer than the best so far" (distance), what they do at the leaves, and the entry points.
 
 #include "core/traversal.h"
 
@@ -12,41 +12,12 @@
 
 #include "core/kernels/box_ops.h"
 #include "core/kernels/pair_kernels.h"
+#include "core/walk.h"
 
 namespace cube {
 namespace detail {
 
 namespace {
-
-// A stack that lives in the frame up to N entries and moves to the heap beyond, so that queries
-// allocate nothing on ordinary trees and still cope with degenerate deep ones.
-template <class T, std::size_t N>
-class SmallStack {
- public:
-  SmallStack() = default;
-  SmallStack(const SmallStack&) = delete;
-  SmallStack& operator=(const SmallStack&) = delete;
-  bool empty() const { return n_ == 0; }
-  void push(const T& t) {
-    if (__builtin_expect(n_ == cap_, 0)) grow();
-    data_[n_++] = t;
-  }
-  T pop() { return data_[--n_]; }
-
- private:
-  [[gnu::noinline]] void grow() {
-    std::vector<T> bigger(cap_ * 2);
-    std::copy(data_, data_ + n_, bigger.begin());
-    heap_.swap(bigger);
-    data_ = heap_.data();
-    cap_ = heap_.size();
-  }
-  T local_[N];
-  T* data_ = local_;
-  std::size_t n_ = 0;
-  std::size_t cap_ = N;
-  std::vector<T> heap_;
-};
 
 struct NoKey {};
 
@@ -279,12 +250,6 @@ bool leafNearestFirst(const View<S>& tree, const Node& n, const Item<S>& q, cons
   return false;
 }
 
-template <class Key>
-struct Entry {
-  std::uint32_t a, b;
-  Key key;
-};
-
 template <typename S, class Policy>
 bool leafSelf(const View<S>& v, const Node& n, const Policy& p) {
   if constexpr (!Policy::kOrdered) {
@@ -325,48 +290,6 @@ bool leafPair(const View<S>& va, const Node& na, const View<S>& vb, const Node& 
   return false;
 }
 
-// Chooses what the walk does next among the taken entries of `e`: the most promising one (for
-// distance the nearest, for collide the first) goes into `next` and is visited straight away;
-// the others wait on the stack, the next most promising on top. Returns false if none was taken.
-// Going straight on, and choosing with branches on registers rather than by compacting the
-// taken entries through memory (each store and load of which waits on the last), more than
-// doubled the speed of object queries.
-template <class Policy, class Stack, class E, int N>
-bool continueWithBest(Stack& stack, const bool (&take)[N], const E (&e)[N], E& next) {
-  if constexpr (!Policy::kOrdered) {
-    int first = 0;
-    while (first < N && !take[first]) ++first;
-    if (first == N) return false;
-    for (int i = N - 1; i > first; --i)
-      if (take[i]) stack.push(e[i]);
-    next = e[first];
-    return true;
-  } else if constexpr (N == 2) {
-    if (take[0] && take[1]) {
-      const int near = Policy::before(e[1].key, e[0].key) ? 1 : 0;
-      stack.push(e[1 - near]);
-      next = e[near];
-      return true;
-    }
-    if (!take[0] && !take[1]) return false;
-    next = e[take[0] ? 0 : 1];
-    return true;
-  } else {
-    int order[N];
-    int m = 0;
-    for (int i = 0; i < N; ++i)
-      if (take[i]) order[m++] = i;
-    if (m == 0) return false;
-    // Insertion sort, nearest first (stable: equal keys keep their order).
-    for (int i = 1; i < m; ++i)
-      for (int j = i; j > 0 && Policy::before(e[order[j]].key, e[order[j - 1]].key); --j)
-        std::swap(order[j - 1], order[j]);
-    for (int j = m - 1; j > 0; --j) stack.push(e[order[j]]);
-    next = e[order[0]];
-    return true;
-  }
-}
-
 // Starts loading what a visit of cube `n` will read first (its children, or its objects), so
 // that the load overlaps the work on the entries above it on the stack: a descent is otherwise
 // one chain of dependent cache misses.
@@ -378,129 +301,82 @@ inline void prefetchBelow(const View<S>& v, const Node& n) {
     __builtin_prefetch(v.nodes + n.first);
 }
 
-template <class Key>
-struct OneEntry {
-  std::uint32_t node;
-  Key key;
+// One object against a tree (walkTree): the common query, with a lighter stack than a walk of
+// cube pairs. Calls p.leaf(tree object, query object).
+template <typename S, class Policy>
+struct ObjectVisitor {
+  using State = typename Policy::Key;
+  static constexpr bool kOrdered = Policy::kOrdered;
+  const View<S>& tree;
+  const Node& qn;
+  const Item<S>& q;
+  const Policy& p;
+
+  static bool before(State x, State y) { return Policy::before(x, y); }
+  bool keep(State key) const { return p.keep(key); }
+  bool enter(std::uint32_t child, int, State, State& key) const {
+    const Node& n = tree.nodes[child];
+    prefetchBelow(tree, n);
+    return p.enter(n, qn, key);
+  }
+  Step at(std::uint32_t cube, State) const {
+    p.count.visit();
+    const Node& n = tree.nodes[cube];
+    if (!n.isLeaf()) return Step::open;
+    if constexpr (Policy::kOrdered) {
+      if (n.count <= 16) return leafNearestFirst(tree, n, q, p) ? Step::stop : Step::skip;
+    } else {
+      if (n.count <= kMaskLeaf)
+        return collideSmall<false>(tree.items + n.first, n.count, &q, 1, p) ? Step::stop
+                                                                            : Step::skip;
+    }
+    for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
+      if (p.leaf(tree.items[i], q)) return Step::stop;
+    return Step::skip;
+  }
 };
 
-// One object against a tree: the common query, with a lighter stack than the pair descent.
-// Calls p.leaf(tree object, query object).
+// Cube pairs of two views, or of one view with itself (walkPair).
 template <typename S, class Policy>
-bool descendOne(const View<S>& tree, const Node& qn, const Item<S>& q, const Policy& p) {
-  using E = OneEntry<typename Policy::Key>;
-  E start{tree.root, {}};
-  if (!p.enter(tree.nodes[tree.root], qn, start.key)) return false;
-  SmallStack<E, 64> stack;
-  stack.push(start);
-  while (!stack.empty()) {
-    E e = stack.pop();
-    if (!p.keep(e.key)) continue;
-    for (bool more = true; more;) {
-      more = false;
-      p.count.visit();
-      const Node& n = tree.nodes[e.node];
-      if (n.isLeaf()) {
-        if constexpr (Policy::kOrdered) {
-          if (n.count <= 16) {
-            if (leafNearestFirst(tree, n, q, p)) return true;
-            break;
-          }
-        }
-        if constexpr (!Policy::kOrdered) {
-          if (n.count <= kMaskLeaf) {
-            if (collideSmall<false>(tree.items + n.first, n.count, &q, 1, p)) return true;
-            break;
-          }
-        }
-        for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
-          if (p.leaf(tree.items[i], q)) return true;
-        break;
-      }
-      E e2[2] = {{n.first, {}}, {n.first + 1, {}}};
-      bool take[2];
-      for (int i = 0; i < 2; ++i) {
-        take[i] = p.enter(tree.nodes[e2[i].node], qn, e2[i].key);
-        prefetchBelow(tree, tree.nodes[e2[i].node]);
-      }
-      more = continueWithBest<Policy>(stack, take, e2, e);
-    }
-  }
-  return false;
-}
+struct PairVisitor {
+  using State = typename Policy::Key;
+  static constexpr bool kOrdered = Policy::kOrdered;
+  const View<S>& va;
+  const View<S>& vb;
+  const Policy& p;
 
+  static bool before(State x, State y) { return Policy::before(x, y); }
+  bool keep(State key) const { return p.keep(key); }
+  void visit() const { p.count.visit(); }
+  bool enter(std::uint32_t a, std::uint32_t b, State& key) const {
+    return p.enter(va.nodes[a], vb.nodes[b], key);
+  }
+  void prefetch(bool in_a, std::uint32_t cube) const {
+    if (in_a)
+      prefetchBelow(va, va.nodes[cube]);
+    else
+      prefetchBelow(vb, vb.nodes[cube]);
+  }
+  bool leafSelf(std::uint32_t a) const { return detail::leafSelf(va, va.nodes[a], p); }
+  bool leafPair(std::uint32_t a, std::uint32_t b) const {
+    return detail::leafPair(va, va.nodes[a], vb, vb.nodes[b], p);
+  }
+};
+
+// Every query's walk: a single object (one-leaf view) against a tree goes through walkTree,
+// anything else through walkPair.
 template <typename S, class Policy>
 bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
-  using E = Entry<typename Policy::Key>;
   if (va.root == kNone || vb.root == kNone) return false;
   const Node& qb = vb.nodes[vb.root];
-  if (!self && qb.count == 1) return descendOne(va, qb, vb.items[qb.first], p);
-  SmallStack<E, 128> stack;
-  E start{va.root, vb.root, {}};
-  if (!self && !p.enter(va.nodes[va.root], vb.nodes[vb.root], start.key)) return false;
-  stack.push(start);
-  while (!stack.empty()) {
-    E e = stack.pop();
-    if (!p.keep(e.key)) continue;  // the best distance may have dropped since the push
-    for (bool more = true; more;) {
-      more = false;
-      p.count.visit();
-      const Node& na = va.nodes[e.a];
-      const Node& nb = vb.nodes[e.b];
-      if (self && e.a == e.b) {
-        if (na.isLeaf()) {
-          if (leafSelf(va, na, p)) return true;
-          break;
-        }
-        // Within a cube: within each child, then across the two.
-        const std::uint32_t c = na.first;
-        E e3[3] = {{c, c, {}}, {c + 1, c + 1, {}}, {c, c + 1, {}}};
-        bool take[3] = {true, true, false};
-        take[2] = p.enter(va.nodes[c], va.nodes[c + 1], e3[2].key);
-        prefetchBelow(va, va.nodes[c]);
-        prefetchBelow(va, va.nodes[c + 1]);
-        more = continueWithBest<Policy>(stack, take, e3, e);
-        continue;
-      }
-      const bool la = na.isLeaf(), lb = nb.isLeaf();
-      if (la && lb) {
-        if (leafPair(va, na, vb, nb, p)) return true;
-        break;
-      }
-      if (!la && !lb) {
-        // Open both cubes: one visit settles four child pairs.
-        const std::uint32_t ca = na.first, cb = nb.first;
-        E e4[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
-        bool take[4];
-        for (int i = 0; i < 4; ++i)
-          take[i] = p.enter(va.nodes[e4[i].a], vb.nodes[e4[i].b], e4[i].key);
-        for (int i = 0; i < 2; ++i) {
-          prefetchBelow(va, va.nodes[ca + i]);
-          prefetchBelow(vb, vb.nodes[cb + i]);
-        }
-        more = continueWithBest<Policy>(stack, take, e4, e);
-      } else if (lb) {
-        const std::uint32_t c = na.first;
-        E e2[2] = {{c, e.b, {}}, {c + 1, e.b, {}}};
-        bool take[2];
-        for (int i = 0; i < 2; ++i) {
-          take[i] = p.enter(va.nodes[c + i], nb, e2[i].key);
-          prefetchBelow(va, va.nodes[c + i]);
-        }
-        more = continueWithBest<Policy>(stack, take, e2, e);
-      } else {
-        const std::uint32_t c = nb.first;
-        E e2[2] = {{e.a, c, {}}, {e.a, c + 1, {}}};
-        bool take[2];
-        for (int i = 0; i < 2; ++i) {
-          take[i] = p.enter(na, vb.nodes[c + i], e2[i].key);
-          prefetchBelow(vb, vb.nodes[c + i]);
-        }
-        more = continueWithBest<Policy>(stack, take, e2, e);
-      }
-    }
+  typename Policy::Key key{};
+  if (!self && !p.enter(va.nodes[va.root], qb, key)) return false;
+  if (!self && qb.count == 1) {
+    ObjectVisitor<S, Policy> v{va, qb, vb.items[qb.first], p};
+    return walkTree(va.nodes, va.root, key, v);
   }
-  return false;
+  PairVisitor<S, Policy> v{va, vb, p};
+  return walkPair(va.nodes, vb.nodes, va.root, vb.root, key, self, v);
 }
 
 template <typename S, class Sink>
