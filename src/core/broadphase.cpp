@@ -100,44 +100,27 @@ void Broadphase<S>::add(Object* obj, const Box<S>& box) {
 
 template <typename S>
 void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_t n) {
-  // Entries registered already, or earlier in the batch, are skipped.
-  std::vector<std::size_t> fresh;
-  fresh.reserve(n);
-  {
-    std::size_t cap = 16;
-    while (cap < 2 * n) cap *= 2;
-    std::vector<const Object*> seen(cap, nullptr);  // a set of the batch's pointers
-    const std::size_t mask = cap - 1;
-    const bool empty = size() == 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!empty && contains(objs[i])) continue;
-      std::size_t h =
-          (reinterpret_cast<std::uintptr_t>(objs[i]) >> 4) * 0x9E3779B97F4A7C15ull >> 20;
-      h &= mask;
-      while (seen[h] != nullptr && seen[h] != objs[i]) h = (h + 1) & mask;
-      if (seen[h] != nullptr) continue;
-      seen[h] = objs[i];
-      fresh.push_back(i);
-    }
-  }
-  if (fresh.empty()) return;
+  // Entries registered already, or earlier in the batch, are skipped by the table.
+  std::vector<ObjectId> new_ids;
+  const std::size_t added = table_.addBatch(objs, n, new_ids);
+  if (added == 0) return;
   pairs_.invalidate();
-  if (fresh.size() < size()) {
+  if (added < size() - added) {
     // A small batch into a large manager: insertions beat a build.
-    for (std::size_t i : fresh) add(objs[i], boxes[i]);
+    for (std::size_t i = 0; i < n; ++i)
+      if (new_ids[i] != kNone) {
+        place(new_ids[i], objs[i], boxes[i]);
+        maintain();
+      }
     return;
   }
   // One build over everything.
-  std::vector<Object*> batch(fresh.size());
-  for (std::size_t k = 0; k < fresh.size(); ++k) batch[k] = objs[fresh[k]];
-  std::vector<ObjectId> new_ids;
-  table_.addBatch(batch.data(), batch.size(), new_ids);
   std::vector<Item<S>> extra;
-  extra.reserve(fresh.size());
-  for (std::size_t k = 0; k < fresh.size(); ++k) {
-    const Box<S>& box = boxes[fresh[k]];
-    const Item<S> item{box, batch[k], kNone, new_ids[k]};
-    if (classify(box, config_.unbounded_limit) == BoxKind::unbounded) {
+  extra.reserve(added);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (new_ids[i] == kNone) continue;
+    const Item<S> item{boxes[i], objs[i], kNone, new_ids[i]};
+    if (classify(boxes[i], config_.unbounded_limit) == BoxKind::unbounded) {
       table_.setLocation(item.id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
       unbounded_.push_back(item);
     } else {

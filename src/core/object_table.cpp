@@ -43,10 +43,10 @@ void ObjectTable<S>::put(ObjectId id) {
 }
 
 template <typename S>
-void ObjectTable<S>::grow() {
+void ObjectTable<S>::grow(std::size_t objects) {
   // Load factor up to 3/4: linear probing stays short, about 6 bytes per object.
   std::size_t cap = 16;
-  while (cap * 3 < 4 * (live_ + 1)) cap *= 2;
+  while (cap * 3 < 4 * (objects + 1)) cap *= 2;
   if (cap <= index_.size()) return;
   index_.assign(cap, 0);
   for (ObjectId id = 0; id < obj_.size(); ++id)
@@ -92,24 +92,34 @@ ObjectId ObjectTable<S>::add(Object* obj) {
   assert(obj != nullptr && find(obj) == kNone);
   const ObjectId id = take(obj);
   if (live_ * 4 > index_.size() * 3)
-    grow();  // puts every live id, this one included
+    grow(live_);  // puts every live id, this one included
   else
     put(id);
   return id;
 }
 
 template <typename S>
-void ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, std::vector<ObjectId>& ids) {
-  ids.resize(n);
+std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n,
+                                     std::vector<ObjectId>& ids) {
+  ids.assign(n, kNone);
+  std::size_t added = 0;
+  // Sized once for the whole batch; each pointer is then looked up and put with one probe
+  // sequence, which also finds the batch's own repeats.
+  grow(live_ + n);
   const std::size_t fresh = n > free_.size() ? n - free_.size() : 0;
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
-  for (std::size_t i = 0; i < n; ++i) ids[i] = take(objs[i]);
-  const std::size_t before = index_.size();
-  grow();
-  if (index_.size() == before)  // no regrowth: the batch is not in the map yet
-    for (ObjectId id : ids) put(id);
+  const std::size_t mask = index_.size() - 1;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t h = hashPtr(objs[i]) & mask;
+    while (index_[h] != 0 && obj_[index_[h] - 1] != objs[i]) h = (h + 1) & mask;
+    if (index_[h] != 0) continue;  // registered already, or earlier in the batch
+    ids[i] = take(objs[i]);
+    index_[h] = ids[i] + 1;
+    ++added;
+  }
+  return added;
 }
 
 template <typename S>

@@ -25,8 +25,10 @@ class ObjectTable {
   ObjectId find(const Object* obj) const;
   /// Registers `obj` (not registered yet): a fresh or recycled id, the next registration number.
   ObjectId add(Object* obj);
-  /// Registers a batch of objects known to be distinct and unregistered, the map sized once.
-  void addBatch(Object* const* objs, std::size_t n, std::vector<ObjectId>& ids);
+  /// Registers the entries of a batch (not null) that are neither registered nor repeated
+  /// earlier in it, in batch order, the map sized once. ids[i] becomes entry i's new id, or
+  /// kNone if it was skipped. Returns the number registered.
+  std::size_t addBatch(Object* const* objs, std::size_t n, std::vector<ObjectId>& ids);
   /// Forgets a registered id; it will be handed out again.
   void remove(ObjectId id);
   /// Forgets everything (keeps no memory).
@@ -59,7 +61,7 @@ class ObjectTable {
   std::uint32_t nextSeq();
   ObjectId take(Object* obj);  // a fresh or recycled id for obj, not yet in the map
   void put(ObjectId id);
-  void grow();
+  void grow(std::size_t objects);  // sizes the map for `objects` live ids and puts them all
 
   std::vector<Object*> obj_;          // per id; nullptr: free
   std::vector<std::uint32_t> seq_;    // per id: registration number
