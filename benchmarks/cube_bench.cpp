@@ -43,6 +43,7 @@ namespace {
 using S = double;
 using Object = fcl::CollisionObject<S>;
 using Manager = fcl::BroadPhaseCollisionManager<S>;
+using CubeManager = cube::CubeCollisionManager<S>;
 using Pair = std::pair<Object*, Object*>;
 using Clock = std::chrono::steady_clock;
 namespace scenes = cube::scenes;
@@ -97,10 +98,15 @@ Extent extentOf(const std::vector<Object*>& objs, double typical) {
   return e;
 }
 
-std::unique_ptr<Manager> makeManager(Mgr m, const Extent& e) {
+/// A new manager of kind m. For Mgr::cube, `*cube` (if given) is set to the same object with its
+/// own type, for what FCL's interface lacks (QueryStats, bytes()).
+std::unique_ptr<Manager> makeManager(Mgr m, const Extent& e, CubeManager** cube = nullptr) {
   switch (m) {
-    case Mgr::cube:
-      return std::make_unique<cube::CubeCollisionManager<S>>();
+    case Mgr::cube: {
+      auto mgr = std::make_unique<CubeManager>();
+      if (cube != nullptr) *cube = mgr.get();
+      return mgr;
+    }
     case Mgr::dtree:
       return std::make_unique<fcl::DynamicAABBTreeCollisionManager<S>>();
     case Mgr::dtree_array:
@@ -121,8 +127,10 @@ std::unique_ptr<Manager> makeManager(Mgr m, const Extent& e) {
   return nullptr;
 }
 
-std::unique_ptr<Manager> built(Mgr m, const std::vector<Object*>& objs, const Extent& e) {
-  auto mgr = makeManager(m, e);
+/// makeManager() with `objs` registered and setup() called.
+std::unique_ptr<Manager> built(Mgr m, const std::vector<Object*>& objs, const Extent& e,
+                               CubeManager** cube = nullptr) {
+  auto mgr = makeManager(m, e, cube);
   mgr->registerObjects(objs);
   mgr->setup();
   return mgr;
@@ -305,14 +313,20 @@ struct SceneSet {
 
   /// Managers over the main, distance and robot objects, built once per scene and manager and
   /// shared by the cases that do not change them.
-  Manager* mainManager(Mgr m) { return cached(main_managers, m, objs, extent); }
+  Manager* mainManager(Mgr m) { return cached(main_managers, m, objs, extent).mgr.get(); }
   Manager* distManager(Mgr m) {
     derive();
-    return cached(dist_managers, m, dist_objs, dist_extent);
+    return cached(dist_managers, m, dist_objs, dist_extent).mgr.get();
   }
   Manager* robotManager(Mgr m) {
     derive();
-    return cached(robot_managers, m, robot, robot_extent);
+    return cached(robot_managers, m, robot, robot_extent).mgr.get();
+  }
+  /// mainManager(Mgr::cube) and distManager(Mgr::cube) with their own type.
+  const CubeManager* mainCube() { return cached(main_managers, Mgr::cube, objs, extent).cube; }
+  const CubeManager* distCube() {
+    derive();
+    return cached(dist_managers, Mgr::cube, dist_objs, dist_extent).cube;
   }
 
   void restore() {
@@ -323,11 +337,15 @@ struct SceneSet {
   }
 
  private:
-  using Cache = std::map<Mgr, std::unique_ptr<Manager>>;
-  static Manager* cached(Cache& c, Mgr m, const std::vector<Object*>& o, const Extent& e) {
+  struct Entry {
+    std::unique_ptr<Manager> mgr;
+    CubeManager* cube = nullptr;  // mgr's object if it is the cube manager
+  };
+  using Cache = std::map<Mgr, Entry>;
+  static const Entry& cached(Cache& c, Mgr m, const std::vector<Object*>& o, const Extent& e) {
     auto& slot = c[m];
-    if (!slot) slot = built(m, o, e);
-    return slot.get();
+    if (!slot.mgr) slot.mgr = built(m, o, e, &slot.cube);
+    return slot;
   }
   // Declared last so that they go before the objects they point to.
   Cache main_managers, dist_managers, robot_managers;
@@ -600,12 +618,10 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       if (spec.c == Case::build) {
         // Live heap growth over construction + register + setup: the manager's own memory.
         const double before = liveHeapBytes();
-        auto mgr = built(spec.m, s.objs, s.extent);
+        CubeManager* cube_mgr = nullptr;
+        auto mgr = built(spec.m, s.objs, s.extent, &cube_mgr);
         ck.counters["heap_B_per_obj"] = (liveHeapBytes() - before) / n;
-        if (spec.m == Mgr::cube)
-          ck.counters["tree_B_per_obj"] =
-              double(static_cast<const cube::CubeCollisionManager<S>&>(*mgr).bytes()) /
-              n;
+        if (spec.m == Mgr::cube) ck.counters["tree_B_per_obj"] = double(cube_mgr->bytes()) / n;
         const auto got = selfPairs(*mgr);
         compare(got == want, describe(got, want));
       } else {
@@ -616,7 +632,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
         if (spec.m == Mgr::cube) {
           cube::QueryStats st;
           Counter cnt;
-          static_cast<const cube::CubeCollisionManager<S>&>(*mgr).collide(&cnt, &Counter::fn, &st);
+          s.mainCube()->collide(&cnt, &Counter::fn, &st);
           ck.counters["box_tests_per_obj"] = double(st.box_tests) / n;
           ck.counters["cubes_per_obj"] = double(st.cubes_visited) / n;
         }
@@ -659,9 +675,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       if (spec.m == Mgr::cube) {
         cube::QueryStats st;
         Counter cnt;
-        for (Object* q : s.queries)
-          static_cast<const cube::CubeCollisionManager<S>&>(*mgr).collide(q, &cnt, &Counter::fn,
-                                                                          &st);
+        for (Object* q : s.queries) s.mainCube()->collide(q, &cnt, &Counter::fn, &st);
         ck.counters["box_tests_per_query"] = double(st.box_tests) / double(s.queries.size());
       }
       break;
@@ -678,8 +692,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
         auto robot = built(Mgr::cube, s.robot, s.robot_extent);
         cube::QueryStats st;
         Counter cnt;
-        static_cast<const cube::CubeCollisionManager<S>&>(*mgr).collide(robot.get(), &cnt,
-                                                                        &Counter::fn, &st);
+        s.mainCube()->collide(robot.get(), &cnt, &Counter::fn, &st);
         ck.counters["box_tests_per_robot_obj"] = double(st.box_tests) / double(s.robot.size());
       }
       break;
@@ -699,8 +712,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       if (spec.m == Mgr::cube) {
         cube::QueryStats st;
         cube::DistanceData<S> d;
-        static_cast<const cube::CubeCollisionManager<S>&>(*mgr).distance(
-            &d, cube::defaultDistanceCallback<S>, &st);
+        s.distCube()->distance(&d, cube::defaultDistanceCallback<S>, &st);
         ck.counters["box_tests_per_obj"] = double(st.box_tests) / double(s.dist_objs.size());
       }
       break;
@@ -722,8 +734,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
         cube::QueryStats st;
         for (Object* q : s.dist_queries) {
           cube::DistanceData<S> d;
-          static_cast<const cube::CubeCollisionManager<S>&>(*mgr).distance(
-              q, &d, cube::defaultDistanceCallback<S>, &st);
+          s.distCube()->distance(q, &d, cube::defaultDistanceCallback<S>, &st);
         }
         ck.counters["box_tests_per_query"] = double(st.box_tests) / double(s.dist_queries.size());
       }
@@ -830,7 +841,8 @@ void run(benchmark::State& state, const Spec& spec) {
     case Case::update_vector:
     case Case::churn:
     case Case::churn_nosetup: {
-      auto mgr = built(spec.m, s.objs, s.extent);
+      CubeManager* cube_mgr = nullptr;
+      auto mgr = built(spec.m, s.objs, s.extent, &cube_mgr);
       Motion motion(s);
       state.counters["updated_per_step"] = double(motion.perStep());
       for (auto _ : state) {
@@ -857,8 +869,8 @@ void run(benchmark::State& state, const Spec& spec) {
       }
       // What the manager owns after the steps: for cube, the pair list of Config::keep_pairs
       // included.
-      if (const auto* cube = dynamic_cast<const cube::CubeCollisionManager<S>*>(mgr.get()))
-        state.counters["B_per_obj_after"] = double(cube->bytes()) / double(s.objs.size());
+      if (cube_mgr != nullptr)
+        state.counters["B_per_obj_after"] = double(cube_mgr->bytes()) / double(s.objs.size());
       mgr.reset();
       s.restore();
       break;

@@ -70,17 +70,12 @@ std::vector<ReObj<T>*> reObjectsOf(const ReBase<T>& m) {
   return out;
 }
 
-// Brute-force candidates between two sets (a != b), as sorted unordered pairs.
+// Brute-force candidates between two sets (a != b), as sorted unordered pairs: the shared
+// oracle's ordered pairs, made unordered.
 template <typename T>
 std::vector<RePair<T>> reBruteCross(const std::vector<ReObj<T>*>& as,
                                     const std::vector<ReObj<T>*>& bs) {
-  std::vector<RePair<T>> out;
-  for (auto* a : as)
-    for (auto* b : bs)
-      if (a != b && a->getAABB().overlap(b->getAABB()))
-        out.push_back(cube::oracle::unordered(a, b));
-  std::sort(out.begin(), out.end());
-  return out;
+  return cube::oracle::unorderedSorted(cube::oracle::bruteCrossPairs(as, bs));
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -100,16 +100,7 @@ struct DistCalls {
 };
 
 /// Sorted ordered pairs (a, b) of `as` x `bs` with overlapping AABBs and a != b.
-template <typename S>
-std::vector<Pair<S>> bruteCrossPairs(const std::vector<Obj<S>*>& as,
-                                     const std::vector<Obj<S>*>& bs) {
-  std::vector<Pair<S>> out;
-  for (auto* a : as)
-    for (auto* b : bs)
-      if (a != b && a->getAABB().overlap(b->getAABB())) out.emplace_back(a, b);
-  std::sort(out.begin(), out.end());
-  return out;
-}
+using oracle::bruteCrossPairs;
 
 /// Sorted ordered calls (first, second) of a self query.
 template <typename S>

@@ -27,6 +27,15 @@ Pair<S> unordered(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
   return a < b ? Pair<S>(a, b) : Pair<S>(b, a);
 }
 
+/// `pairs` as a sorted list of unordered pairs (duplicates kept).
+template <typename S>
+std::vector<Pair<S>> unorderedSorted(const std::vector<Pair<S>>& pairs) {
+  std::vector<Pair<S>> out;
+  for (const auto& p : pairs) out.push_back(unordered(p.first, p.second));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 /// Every callback of a collide query, in call order, as given (first, second argument).
 template <typename S>
 struct Calls {
@@ -36,12 +45,7 @@ struct Calls {
     return false;
   }
   /// The calls as a sorted multiset of unordered pairs (duplicates kept, so they show).
-  std::vector<Pair<S>> unorderedSorted() const {
-    std::vector<Pair<S>> out;
-    for (const auto& c : calls) out.push_back(unordered(c.first, c.second));
-    std::sort(out.begin(), out.end());
-    return out;
-  }
+  std::vector<Pair<S>> unorderedSorted() const { return oracle::unorderedSorted(calls); }
 };
 
 /// Pairs whose AABBs overlap among `objs` (brute force), as a sorted list of unordered pairs.
@@ -52,6 +56,19 @@ std::vector<Pair<S>> bruteSelfPairs(const std::vector<fcl::CollisionObject<S>*>&
     for (std::size_t j = i + 1; j < objs.size(); ++j)
       if (objs[i] != objs[j] && objs[i]->getAABB().overlap(objs[j]->getAABB()))
         out.push_back(unordered(objs[i], objs[j]));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// Pairs (a, b) of `as` x `bs` whose AABBs overlap, a != b (brute force), sorted; ordered: a from
+/// `as`, b from `bs` (unorderedSorted() of them for unordered pairs).
+template <typename S>
+std::vector<Pair<S>> bruteCrossPairs(const std::vector<fcl::CollisionObject<S>*>& as,
+                                     const std::vector<fcl::CollisionObject<S>*>& bs) {
+  std::vector<Pair<S>> out;
+  for (auto* a : as)
+    for (auto* b : bs)
+      if (a != b && a->getAABB().overlap(b->getAABB())) out.emplace_back(a, b);
   std::sort(out.begin(), out.end());
   return out;
 }
