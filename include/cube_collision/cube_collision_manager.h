@@ -38,7 +38,8 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   CubeCollisionManager(const CubeCollisionManager&) = delete;
   CubeCollisionManager& operator=(const CubeCollisionManager&) = delete;
 
-  /// Registers each entry not yet registered, once. A null or NaN entry throws, registering none.
+  /// Registers each entry not yet registered, once. A null entry, or an unregistered one with a
+  /// NaN AABB, throws and registers none.
   void registerObjects(const std::vector<Object*>& other_objs) override;
   /// Registers obj with its getAABB() of now. Throws if null or NaN; no effect if registered.
   void registerObject(Object* obj) override;
