@@ -3,6 +3,8 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include "cull.h"
+
 namespace cube {
 
 template <typename S>
@@ -10,6 +12,10 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
                               void* data) {
   auto& d = *static_cast<CollisionData<S>*>(data);
   if (d.done) return true;
+  // A pair proved apart adds nothing to the result, so the narrow phase is skipped. Not with
+  // costs: an octree's cost sources come from cells its box does not bound.
+  if (!d.request.enable_cost && detail::surelyApart(*o1, *o2, S(d.request.gjk_tolerance)))
+    return false;
   fcl::collide(o1, o2, d.request, d.result);
   // With costs requested every pair matters, so only a contact budget without costs stops.
   if (!d.request.enable_cost && d.result.isCollision() &&

@@ -60,7 +60,7 @@ struct CollidePolicy {
   static constexpr bool kOrdered = false;
   Sink sink;
   Counter count;
-  const PairKernels<S>* kernels;
+  const PairKernels<S>* kernels;     // null in object queries, which test one box at a time
   const Columns* columns = nullptr;  // null: leaves are tested on the exact boxes only
   bool enter(const Node& a, const Node& b, Key&) const {
     count.test();
@@ -382,16 +382,19 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
 template <typename S, class Sink>
 bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink,
                  QueryStats* stats) {
-  const PairKernels<S>& kernels = pairKernels<S>();
+  // Against a single object (an object query) the walk tests one box at a time and needs no
+  // kernel table: most calls are those, and small.
+  const bool one = !self && b.root != kNone && b.nodes[b.root].count == 1;
+  const PairKernels<S>* kernels = one ? nullptr : &pairKernels<S>();
   std::unique_ptr<ColumnStore> store;
-  if (self && a.slots >= kColumnsMin && kernels.columnHits[1] != nullptr) {
+  if (self && a.slots >= kColumnsMin && kernels->columnHits[1] != nullptr) {
     store = std::make_unique<ColumnStore>(a.slots);
-    kernels.fill(a.items, nullptr, a.slots, store->columns(), 0);
+    kernels->fill(a.items, nullptr, a.slots, store->columns(), 0);
   }
   const Columns* use = store ? &store->columns() : nullptr;
   if (stats)
-    return descend(a, b, self, CollidePolicy<S, Count, Sink>{sink, Count{stats}, &kernels, use});
-  return descend(a, b, self, CollidePolicy<S, NoCount, Sink>{sink, NoCount{}, &kernels, use});
+    return descend(a, b, self, CollidePolicy<S, Count, Sink>{sink, Count{stats}, kernels, use});
+  return descend(a, b, self, CollidePolicy<S, NoCount, Sink>{sink, NoCount{}, kernels, use});
 }
 
 }  // namespace

@@ -84,8 +84,11 @@ bool pairKernelAvailable(PairKernel k) {
 
 template <typename S>
 const PairKernels<S>& pairKernels(PairKernel k) {
-  static const PairKernel best = resolveBest();  // thread-safe, once, read-only afterwards
-  if (k == PairKernel::best) k = best;
+  if (k == PairKernel::best) {
+    // Resolved once (thread-safe static initialisation), read-only afterwards: every query asks.
+    static const PairKernels<S>* const best = &pairKernels<S>(resolveBest());
+    return *best;
+  }
   const PairKernels<S>* table = nullptr;
   switch (k) {
     case PairKernel::best:

@@ -127,9 +127,9 @@ PairKernels<S> makeAvx2() {
 
 template <typename S>
 const PairKernels<S>* avx2Kernels() {
-  if (!__builtin_cpu_supports("avx2")) return nullptr;
   static const PairKernels<S> table = makeAvx2<S>();
-  return &table;
+  static const bool cpu_has_it = __builtin_cpu_supports("avx2");
+  return cpu_has_it ? &table : nullptr;
 }
 
 #else
