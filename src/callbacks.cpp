@@ -28,7 +28,13 @@ template <typename S>
 bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
                              S& dist) {
   auto& d = *static_cast<DistanceData<S>*>(data);
-  if (!d.done) fcl::distance(o1, o2, d.request, d.result);
+  if (!d.done) {
+    // A pair whose tight volumes are farther apart than the best distance so far (by more than
+    // the margin) would get a larger distance from FCL, which leaves the result as it is.
+    const detail::Separation<S> s = detail::separation(*o1, *o2, S(d.request.distance_tolerance));
+    if (!(s.lower_bound - s.margin > d.result.min_distance))
+      fcl::distance(o1, o2, d.request, d.result);
+  }
   dist = d.result.min_distance;
   return d.done || dist <= 0;
 }

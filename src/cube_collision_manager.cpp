@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/broadphase.h"
+#include "cull.h"
 
 namespace cube {
 
@@ -85,6 +86,25 @@ void refuseInsideQuery(const void* core, const char* call) {
                              ": called from inside a callback of a query on this manager; the "
                              "manager is unchanged");
 }
+
+// Config::cull_pairs: the user's callback behind the test of the tight volumes. The margin is
+// sized for FCL's default GJK tolerance, the one the user's fcl::collide most likely runs with.
+template <typename S>
+struct CulledCallback {
+  void* data;
+  fcl::CollisionCallBack<S> fn;
+  static bool call(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* self) {
+    const auto& c = *static_cast<const CulledCallback*>(self);
+    if (detail::surelyApart(*a, *b, S(1e-6))) return false;
+    return c.fn(a, b, c.data);
+  }
+  // Swaps (cdata, callback) for this wrapper when culling is on.
+  void install(bool on, void*& cdata, fcl::CollisionCallBack<S>& callback) {
+    if (!on) return;
+    cdata = this;
+    callback = &CulledCallback::call;
+  }
+};
 
 }  // namespace
 
@@ -242,6 +262,8 @@ void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCa
                                       QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "collide");
   if (callback == nullptr) fail("collide", "null callback");
+  CulledCallback<S> culled{cdata, callback};
+  culled.install(core_->config().cull_pairs, cdata, callback);
   const QueryScope scope(core_.get());
   core_->collide(obj, box, cdata, callback, stats);
 }
@@ -260,6 +282,8 @@ template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
+  CulledCallback<S> culled{cdata, callback};
+  culled.install(core_->config().cull_pairs, cdata, callback);
   const QueryScope scope(core_.get());
   core_->collideSelf(cdata, callback, stats);
 }
@@ -309,6 +333,8 @@ template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
+  CulledCallback<S> culled{cdata, callback};
+  culled.install(core_->config().cull_pairs, cdata, callback);
   againstManager(
       *this, other_manager, "collide", [&] { core_->collideSelf(cdata, callback, stats); },
       [&](const detail::Broadphase<S>& other) { core_->collide(other, cdata, callback, stats); },

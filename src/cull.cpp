@@ -46,7 +46,7 @@ bool tightOf(const fcl::CollisionObject<S>& o, Tight<S>& t) {
          (t.e.array() >= S(0)).all();
 }
 
-// Distance from point p to the box b, minus nothing: 0 inside.
+// Distance from point p to the box b (0 inside).
 template <typename S>
 S pointBoxDistance(const fcl::Vector3<S>& p, const Tight<S>& b) {
   const fcl::Vector3<S> q = b.R.transpose() * (p - b.c);
@@ -54,52 +54,64 @@ S pointBoxDistance(const fcl::Vector3<S>& p, const Tight<S>& b) {
   return out.norm();
 }
 
-// Separating-axis test of two oriented boxes grown by m/2 each: true if one of the 15 axes
-// (three face normals of each, nine edge cross products) separates them. |R| gets a small term
-// so that near-parallel edges, whose cross product is almost zero, cannot fake a separation.
+// A lower bound on the distance between two oriented boxes: the largest gap along the 15 axes
+// of the separating-axis test (three face normals of each, nine edge cross products, each
+// gap divided by its axis' length). |R| gets a small term so that rounding makes gaps smaller,
+// never larger; cross products of near-parallel edges (length below 1e-3) are left out.
 template <typename S>
-bool boxesApart(const Tight<S>& a, const Tight<S>& b, S m) {
-  const S h = m * S(0.5);
-  const fcl::Vector3<S> ea = a.e.array() + h, eb = b.e.array() + h;
+S boxGap(const Tight<S>& a, const Tight<S>& b) {
   const fcl::Matrix3<S> R = a.R.transpose() * b.R;  // b's axes in a's frame
   const fcl::Vector3<S> t = a.R.transpose() * (b.c - a.c);
   const fcl::Matrix3<S> A = R.cwiseAbs().array() + S(16) * std::numeric_limits<S>::epsilon();
-  for (int i = 0; i < 3; ++i)
-    if (std::abs(t[i]) > ea[i] + eb.dot(A.row(i))) return true;
+  S gap = -std::numeric_limits<S>::infinity();
+  for (int i = 0; i < 3; ++i) gap = std::max(gap, std::abs(t[i]) - a.e[i] - b.e.dot(A.row(i)));
   for (int j = 0; j < 3; ++j)
-    if (std::abs(t.dot(R.col(j))) > ea.dot(A.col(j)) + eb[j]) return true;
+    gap = std::max(gap, std::abs(t.dot(R.col(j))) - a.e.dot(A.col(j)) - b.e[j]);
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
+      const S len = std::sqrt(std::max(S(0), S(1) - R(i, j) * R(i, j)));
+      if (len < S(1e-3)) continue;
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
       // Axis: a's axis i cross b's axis j.
       const S dist = std::abs(t[i2] * R(i1, j) - t[i1] * R(i2, j));
-      const S ra = ea[i1] * A(i2, j) + ea[i2] * A(i1, j);
-      const S rb = eb[j1] * A(i, j2) + eb[j2] * A(i, j1);
-      if (dist > ra + rb) return true;
+      const S ra = a.e[i1] * A(i2, j) + a.e[i2] * A(i1, j);
+      const S rb = b.e[j1] * A(i, j2) + b.e[j2] * A(i, j1);
+      gap = std::max(gap, (dist - ra - rb) / len);
     }
   }
-  return false;
+  return gap;
 }
 
 }  // namespace
 
 template <typename S>
-bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance) {
+Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                         S tolerance) {
   Tight<S> ta, tb;
-  if (!tightOf(a, ta) || !tightOf(b, tb)) return false;
+  if (!tightOf(a, ta) || !tightOf(b, tb)) return {-std::numeric_limits<S>::infinity(), S(0)};
   const S floor = sizeof(S) >= 8 ? S(1e-6) : S(1e-4);
   const S scale = std::max({ta.c.cwiseAbs().maxCoeff(), tb.c.cwiseAbs().maxCoeff(), ta.r, tb.r});
-  const S m = std::max(S(2) * tolerance, floor) * (S(1) + scale);
-  // The spheres first: the cheapest test, and exact for spheres.
-  const S gap = (ta.c - tb.c).norm() - ta.r - tb.r;
-  if (gap > m) return true;
-  if (ta.sphere && tb.sphere) return false;
-  if (ta.sphere) return pointBoxDistance(ta.c, tb) > ta.r + m;
-  if (tb.sphere) return pointBoxDistance(tb.c, ta) > tb.r + m;
-  return boxesApart(ta, tb, m);
+  const S margin = std::max(S(2) * tolerance, floor) * (S(1) + scale);
+  // The spheres: the cheapest bound, and exact for spheres.
+  const S spheres = (ta.c - tb.c).norm() - ta.r - tb.r;
+  if (ta.sphere && tb.sphere) return {spheres, margin};
+  if (ta.sphere) return {std::max(spheres, pointBoxDistance(ta.c, tb) - ta.r), margin};
+  if (tb.sphere) return {std::max(spheres, pointBoxDistance(tb.c, ta) - tb.r), margin};
+  if (spheres > margin) return {spheres, margin};  // apart already: spare the box test
+  return {std::max(spheres, boxGap(ta, tb)), margin};
 }
 
+template <typename S>
+bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance) {
+  const Separation<S> s = separation(a, b, tolerance);
+  return s.lower_bound > s.margin;
+}
+
+template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
+                                               const fcl::CollisionObject<double>&, double);
+template Separation<float> separation<float>(const fcl::CollisionObject<float>&,
+                                             const fcl::CollisionObject<float>&, float);
 template bool surelyApart<double>(const fcl::CollisionObject<double>&,
                                   const fcl::CollisionObject<double>&, double);
 template bool surelyApart<float>(const fcl::CollisionObject<float>&,

@@ -11,16 +11,32 @@
 namespace cube {
 namespace detail {
 
+/// What the tight volumes say about two objects: a lower bound on their distance (-infinity when
+/// unknown: a plane, a halfspace, an octree, a non-finite extent or transform), and the margin
+/// by which a bound must beat a narrow-phase answer to decide for it, max(2 tolerance, 1e-6 for
+/// double or 1e-4 for float) x (1 + the largest coordinate or extent involved): FCL may answer
+/// within its tolerance, and this bound's own arithmetic errs by a few ulps of the coordinates.
+/// The bound is the largest of the bounding spheres' gap (exact for spheres), a sphere's gap to
+/// the other's oriented box, and the separating-axis gaps of the two oriented boxes of the
+/// geometries' local AABBs (exact along the axes for boxes).
+template <typename S>
+struct Separation {
+  S lower_bound;
+  S margin;
+};
+template <typename S>
+Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                         S tolerance);
+
 /// True only if objects a and b certainly do not touch, even within the narrow phase's
-/// `tolerance` (fcl::CollisionRequest::gjk_tolerance): their tight volumes are apart by more
-/// than a margin of max(2 tolerance, 1e-6 for double or 1e-4 for float) times (1 + the largest
-/// coordinate or extent involved), which also covers this test's own rounding. The volumes: the
-/// oriented box of the geometry's local AABB (exact for a box; a mesh's or a convex's box
-/// otherwise) and the bounding sphere (exact for a sphere). False whenever the answer is not
-/// certain: a plane, a halfspace, an octree, a non-finite extent or transform.
+/// `tolerance` (fcl::CollisionRequest::gjk_tolerance): separation's bound beats its margin.
 template <typename S>
 bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance);
 
+extern template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
+                                                      const fcl::CollisionObject<double>&, double);
+extern template Separation<float> separation<float>(const fcl::CollisionObject<float>&,
+                                                    const fcl::CollisionObject<float>&, float);
 extern template bool surelyApart<double>(const fcl::CollisionObject<double>&,
                                          const fcl::CollisionObject<double>&, double);
 extern template bool surelyApart<float>(const fcl::CollisionObject<float>&,

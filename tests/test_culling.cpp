@@ -1,8 +1,10 @@
 // The culling in front of the narrow phase (src/cull.h) never drops a colliding pair: every FCL
 // primitive and meshes, random rotations, and pairs pushed to the exact touching position that
-// FCL's own narrow phase finds. And the default callbacks, which cull, give the contacts of
-// fcl::collide on every pair.
+// FCL's own narrow phase finds. Its distance bound never exceeds FCL's distance. And the default
+// callbacks, which cull and bound, give the contacts and distances of FCL's narrow phase on every
+// pair.
 
+#include <fcl/broadphase/broadphase_bruteforce.h>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/geometric_shape_to_BVH_model.h>
 #include <fcl/geometry/shape/box.h>
@@ -16,8 +18,12 @@
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
 #include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <iomanip>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -71,6 +77,12 @@ std::vector<std::pair<std::string, Geometry<S>>> allKinds() {
 bool fclCanCollide(const std::string& a, const std::string& b) {
   const auto flat = [](const std::string& k) { return k == "plane" || k == "halfspace"; };
   return !((a == "convex" && flat(b)) || (b == "convex" && flat(a)));
+}
+
+// FCL 0.7's fcl::distance crashes the same way on any shape against a plane or a halfspace.
+bool fclCanMeasure(const std::string& a, const std::string& b) {
+  const auto flat = [](const std::string& k) { return k == "plane" || k == "halfspace"; };
+  return !flat(a) && !flat(b);
 }
 
 template <typename S>
@@ -205,6 +217,160 @@ TYPED_TEST(Culling, CollideAllEqualsBruteForceNarrowPhase) {
   const fcl::CollisionResult<S> got = cube::collideAll<S>(m, all);
   EXPECT_EQ(got.numContacts(), expected);
   EXPECT_GT(colliding_pairs, 100u);
+}
+
+// The tight volumes' bound, less its margin, never exceeds FCL's own distance: every kind, at
+// random poses from touching to well apart. And it is close enough to matter: for most pairs
+// a few object sizes apart it is at least half the distance.
+TYPED_TEST(Culling, SeparationIsALowerBoundOnFclDistance) {
+  using S = TypeParam;
+  const auto kinds = allKinds<S>();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  std::size_t checked = 0, informative = 0;
+  for (const auto& [na, ga] : kinds)
+    for (const auto& [nb, gb] : kinds) {
+      if (!fclCanMeasure(na, nb)) continue;
+      fcl::CollisionObject<S> a(ga), b(gb);
+      for (int rep = 0; rep < 40; ++rep) {
+        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
+        b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng)));
+        a.computeAABB();
+        b.computeAABB();
+        fcl::DistanceRequest<S> req;
+        fcl::DistanceResult<S> res;
+        const S d = fcl::distance(&a, &b, req, res);
+        if (!(d > 0)) continue;
+        const auto sep = cube::detail::separation(a, b, S(req.distance_tolerance));
+        ASSERT_LE(sep.lower_bound - sep.margin, d) << na << " vs " << nb << " rep " << rep;
+        ++checked;
+        informative += sep.lower_bound >= d / 2;
+      }
+    }
+  EXPECT_GT(checked, 2000u);
+  EXPECT_GT(informative * 2, checked) << informative << " of " << checked;
+}
+
+// The default distance callback skips pairs the bound rules out: minimumDistance on a cube
+// manager, self and against an object, equals the minimum of fcl::distance over every pair.
+TYPED_TEST(Culling, MinimumDistanceEqualsBruteForceNarrowPhase) {
+  using S = TypeParam;
+  auto kinds = allKinds<S>();
+  kinds.erase(
+      std::remove_if(kinds.begin(), kinds.end(),
+                     [](const auto& k) { return k.first == "plane" || k.first == "halfspace"; }),
+      kinds.end());  // see fclCanMeasure
+  std::mt19937 rng(9);
+  int apart_scenes = 0;  // scenes where no two objects touch, so that the search ran its course
+  for (int scene = 0; scene < 6; ++scene) {
+    std::uniform_real_distribution<double> u(-9.0, 9.0);
+    std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
+    for (int i = 0; i < 50; ++i) {
+      objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+          kinds[std::size_t(i + scene) % kinds.size()].second, randomRotation<S>(rng),
+          fcl::Vector3<S>(u(rng), u(rng), u(rng))));
+      objs.back()->computeAABB();
+    }
+    fcl::DistanceRequest<S> req;
+    S self_min = std::numeric_limits<S>::max(), query_min = std::numeric_limits<S>::max();
+    for (std::size_t i = 0; i < objs.size(); ++i)
+      for (std::size_t j = i + 1; j < objs.size(); ++j) {
+        fcl::DistanceResult<S> r;
+        const S d = fcl::distance(objs[i].get(), objs[j].get(), req, r);
+        if (j + 1 == objs.size())
+          query_min = std::min(query_min, d);  // the last object is the query
+        else
+          self_min = std::min(self_min, d);
+      }
+    cube::CubeCollisionManager<S> m;
+    std::vector<fcl::CollisionObject<S>*> ptrs;
+    for (std::size_t i = 0; i + 1 < objs.size(); ++i) ptrs.push_back(objs[i].get());
+    m.registerObjects(ptrs);
+    // FCL's distance for one pair can differ in the last digits with what the result already
+    // holds (a mesh's traversal is pruned by it): equal within FCL's own tolerance.
+    const S tol = S(req.distance_tolerance) * (S(1) + std::abs(self_min));
+    EXPECT_NEAR(cube::minimumDistance<S>(m, req).min_distance, self_min, tol) << "scene " << scene;
+    EXPECT_NEAR(cube::minimumDistance<S>(m, objs.back().get(), req).min_distance, query_min, tol)
+        << "scene " << scene;
+    apart_scenes += self_min > 0;
+  }
+  EXPECT_GE(apart_scenes, 3);
+}
+
+// A user's callback that runs the narrow phase, counting its calls.
+template <typename S>
+struct UserNarrow {
+  fcl::CollisionRequest<S> request;
+  fcl::CollisionResult<S> result;
+  std::size_t calls = 0;
+  UserNarrow() {
+    request.num_max_contacts = 1 << 30;
+    request.enable_contact = true;
+  }
+  static bool fn(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* d) {
+    auto& u = *static_cast<UserNarrow*>(d);
+    ++u.calls;
+    fcl::collide(a, b, u.request, u.result);
+    return false;
+  }
+};
+
+// Config::cull_pairs: self, object and manager-against-manager collides give a user callback
+// that runs fcl::collide the same contacts as without the knob and as fcl::NaiveCollisionManager,
+// in fewer calls; without it the callback sees every pair whose boxes overlap.
+TYPED_TEST(Culling, CullPairsKnobKeepsANarrowPhaseCallbacksContacts) {
+  using S = TypeParam;
+  auto kinds = allKinds<S>();
+  kinds.erase(std::remove_if(kinds.begin(), kinds.end(),
+                             [](const auto& k) {
+                               return k.first == "convex" || k.first == "plane" ||
+                                      k.first == "halfspace";
+                             }),
+              kinds.end());  // never culled, they would only dilute the count
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
+  for (int i = 0; i < 200; ++i) {
+    objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+        kinds[std::size_t(i) % kinds.size()].second, randomRotation<S>(rng),
+        fcl::Vector3<S>(u(rng), u(rng), u(rng))));
+    objs.back()->computeAABB();
+  }
+  std::vector<fcl::CollisionObject<S>*> mine, theirs;
+  for (std::size_t i = 0; i < objs.size(); ++i) (i < 170 ? mine : theirs).push_back(objs[i].get());
+  fcl::CollisionObject<S>* query = theirs.back();
+  theirs.pop_back();
+  cube::Config on;
+  on.cull_pairs = true;
+  cube::CubeCollisionManager<S> off_m, on_m(on), other;
+  fcl::NaiveCollisionManager<S> naive;
+  off_m.registerObjects(mine);
+  on_m.registerObjects(mine);
+  naive.registerObjects(mine);
+  naive.setup();
+  other.registerObjects(theirs);
+
+  UserNarrow<S> a, b, c;
+  off_m.collide(&a, &UserNarrow<S>::fn);
+  on_m.collide(&b, &UserNarrow<S>::fn);
+  naive.collide(&c, &UserNarrow<S>::fn);
+  EXPECT_EQ(b.result.numContacts(), a.result.numContacts());
+  EXPECT_EQ(b.result.numContacts(), c.result.numContacts());
+  EXPECT_EQ(a.calls, cube::overlappingPairs<S>(off_m).size());
+  EXPECT_LT(b.calls * 10, a.calls * 8) << b.calls << " of " << a.calls;  // a fifth or more culled
+  EXPECT_GT(a.result.numContacts(), 50u);
+
+  UserNarrow<S> qa, qb;
+  off_m.collide(query, &qa, &UserNarrow<S>::fn);
+  on_m.collide(query, &qb, &UserNarrow<S>::fn);
+  EXPECT_EQ(qb.result.numContacts(), qa.result.numContacts());
+  EXPECT_LE(qb.calls, qa.calls);
+
+  UserNarrow<S> ma, mb;
+  off_m.collide(&other, &ma, &UserNarrow<S>::fn);
+  on_m.collide(&other, &mb, &UserNarrow<S>::fn);
+  EXPECT_EQ(mb.result.numContacts(), ma.result.numContacts());
+  EXPECT_LT(mb.calls, ma.calls);
 }
 
 }  // namespace

@@ -75,6 +75,20 @@ struct Config {
   /// Upper bound of all_pairs_limit.
   static constexpr std::size_t kMaxAllPairsLimit = 64;
 
+  /// collide() in all three forms leaves out the pairs whose tight bounding volumes (the
+  /// bounding sphere, exact for spheres, and the oriented box of the geometry's local AABB,
+  /// exact for boxes) are apart by more than a margin sized for FCL's default GJK tolerance
+  /// (1e-6): such pairs cannot collide, and the callback never sees them. The default callbacks
+  /// of cube_collision/callbacks.h do this anyway. Turn it on when your callback runs
+  /// fcl::collide with gjk_tolerance <= 1e-6 and keeps only what collides: its results stay the
+  /// same and it runs for fewer pairs. Leave it off if your callback counts or records
+  /// broadphase pairs, grows the AABBs for a contact margin (pairs near but not touching would
+  /// be lost) or asks for costs. Planes, halfspaces and octrees are never left out. Trade-off:
+  /// a few dozen flops per pair whose boxes overlap, against a narrow-phase call of about a
+  /// microsecond or more for each pair proved apart (three in four of the boxes' pairs in the
+  /// benchmark's scenes). Distance queries are not affected.
+  bool cull_pairs = false;
+
   /// Throws std::invalid_argument naming the first knob out of range.
   void check() const;
 };
