@@ -181,6 +181,63 @@ std::size_t narrowCollide(Mgr m, const Manager& mgr) {
   return d.result.numContacts();
 }
 
+// FCL's default distance callback, counting the fcl::distance calls it makes (one per call
+// until the search is done).
+struct CountedFclDistance {
+  fcl::DefaultDistanceData<S> d;
+  std::size_t calls = 0;
+  static bool fn(Object* a, Object* b, void* p, S& dist) {
+    auto& c = *static_cast<CountedFclDistance*>(p);
+    c.calls += !c.d.done;
+    return fcl::DefaultDistanceFunction<S>(a, b, &c.d, dist);
+  }
+};
+
+// Narrow-phase calls of object distance queries (sum over `queries`) and of a self distance.
+std::size_t objectDistanceCalls(Mgr m, const Manager& mgr, const std::vector<Object*>& queries) {
+  std::size_t calls = 0;
+  for (Object* q : queries) {
+    if (m == Mgr::cube) {
+      cube::DistanceData<S> d;
+      mgr.distance(q, &d, cube::defaultDistanceCallback<S>);
+      calls += d.narrow_calls;
+    } else {
+      CountedFclDistance c;
+      mgr.distance(q, &c, &CountedFclDistance::fn);
+      calls += c.calls;
+    }
+  }
+  return calls;
+}
+
+std::size_t selfDistanceCalls(Mgr m, const Manager& mgr) {
+  if (m == Mgr::cube) {
+    cube::DistanceData<S> d;
+    mgr.distance(&d, cube::defaultDistanceCallback<S>);
+    return d.narrow_calls;
+  }
+  CountedFclDistance c;
+  mgr.distance(&c, &CountedFclDistance::fn);
+  return c.calls;
+}
+
+// fcl::collide calls of narrowCollide: the cube callback's count; FCL's default callback calls
+// it for every pair it is given (all contacts are asked for, so it never stops early).
+std::size_t narrowCollideCalls(Mgr m, const Manager& mgr) {
+  if (m == Mgr::cube) {
+    cube::CollisionData<S> d;
+    d.request.num_max_contacts = kAllContacts;
+    mgr.collide(&d, cube::defaultCollisionCallback<S>);
+    return d.narrow_calls;
+  }
+  std::size_t pairs = 0;
+  mgr.collide(&pairs, [](Object*, Object*, void* p) {
+    ++*static_cast<std::size_t*>(p);
+    return false;
+  });
+  return pairs;
+}
+
 S selfDistance(Mgr m, const Manager& mgr) {
   if (m == Mgr::cube) {
     cube::DistanceData<S> d;
@@ -644,6 +701,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       const std::size_t want = ref.counts["narrow"];
       const std::size_t got = narrowCollide(spec.m, *s.mainManager(spec.m));
       ck.counters["contacts"] = double(got);
+      ck.counters["narrow_calls"] = double(narrowCollideCalls(spec.m, *s.mainManager(spec.m)));
       compare(got == want,
               std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
       break;
@@ -709,6 +767,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       os << "distance " << got << " vs " << want << " expected";
       compare(sameDistance(got, want), os.str());
       ck.counters["objects"] = double(s.dist_objs.size());
+      ck.counters["narrow_calls"] = double(selfDistanceCalls(spec.m, *mgr));
       if (spec.m == Mgr::cube) {
         cube::QueryStats st;
         cube::DistanceData<S> d;
@@ -730,6 +789,9 @@ Check runCheck(const Spec& spec, SceneSet& s) {
               std::to_string(bad) + " of " + std::to_string(want.size()) + " distances differ");
       ck.counters["objects"] = double(s.dist_objs.size());
       ck.counters["queries"] = double(s.dist_queries.size());
+      ck.counters["narrow_calls_per_query"] =
+          double(objectDistanceCalls(spec.m, *mgr, s.dist_queries)) /
+          double(s.dist_queries.size());
       if (spec.m == Mgr::cube) {
         cube::QueryStats st;
         for (Object* q : s.dist_queries) {

@@ -16,6 +16,7 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
   // costs: an octree's cost sources come from cells its box does not bound.
   if (!d.request.enable_cost && detail::surelyApart(*o1, *o2, S(d.request.gjk_tolerance)))
     return false;
+  ++d.narrow_calls;
   fcl::collide(o1, o2, d.request, d.result);
   // With costs requested every pair matters, so only a contact budget without costs stops.
   if (!d.request.enable_cost && d.result.isCollision() &&
@@ -32,8 +33,10 @@ bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S
     // A pair whose tight volumes are farther apart than the best distance so far (by more than
     // the margin) would get a larger distance from FCL, which leaves the result as it is.
     const detail::Separation<S> s = detail::separation(*o1, *o2, S(d.request.distance_tolerance));
-    if (!(s.lower_bound - s.margin > d.result.min_distance))
+    if (!(s.lower_bound - s.margin > d.result.min_distance)) {
+      ++d.narrow_calls;
       fcl::distance(o1, o2, d.request, d.result);
+    }
   }
   dist = d.result.min_distance;
   return d.done || dist <= 0;

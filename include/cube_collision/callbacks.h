@@ -1,13 +1,16 @@
 #pragma once
 
-// Default callbacks: FCL's narrow phase (libccd GJK) on every candidate pair, stopping as FCL's
-// own DefaultCollisionFunction / DefaultDistanceFunction do.
+// Default callbacks: FCL's narrow phase (libccd GJK) on every candidate pair that tighter
+// volumes than the boxes cannot settle, stopping as FCL's own DefaultCollisionFunction /
+// DefaultDistanceFunction do, with the same results (README, "One-call queries").
 
 #include <fcl/narrowphase/collision_object.h>
 #include <fcl/narrowphase/collision_request.h>
 #include <fcl/narrowphase/collision_result.h>
 #include <fcl/narrowphase/distance_request.h>
 #include <fcl/narrowphase/distance_result.h>
+
+#include <cstddef>
 
 namespace cube {
 
@@ -18,6 +21,8 @@ struct CollisionData {
   fcl::CollisionRequest<S> request;
   fcl::CollisionResult<S> result;
   bool done = false;
+  /// fcl::collide calls made so far; pairs proved apart without it are not counted.
+  std::size_t narrow_calls = 0;
 };
 
 /// Runs fcl::collide on the pair and accumulates into CollisionData::result. Returns true (stop)
@@ -31,6 +36,8 @@ struct DistanceData {
   fcl::DistanceRequest<S> request;
   fcl::DistanceResult<S> result;
   bool done = false;
+  /// fcl::distance calls made so far; pairs whose lower bound ruled them out are not counted.
+  std::size_t narrow_calls = 0;
 };
 
 /// Runs fcl::distance on the pair, accumulates the minimum into DistanceData::result and writes
