@@ -262,6 +262,7 @@ void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCa
                                       QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "collide");
   if (callback == nullptr) fail("collide", "null callback");
+  if (core_->size() == 0) return;  // checked, nothing to meet: skip the set-up of a walk
   CulledCallback<S> culled{cdata, callback};
   culled.install(core_->config().cull_pairs, cdata, callback);
   const QueryScope scope(core_.get());
@@ -273,6 +274,7 @@ void CubeCollisionManager<S>::distance(Object* obj, void* cdata, fcl::DistanceCa
                                        QueryStats* stats) const {
   const Box<S> box = checkedQueryBox(obj, "distance");
   if (callback == nullptr) fail("distance", "null callback");
+  if (core_->size() == 0) return;
   const QueryScope scope(core_.get());
   S best = std::numeric_limits<S>::max();
   core_->distance(obj, box, cdata, callback, best, stats);
@@ -282,6 +284,7 @@ template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   if (callback == nullptr) fail("collide", "null callback");
+  if (core_->size() < 2) return;  // no pair
   CulledCallback<S> culled{cdata, callback};
   culled.install(core_->config().cull_pairs, cdata, callback);
   const QueryScope scope(core_.get());
@@ -292,6 +295,7 @@ template <typename S>
 void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback,
                                        QueryStats* stats) const {
   if (callback == nullptr) fail("distance", "null callback");
+  if (core_->size() < 2) return;  // no pair
   const QueryScope scope(core_.get());
   S best = std::numeric_limits<S>::max();
   core_->distanceSelf(cdata, callback, best, stats);
