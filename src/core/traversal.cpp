@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -386,9 +386,9 @@ bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink
   // kernel table: most calls are those, and small.
   const bool one = !self && b.root != kNone && b.nodes[b.root].count == 1;
   const PairKernels<S>* kernels = one ? nullptr : &pairKernels<S>();
-  std::unique_ptr<ColumnStore> store;
+  std::optional<ColumnStore> store;  // in the frame: one heap block, the columns' own
   if (self && a.slots >= kColumnsMin && kernels->columnHits[1] != nullptr) {
-    store = std::make_unique<ColumnStore>(a.slots);
+    store.emplace(a.slots);
     kernels->fill(a.items, nullptr, a.slots, store->columns(), 0);
   }
   const Columns* use = store ? &store->columns() : nullptr;
