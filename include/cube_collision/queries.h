@@ -3,7 +3,8 @@
 // One-call helpers for the common queries. They work with any fcl::BroadPhaseCollisionManager
 // (cube, FCL's own, or yours): they only call its public collide/distance with a callback. FCL's
 // own managers need setup() after registration before these are called; ours does not.
-// Compiled into the library for S = double and S = float.
+// Compiled into the library for S = double and S = float. The narrow-phase helpers run FCL's
+// narrow phase through the pipeline of narrow_phase.h: culled, cached if asked, on threads.
 
 #include <fcl/broadphase/broadphase_collision_manager.h>
 #include <fcl/narrowphase/collision_object.h>
@@ -15,11 +16,9 @@
 #include <utility>
 #include <vector>
 
-namespace cube {
+#include "cube_collision/narrow_phase.h"
 
-/// A pair of objects in the order the manager's callback received them.
-template <typename S>
-using ObjectPair = std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>;
+namespace cube {
 
 /// Every candidate pair of a self-collide of `manager` (pairs whose AABBs overlap, as the manager
 /// decides), in the order the manager reported them. No narrow phase is run.
@@ -39,45 +38,66 @@ std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManage
                                             fcl::BroadPhaseCollisionManager<S>& other);
 
 /// Runs fcl::collide (with `request`) on the candidate pairs of a self-collide and returns all
-/// their contacts merged into one result. Stops, as FCL's default callback does, once the result
-/// holds request.num_max_contacts contacts (unless request.enable_cost): the default request
-/// answers "does anything collide?"; raise num_max_contacts to collect every contact.
+/// their contacts merged into one result: the contacts, in the order, that fcl::collide called
+/// on each pair in the manager's order with one accumulating result gives (FCL's default
+/// callback), whatever options.threads is. Stops once the result holds
+/// request.num_max_contacts contacts (unless request.enable_cost): the default request answers
+/// "does anything collide?"; raise num_max_contacts to collect every contact. Requests with
+/// costs or a cached GJK guess run on this thread, without culling or cache.
 template <typename S>
 fcl::CollisionResult<S> collideAll(
     const fcl::BroadPhaseCollisionManager<S>& manager,
-    const fcl::CollisionRequest<S>& request = fcl::CollisionRequest<S>());
+    const fcl::CollisionRequest<S>& request = fcl::CollisionRequest<S>(),
+    const NarrowPhaseOptions<S>& options = {});
 
 /// collideAll for manager.collide(obj): the contacts of obj with the managed objects.
 template <typename S>
 fcl::CollisionResult<S> collideAll(
     const fcl::BroadPhaseCollisionManager<S>& manager, fcl::CollisionObject<S>* obj,
-    const fcl::CollisionRequest<S>& request = fcl::CollisionRequest<S>());
+    const fcl::CollisionRequest<S>& request = fcl::CollisionRequest<S>(),
+    const NarrowPhaseOptions<S>& options = {});
 
 /// collideAll for manager.collide(&other): the contacts between the two managers' objects.
 template <typename S>
 fcl::CollisionResult<S> collideAll(
     const fcl::BroadPhaseCollisionManager<S>& manager, fcl::BroadPhaseCollisionManager<S>& other,
-    const fcl::CollisionRequest<S>& request = fcl::CollisionRequest<S>());
+    const fcl::CollisionRequest<S>& request = fcl::CollisionRequest<S>(),
+    const NarrowPhaseOptions<S>& options = {});
+
+/// manager.collide(cdata, callback) with the callback called on options.threads threads, for a
+/// callback that is safe to call concurrently (on cdata too). Pairs are gathered in chunks from
+/// the walk; once a call returns true no new call starts and the walk stops, but calls of the
+/// same chunk already running finish. The order of the calls is not specified. options.cache
+/// and options.stats are not used. An exception from the callback is rethrown here.
+template <typename S>
+void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
+                         fcl::CollisionCallBack<S> callback, int threads = 0);
 
 /// The smallest distance between two managed objects, with the nearest points if `request` asks
 /// for them (fcl::distance on the pairs the branch and bound visits). min_distance is the largest
 /// value of S when the manager holds fewer than two objects; it is <= 0 for touching objects
-/// (the search stops at the first such pair).
+/// (the search stops at the first such pair). With options.threads > 1, or a cache, each pair
+/// gets a fresh fcl::distance, options.threads pairs at a time: the minimum is the same for every
+/// thread count, and its nearest points are those of the first pair in walk order that reaches
+/// it.
 template <typename S>
 fcl::DistanceResult<S> minimumDistance(
     const fcl::BroadPhaseCollisionManager<S>& manager,
-    const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>());
+    const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>(),
+    const NarrowPhaseOptions<S>& options = {});
 
 /// minimumDistance between obj and the managed objects.
 template <typename S>
 fcl::DistanceResult<S> minimumDistance(
     const fcl::BroadPhaseCollisionManager<S>& manager, fcl::CollisionObject<S>* obj,
-    const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>());
+    const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>(),
+    const NarrowPhaseOptions<S>& options = {});
 
 /// minimumDistance between the objects of manager and those of other.
 template <typename S>
 fcl::DistanceResult<S> minimumDistance(
     const fcl::BroadPhaseCollisionManager<S>& manager, fcl::BroadPhaseCollisionManager<S>& other,
-    const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>());
+    const fcl::DistanceRequest<S>& request = fcl::DistanceRequest<S>(),
+    const NarrowPhaseOptions<S>& options = {});
 
 }  // namespace cube

@@ -1,0 +1,110 @@
+#pragma once
+
+// FCL's narrow phase over a list of candidate pairs: culled by tight volumes, answered from a
+// cache for pairs that did not move, and run on several threads (OpenMP). Results do not depend
+// on the thread count: per-pair answers are merged in the order of the pairs. The one-call
+// helpers of queries.h are built on this; README, "The narrow-phase pipeline".
+
+#include <fcl/narrowphase/collision_object.h>
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/collision_result.h>
+#include <fcl/narrowphase/distance_request.h>
+#include <fcl/narrowphase/distance_result.h>
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <utility>
+#include <vector>
+
+namespace cube {
+
+/// A pair of objects in the order the manager's callback received them.
+template <typename S>
+using ObjectPair = std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>;
+
+/// The threads the narrow phase uses when asked for 0 (OpenMP's default: the hardware's
+/// threads, or OMP_NUM_THREADS). At least 1.
+int hardwareThreads();
+
+/// What one call of the pipeline did, for benchmarks and tuning. Counts add up over calls.
+struct NarrowPhaseStats {
+  std::size_t candidate_pairs = 0;  ///< pairs the broadphase handed over
+  std::size_t culled = 0;           ///< proved apart by the tight volumes, no narrow phase
+  std::size_t cached = 0;           ///< answered from a NarrowPhaseCache
+  std::size_t narrow_calls = 0;     ///< fcl::collide / fcl::distance calls made
+};
+
+/// Last narrow-phase answers per ordered pair (a, b): the contacts for a collision request, the
+/// distance and nearest points for a distance request. A pair is answered from it while both of
+/// its objects keep the same transform (bit for bit), the same geometry object and the same local
+/// AABB, and the request is the same; a query drops the entries it did not use, so the cache
+/// holds at most one query's pairs. Changing a geometry in place without changing its local AABB
+/// (e.g. a mesh's vertices after computeLocalAABB() gave the same box) is not seen: call clear().
+/// Owned by the caller and passed to the queries; not shared between concurrent queries.
+template <typename S>
+class NarrowPhaseCache {
+ public:
+  NarrowPhaseCache();
+  ~NarrowPhaseCache();
+  NarrowPhaseCache(NarrowPhaseCache&&) noexcept;
+  NarrowPhaseCache& operator=(NarrowPhaseCache&&) noexcept;
+  NarrowPhaseCache(const NarrowPhaseCache&) = delete;
+  NarrowPhaseCache& operator=(const NarrowPhaseCache&) = delete;
+
+  /// Forgets every answer.
+  void clear();
+  /// Forgets the answers of every pair that involves `obj` (e.g. before deleting it, or after
+  /// changing its geometry in place).
+  void forget(const fcl::CollisionObject<S>* obj);
+  /// Pairs held (collision and distance answers together).
+  std::size_t size() const;
+
+  struct Impl;
+  /// The library's access to the entries; not for users.
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// How the helpers run the narrow phase.
+template <typename S>
+struct NarrowPhaseOptions {
+  /// Threads for the narrow phase: 0 = hardwareThreads(), 1 = this thread only. Results are the
+  /// same for every count. Small pair lists run on this thread whatever the count.
+  int threads = 0;
+  /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
+  NarrowPhaseCache<S>* cache = nullptr;
+  /// If set, the query's counts are added to it.
+  NarrowPhaseStats* stats = nullptr;
+};
+
+/// fcl::collide on each pair (a fresh result per pair), culled and cached as the options say, on
+/// options.threads threads. result[i] belongs to pairs[i]; a culled pair gets an empty result.
+/// With request.enable_cost or enable_cached_gjk_guess nothing is culled or cached.
+template <typename S>
+std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S>>& pairs,
+                                                  const fcl::CollisionRequest<S>& request,
+                                                  const NarrowPhaseOptions<S>& options = {});
+
+/// The contacts of the pairs, merged in pair order into one result exactly as fcl::collide
+/// called on each pair in turn with one accumulating result would give them (stopping once it
+/// holds request.num_max_contacts contacts, costs aside). What collideAll runs.
+template <typename S>
+fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
+                                      const fcl::CollisionRequest<S>& request,
+                                      const NarrowPhaseOptions<S>& options = {});
+
+/// Calls fn(i, pairs[i].first, pairs[i].second) for every i on options.threads threads (the
+/// cache and stats options are not used): for callers who run their own narrow phase. fn must be
+/// safe to call concurrently; write results by index to keep them independent of the threads.
+/// An exception thrown by fn is rethrown here after the other calls finished (the first one, in
+/// pair order, if several threw).
+template <typename S>
+void forEachPair(
+    const std::vector<ObjectPair<S>>& pairs,
+    const std::function<void(std::size_t, fcl::CollisionObject<S>*, fcl::CollisionObject<S>*)>& fn,
+    int threads = 0);
+
+}  // namespace cube

@@ -1,0 +1,93 @@
+#pragma once
+
+// The narrow-phase pipeline as streams fed by a manager's walk, one pair per callback: pairs are
+// gathered in chunks, each chunk runs on the threads, and the answers merge in pair order. A
+// stream tells the walk to stop as soon as the merged answer is complete, so a request for one
+// contact still stops near the first colliding pair.
+
+#include <cstdint>
+#include <exception>
+#include <vector>
+
+#include "cube_collision/narrow_phase.h"
+
+namespace cube {
+namespace detail {
+
+/// Accumulates fcl::collide answers exactly as one result passed to fcl::collide for each pair
+/// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial).
+template <typename S>
+class CollideStream {
+ public:
+  CollideStream(const fcl::CollisionRequest<S>& request, const NarrowPhaseOptions<S>& options);
+  ~CollideStream();
+  CollideStream(const CollideStream&) = delete;
+  CollideStream& operator=(const CollideStream&) = delete;
+
+  /// Adds one candidate pair. True once the result is complete: the walk may stop.
+  bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
+  /// Runs what is pending and returns the merged result. Call once, at the end.
+  fcl::CollisionResult<S> finish();
+
+  /// An fcl::CollisionCallBack feeding the CollideStream passed as cdata.
+  static bool callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* stream);
+
+ private:
+  struct Slot;
+  void flush();
+
+  const fcl::CollisionRequest<S>& request_;
+  NarrowPhaseStats stats_;
+  NarrowPhaseStats* stats_out_;
+  typename NarrowPhaseCache<S>::Impl* cache_;
+  int threads_;
+  bool done_ = false;
+  std::size_t chunk_limit_;
+  std::vector<ObjectPair<S>> chunk_;
+  std::vector<Slot> slots_;
+  fcl::CollisionResult<S> result_;
+};
+
+/// The smallest fcl::distance over the pairs pushed, culled by tight-volume bounds, answered
+/// from the cache when it can, and computed `threads` pairs at a time: a pair is held back until
+/// a batch of that many is complete (or finish()), and the bound returned to the walk is the one
+/// before the batch. The minimum is the same for every thread count; its nearest points are
+/// those of the first pair, in walk order, that reached it.
+template <typename S>
+class DistanceSearch {
+ public:
+  DistanceSearch(const fcl::DistanceRequest<S>& request, const NarrowPhaseOptions<S>& options);
+  ~DistanceSearch();
+  DistanceSearch(const DistanceSearch&) = delete;
+  DistanceSearch& operator=(const DistanceSearch&) = delete;
+
+  /// Adds one candidate pair; `dist` gets the best distance so far. True once objects touch.
+  bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist);
+  /// Runs what is pending and returns the result. Call once, at the end.
+  fcl::DistanceResult<S> finish();
+
+  /// An fcl::DistanceCallBack feeding the DistanceSearch passed as cdata.
+  static bool callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* search,
+                       S& dist);
+
+ private:
+  struct Slot;
+  void flush();
+
+  const fcl::DistanceRequest<S>& request_;
+  NarrowPhaseStats stats_;
+  NarrowPhaseStats* stats_out_;
+  typename NarrowPhaseCache<S>::Impl* cache_;
+  int threads_;
+  std::vector<ObjectPair<S>> batch_;
+  std::vector<Slot> slots_;
+  fcl::DistanceResult<S> result_;
+};
+
+extern template class CollideStream<double>;
+extern template class CollideStream<float>;
+extern template class DistanceSearch<double>;
+extern template class DistanceSearch<float>;
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,433 @@
+// The narrow-phase pipeline (narrow_phase.h, queries.h): on every thread count it gives the
+// contacts, in the order, that FCL's own accumulation gives (fcl::collide on each pair of the
+// manager's walk with one result); the cache answers only pairs whose objects did not move, and
+// every kind of change sends a pair back to FCL; distances equal the brute-force minimum.
+
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
+#include "scenes.h"
+
+namespace {
+
+template <typename S>
+class NarrowPhase : public ::testing::Test {};
+using Scalars = ::testing::Types<double, float>;
+TYPED_TEST_SUITE(NarrowPhase, Scalars);
+
+using cube::scenes::Layout;
+
+template <typename S>
+cube::scenes::Scene<S> scene(Layout layout, bool meshes, std::size_t n, std::uint32_t seed) {
+  cube::scenes::SceneOptions o;
+  o.n = n;
+  o.layout = layout;
+  o.meshes = meshes;
+  o.seed = seed;
+  o.overlaps_per_object = 3.0;  // many touching pairs: contacts to merge
+  return cube::scenes::makeScene<S>(o);
+}
+
+// FCL's own way, the reference: fcl::collide on every pair the manager hands over, in its
+// order, into one result, stopping once the result is full (FCL's DefaultCollisionFunction).
+template <typename S>
+struct Accumulate {
+  fcl::CollisionRequest<S> request;
+  fcl::CollisionResult<S> result;
+  static bool fn(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* d) {
+    auto& x = *static_cast<Accumulate*>(d);
+    fcl::collide(a, b, x.request, x.result);
+    return x.result.isCollision() && x.result.numContacts() >= x.request.num_max_contacts;
+  }
+};
+
+template <typename S>
+bool sameBits(const fcl::Vector3<S>& a, const fcl::Vector3<S>& b) {
+  return std::memcmp(a.data(), b.data(), sizeof(S) * 3) == 0;
+}
+
+// Equal contact lists, order and every bit included. Without enable_contact FCL leaves a
+// contact's position, normal and depth uninitialised: only the objects and primitives count.
+template <typename S>
+::testing::AssertionResult sameContacts(const fcl::CollisionResult<S>& a,
+                                        const fcl::CollisionResult<S>& b,
+                                        bool with_geometry = true) {
+  if (a.numContacts() != b.numContacts())
+    return ::testing::AssertionFailure()
+           << a.numContacts() << " contacts against " << b.numContacts();
+  for (std::size_t k = 0; k < a.numContacts(); ++k) {
+    const fcl::Contact<S>&x = a.getContact(k), &y = b.getContact(k);
+    if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2)
+      return ::testing::AssertionFailure() << "contact " << k << ": other objects";
+    if (with_geometry &&
+        (!sameBits(x.pos, y.pos) || !sameBits(x.normal, y.normal) ||
+         std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0))
+      return ::testing::AssertionFailure() << "contact " << k << " differs";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+template <typename S>
+std::vector<fcl::CollisionRequest<S>> requests() {
+  std::vector<fcl::CollisionRequest<S>> out;
+  for (std::size_t max : {std::size_t(1), std::size_t(7), std::size_t(1) << 30})
+    for (bool contact : {false, true}) {
+      fcl::CollisionRequest<S> r;
+      r.num_max_contacts = max;
+      r.enable_contact = contact;
+      out.push_back(r);
+    }
+  return out;
+}
+
+// collideAll on 1, 2 and 3 threads (3 > the cores: oversubscribed), with and without a cache,
+// equals FCL's accumulation bit for bit, for self, object and manager-against-manager queries,
+// on primitives and meshes, for budgets that stop early and budgets that take everything.
+TYPED_TEST(NarrowPhase, CollideAllEqualsFclOnEveryThreadCount) {
+  using S = TypeParam;
+  for (bool meshes : {false, true}) {
+    auto world = scene<S>(Layout::clustered, meshes, meshes ? 150 : 400, 7);
+    auto robot = scene<S>(Layout::clustered, meshes, 40, 8);
+    cube::CubeCollisionManager<S> m, r;
+    m.registerObjects(world.pointers());
+    r.registerObjects(robot.pointers());
+    for (const auto& request : requests<S>()) {
+      Accumulate<S> self, one, two;
+      self.request = one.request = two.request = request;
+      m.collide(&self, &Accumulate<S>::fn);
+      m.collide(robot.objects[0].get(), &one, &Accumulate<S>::fn);
+      m.collide(&r, &two, &Accumulate<S>::fn);
+      if (request.num_max_contacts > 100) {
+        ASSERT_GT(self.result.numContacts(), 50u) << "the scene must collide a lot";
+        ASSERT_GT(two.result.numContacts(), 5u);
+      }
+      for (int threads : {1, 2, 3}) {
+        cube::NarrowPhaseCache<S> cache;
+        for (int round = 0; round < 2; ++round) {  // round 1: answered from the cache
+          cube::NarrowPhaseOptions<S> o;
+          o.threads = threads;
+          o.cache = round == 0 && threads == 2 ? nullptr : &cache;
+          const auto what = ::testing::Message()
+                            << "meshes " << meshes << " max " << request.num_max_contacts
+                            << " contact " << request.enable_contact << " threads " << threads
+                            << " round " << round;
+          const bool geometry = request.enable_contact;
+          EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, request, o), self.result, geometry))
+              << what;
+          EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, robot.objects[0].get(), request, o),
+                                   one.result, geometry))
+              << what;
+          EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, r, request, o), two.result, geometry))
+              << what;
+        }
+      }
+    }
+  }
+}
+
+// What the pipeline does per pair: culled pairs skip FCL, a second query on an unchanged world
+// calls FCL for no pair, and the counts add up.
+TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
+  using S = TypeParam;
+  auto world = scene<S>(Layout::uniform, false, 500, 3);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(world.pointers());
+  fcl::CollisionRequest<S> all;
+  all.num_max_contacts = 1 << 30;
+  cube::NarrowPhaseCache<S> cache;
+  cube::NarrowPhaseStats first, second;
+  cube::NarrowPhaseOptions<S> o;
+  o.cache = &cache;
+  o.stats = &first;
+  const auto a = cube::collideAll<S>(m, all, o);
+  o.stats = &second;
+  const auto b = cube::collideAll<S>(m, all, o);
+  EXPECT_TRUE(sameContacts(a, b, false));
+  const std::size_t candidates = cube::overlappingPairs<S>(m).size();
+  EXPECT_EQ(first.candidate_pairs, candidates);
+  EXPECT_EQ(first.culled + first.narrow_calls, candidates);
+  EXPECT_EQ(first.cached, 0u);
+  EXPECT_GT(first.culled, 0u);
+  EXPECT_GT(first.narrow_calls, 0u);
+  EXPECT_EQ(second.narrow_calls, 0u);
+  EXPECT_EQ(second.cached, first.narrow_calls);
+  EXPECT_EQ(cache.size(), first.narrow_calls);
+}
+
+// Every kind of change sends the pairs of the changed object back to FCL: a translation by one
+// ulp, a rotation, a geometry resized in place (new local AABB), another request. Setting the same transform again changes nothing. forget() and
+// clear() drop answers. After each change the result equals an uncached query.
+TYPED_TEST(NarrowPhase, EveryKindOfMotionInvalidatesTheCache) {
+  using S = TypeParam;
+  auto world = scene<S>(Layout::uniform, false, 300, 11);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(world.pointers());
+  fcl::CollisionRequest<S> all;
+  all.num_max_contacts = 1 << 30;
+  all.enable_contact = true;
+  cube::NarrowPhaseCache<S> cache;
+  // An object of a colliding pair: its pairs are never culled, so its changes show.
+  fcl::CollisionObject<S>* moved = nullptr;
+  for (const auto& [a, b] : cube::overlappingPairs<S>(m)) {
+    fcl::CollisionResult<S> r;
+    if (fcl::collide(a, b, all, r) > 0) {
+      moved = a;
+      break;
+    }
+  }
+  ASSERT_NE(moved, nullptr);
+
+  const auto query = [&](cube::NarrowPhaseStats& st, const fcl::CollisionRequest<S>& req) {
+    cube::NarrowPhaseOptions<S> o;
+    o.cache = &cache;
+    o.stats = &st;
+    const auto got = cube::collideAll<S>(m, req, o);
+    EXPECT_TRUE(sameContacts(got, cube::collideAll<S>(m, req, cube::NarrowPhaseOptions<S>{1}),
+                             req.enable_contact));
+    return got;
+  };
+  cube::NarrowPhaseStats warm;
+  query(warm, all);
+  const auto expectRecomputed = [&](const char* what, bool recomputed) {
+    cube::NarrowPhaseStats st;
+    query(st, all);
+    if (recomputed)
+      EXPECT_GT(st.narrow_calls, 0u) << what;
+    else
+      EXPECT_EQ(st.narrow_calls, 0u) << what;
+    EXPECT_EQ(st.culled + st.cached + st.narrow_calls, st.candidate_pairs) << what;
+  };
+  expectRecomputed("nothing moved", false);
+
+  moved->setTransform(moved->getTransform());
+  expectRecomputed("the same transform again", false);
+
+  fcl::Vector3<S> t = moved->getTranslation();
+  t[0] = std::nextafter(t[0], std::numeric_limits<S>::max());
+  moved->setTranslation(t);
+  moved->computeAABB();
+  m.update(moved);
+  expectRecomputed("one ulp along x", true);
+
+  moved->setRotation(moved->getRotation() *
+                     fcl::AngleAxis<S>(S(1e-3), fcl::Vector3<S>::UnitZ()).toRotationMatrix());
+  moved->computeAABB();
+  m.update(moved);
+  expectRecomputed("a small rotation", true);
+
+  // FCL 0.7 has no way to give an object another geometry; a geometry can change in place.
+  auto* g = const_cast<fcl::CollisionGeometry<S>*>(moved->collisionGeometry().get());
+  switch (g->getNodeType()) {
+    case fcl::GEOM_BOX:
+      static_cast<fcl::Box<S>*>(g)->side *= S(1.5);
+      break;
+    case fcl::GEOM_SPHERE:
+      static_cast<fcl::Sphere<S>*>(g)->radius *= S(1.5);
+      break;
+    case fcl::GEOM_CYLINDER:
+      static_cast<fcl::Cylinder<S>*>(g)->radius *= S(1.5);
+      static_cast<fcl::Cylinder<S>*>(g)->lz *= S(1.5);
+      break;
+    default:
+      FAIL() << "the scene has boxes, spheres and cylinders only";
+  }
+  g->computeLocalAABB();
+  moved->computeAABB();
+  m.update(moved);
+  expectRecomputed("the geometry resized in place", true);
+
+  fcl::CollisionRequest<S> other = all;
+  other.enable_contact = false;
+  cube::NarrowPhaseStats st;
+  query(st, other);
+  EXPECT_EQ(st.cached, 0u) << "another request";
+  EXPECT_GT(st.narrow_calls, 0u);
+
+  const std::size_t before = cache.size();
+  cache.forget(moved);
+  EXPECT_LT(cache.size(), before);
+  cache.clear();
+  EXPECT_EQ(cache.size(), 0u);
+}
+
+// minimumDistance on 1, 2 and 3 threads, with and without a cache, equals the brute-force
+// minimum of fcl::distance, self and for an object; 2 and 3 threads (fresh results per pair)
+// give the same bits, and their nearest points belong to a pair at that distance.
+TYPED_TEST(NarrowPhase, MinimumDistanceEqualsBruteForceOnEveryThreadCount) {
+  using S = TypeParam;
+  for (bool meshes : {false, true}) {
+    cube::scenes::SceneOptions so;
+    so.n = meshes ? 60 : 200;
+    so.meshes = meshes;
+    so.seed = 5;
+    so.size_scale = 0.02;  // nothing touches: the search runs its course
+    auto world = cube::scenes::makeScene<S>(so);
+    auto objs = world.pointers();
+    fcl::CollisionObject<S>* probe = objs.back();
+    objs.pop_back();
+    fcl::DistanceRequest<S> req;
+    req.enable_nearest_points = true;
+    S self_min = std::numeric_limits<S>::max(), probe_min = self_min;
+    for (std::size_t i = 0; i < objs.size(); ++i) {
+      fcl::DistanceResult<S> r;
+      probe_min = std::min(probe_min, fcl::distance(objs[i], probe, req, r));
+      for (std::size_t j = i + 1; j < objs.size(); ++j) {
+        fcl::DistanceResult<S> q;
+        self_min = std::min(self_min, fcl::distance(objs[i], objs[j], req, q));
+      }
+    }
+    ASSERT_GT(self_min, 0);
+    cube::CubeCollisionManager<S> m;
+    m.registerObjects(objs);
+    // FCL's tolerance, and the rounding of coordinates up to half_extent (float: 1e-4 apart).
+    const S tol = S(req.distance_tolerance) * (S(1) + self_min) +
+                  S(64) * std::numeric_limits<S>::epsilon() * S(so.half_extent);
+    std::vector<S> self_got, probe_got;
+    for (int threads : {1, 2, 3}) {
+      cube::NarrowPhaseCache<S> cache;
+      for (int round = 0; round < 2; ++round) {
+        cube::NarrowPhaseOptions<S> o;
+        o.threads = threads;
+        o.cache = round == 0 ? nullptr : &cache;
+        const auto what = ::testing::Message()
+                          << "meshes " << meshes << " threads " << threads << " round " << round;
+        const auto a = cube::minimumDistance<S>(m, req, o);
+        EXPECT_NEAR(a.min_distance, self_min, tol) << what;
+        EXPECT_NEAR((a.nearest_points[0] - a.nearest_points[1]).norm(), a.min_distance,
+                    S(100) * tol)
+            << what;
+        const auto b = cube::minimumDistance<S>(m, probe, req, o);
+        EXPECT_NEAR(b.min_distance, probe_min, tol) << what;
+        if (threads > 1) {
+          self_got.push_back(a.min_distance);
+          probe_got.push_back(b.min_distance);
+        }
+      }
+    }
+    for (std::size_t k = 1; k < self_got.size(); ++k) {
+      EXPECT_EQ(self_got[k], self_got[0]) << "meshes " << meshes;
+      EXPECT_EQ(probe_got[k], probe_got[0]) << "meshes " << meshes;
+    }
+  }
+}
+
+// collidePairs gives each pair the result of its own fcl::collide, culled pairs none, on any
+// thread count and from the cache.
+TYPED_TEST(NarrowPhase, CollidePairsEqualsFclPerPair) {
+  using S = TypeParam;
+  auto world = scene<S>(Layout::uniform, false, 400, 21);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(world.pointers());
+  const auto pairs = cube::overlappingPairs<S>(m);
+  fcl::CollisionRequest<S> req;
+  req.num_max_contacts = 4;
+  req.enable_contact = true;
+  std::size_t colliding = 0;
+  cube::NarrowPhaseCache<S> cache;
+  for (int threads : {1, 2, 3})
+    for (bool cached : {false, true, true}) {
+      cube::NarrowPhaseOptions<S> o;
+      o.threads = threads;
+      o.cache = cached ? &cache : nullptr;
+      const auto got = cube::collidePairs<S>(pairs, req, o);
+      ASSERT_EQ(got.size(), pairs.size());
+      colliding = 0;
+      for (std::size_t i = 0; i < pairs.size(); ++i) {
+        fcl::CollisionResult<S> r;
+        fcl::collide(pairs[i].first, pairs[i].second, req, r);
+        EXPECT_TRUE(sameContacts(got[i], r)) << "pair " << i << " threads " << threads;
+        colliding += r.isCollision();
+      }
+    }
+  EXPECT_GT(colliding, 20u);
+}
+
+// forEachPair calls fn once per index on any thread count and rethrows the first exception
+// (by index) after the others ran.
+TEST(NarrowPhaseApi, ForEachPairCallsEveryIndexOnceAndRethrows) {
+  auto world = cube::scenes::makeScene<double>(cube::scenes::SceneOptions{});
+  std::vector<cube::ObjectPair<double>> pairs;
+  for (std::size_t i = 0; i + 1 < 300; ++i)
+    pairs.emplace_back(world.objects[i].get(), world.objects[i + 1].get());
+  for (int threads : {1, 2, 3}) {
+    std::vector<std::atomic<int>> calls(pairs.size());
+    cube::forEachPair<double>(
+        pairs,
+        [&](std::size_t i, fcl::CollisionObject<double>* a, fcl::CollisionObject<double>* b) {
+          EXPECT_EQ(a, pairs[i].first);
+          EXPECT_EQ(b, pairs[i].second);
+          ++calls[i];
+        },
+        threads);
+    for (const auto& c : calls) EXPECT_EQ(c.load(), 1);
+    std::atomic<int> after{0};
+    try {
+      cube::forEachPair<double>(
+          pairs,
+          [&](std::size_t i, fcl::CollisionObject<double>*, fcl::CollisionObject<double>*) {
+            if (i == 17 || i == 250) throw std::runtime_error("pair " + std::to_string(i));
+            ++after;
+          },
+          threads);
+      ADD_FAILURE() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "pair 17");
+    }
+    EXPECT_EQ(after.load(), int(pairs.size()) - 2) << "the other calls ran";
+  }
+}
+
+// collideConcurrently hands a thread-safe callback every candidate pair once, and stops early
+// when it returns true.
+TEST(NarrowPhaseApi, CollideConcurrentlySeesEveryPairOnceAndStops) {
+  cube::scenes::SceneOptions so;
+  so.n = 2000;
+  so.overlaps_per_object = 3.0;
+  auto world = cube::scenes::makeScene<double>(so);
+  cube::CubeCollisionManager<double> m;
+  m.registerObjects(world.pointers());
+  const auto expected = cube::overlappingPairs<double>(m);
+  ASSERT_GT(expected.size(), 1000u);
+  struct Seen {
+    std::mutex mutex;
+    std::multiset<std::pair<const void*, const void*>> pairs;
+    std::atomic<std::size_t> calls{0};
+    std::size_t stop_after = 0;  // 0: never
+  };
+  const auto fn = [](fcl::CollisionObject<double>* a, fcl::CollisionObject<double>* b, void* d) {
+    auto& s = *static_cast<Seen*>(d);
+    const std::size_t k = ++s.calls;
+    std::lock_guard<std::mutex> lock(s.mutex);
+    s.pairs.emplace(a, b);
+    return s.stop_after != 0 && k >= s.stop_after;
+  };
+  for (int threads : {1, 2, 3}) {
+    Seen seen;
+    cube::collideConcurrently<double>(m, &seen, fn, threads);
+    std::multiset<std::pair<const void*, const void*>> want;
+    for (const auto& [a, b] : expected) want.emplace(a, b);
+    EXPECT_EQ(seen.pairs, want) << "threads " << threads;
+    Seen stopping;
+    stopping.stop_after = 10;
+    cube::collideConcurrently<double>(m, &stopping, fn, threads);
+    EXPECT_GE(stopping.calls.load(), 10u);
+    EXPECT_LE(stopping.calls.load(), 256u + 10u) << "at most the running chunk finishes";
+  }
+}
+
+}  // namespace
