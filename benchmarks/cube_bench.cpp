@@ -36,6 +36,7 @@
 
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
 #include "scenes.h"
 
 namespace {
@@ -168,17 +169,51 @@ struct Recorder {
 // traversal-order-dependent prefix of the work instead of the work.
 constexpr std::size_t kAllContacts = std::numeric_limits<int>::max();
 
-std::size_t narrowCollide(Mgr m, const Manager& mgr) {
-  if (m == Mgr::cube) {
-    cube::CollisionData<S> d;
-    d.request.num_max_contacts = kAllContacts;
-    mgr.collide(&d, cube::defaultCollisionCallback<S>);
-    return d.result.numContacts();
-  }
+fcl::CollisionRequest<S> allContacts() {
+  fcl::CollisionRequest<S> r;
+  r.num_max_contacts = kAllContacts;
+  return r;
+}
+
+/// Cube's narrow-phase pipeline on `threads` threads (0: the hardware's), optionally with a
+/// cache; `stats` gets its counts.
+cube::NarrowPhaseOptions<S> pipeline(int threads, cube::NarrowPhaseCache<S>* cache = nullptr,
+                                     cube::NarrowPhaseStats* stats = nullptr) {
+  cube::NarrowPhaseOptions<S> o;
+  o.threads = threads;
+  o.cache = cache;
+  o.stats = stats;
+  return o;
+}
+
+/// Every contact of a self-collide: cube through its pipeline (collideAll), the FCL managers
+/// with FCL's default callback.
+std::size_t narrowCollide(Mgr m, const Manager& mgr, int threads = 1,
+                          cube::NarrowPhaseCache<S>* cache = nullptr) {
+  if (m == Mgr::cube)
+    return cube::collideAll<S>(mgr, allContacts(), pipeline(threads, cache)).numContacts();
   fcl::DefaultCollisionData<S> d;
-  d.request.num_max_contacts = kAllContacts;
+  d.request = allContacts();
   mgr.collide(&d, fcl::DefaultCollisionFunction<S>);
   return d.result.numContacts();
+}
+
+/// Every contact of manager.collide(q), as narrowCollide.
+std::size_t narrowQuery(Mgr m, const Manager& mgr, Object* q) {
+  if (m == Mgr::cube) return cube::collideAll<S>(mgr, q, allContacts(), pipeline(1)).numContacts();
+  fcl::DefaultCollisionData<S> d;
+  d.request = allContacts();
+  mgr.collide(q, &d, fcl::DefaultCollisionFunction<S>);
+  return d.result.numContacts();
+}
+
+/// "Does the robot collide?" (FCL's default request: stop at the first contact).
+bool robotCollides(Mgr m, const Manager& world, Manager& robot) {
+  if (m == Mgr::cube)
+    return cube::collideAll<S>(world, robot, fcl::CollisionRequest<S>(), pipeline(1)).isCollision();
+  fcl::DefaultCollisionData<S> d;
+  world.collide(&robot, &d, fcl::DefaultCollisionFunction<S>);
+  return d.result.isCollision();
 }
 
 // FCL's default distance callback, counting the fcl::distance calls it makes (one per call
@@ -225,10 +260,9 @@ std::size_t selfDistanceCalls(Mgr m, const Manager& mgr) {
 // it for every pair it is given (all contacts are asked for, so it never stops early).
 std::size_t narrowCollideCalls(Mgr m, const Manager& mgr) {
   if (m == Mgr::cube) {
-    cube::CollisionData<S> d;
-    d.request.num_max_contacts = kAllContacts;
-    mgr.collide(&d, cube::defaultCollisionCallback<S>);
-    return d.narrow_calls;
+    cube::NarrowPhaseStats st;
+    cube::collideAll<S>(mgr, allContacts(), pipeline(1, nullptr, &st));
+    return st.narrow_calls;
   }
   std::size_t pairs = 0;
   mgr.collide(&pairs, [](Object*, Object*, void* p) {
@@ -480,6 +514,55 @@ class Motion {
   std::vector<Object*> moved_;
 };
 
+/// The robot's path for robot_narrow: kRobotPoses poses across the world along x (a slight
+/// rise in y and z), every link translated by the pose's offset from its home transform.
+constexpr int kRobotPoses = 16;
+
+class RobotPath {
+ public:
+  explicit RobotPath(const SceneSet& s) : links_(s.robot), span_(s.options.half_extent) {
+    for (Object* o : links_) home_.push_back(o->getTransform());
+  }
+  ~RobotPath() { restore(); }
+  RobotPath(const RobotPath&) = delete;
+  RobotPath& operator=(const RobotPath&) = delete;
+  /// Moves every link to pose k and recomputes its AABB.
+  void pose(int k) {
+    const double t = -0.8 + 1.6 * double(k) / double(kRobotPoses - 1);
+    const fcl::Vector3<S> offset(t * span_, 0.1 * t * span_, -0.05 * t * span_);
+    for (std::size_t i = 0; i < links_.size(); ++i) {
+      fcl::Transform3<S> tf = home_[i];
+      tf.translation() += offset;
+      links_[i]->setTransform(tf);
+      links_[i]->computeAABB();
+    }
+  }
+  void restore() {
+    for (std::size_t i = 0; i < links_.size(); ++i) {
+      links_[i]->setTransform(home_[i]);
+      links_[i]->computeAABB();
+    }
+  }
+
+ private:
+  const std::vector<Object*>& links_;
+  std::vector<fcl::Transform3<S>> home_;
+  double span_;
+};
+
+/// robotCollides at every pose of the path, with robot managers of kind m built for it.
+std::vector<bool> robotAnswers(Mgr m, const Manager& world, SceneSet& s) {
+  RobotPath path(s);
+  auto robot = built(m, s.robot, s.robot_extent);
+  std::vector<bool> out;
+  for (int k = 0; k < kRobotPoses; ++k) {
+    path.pose(k);
+    robot->update();
+    out.push_back(robotCollides(m, world, *robot));
+  }
+  return out;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Cases
 
@@ -495,7 +578,13 @@ enum class Case {
   update_vector,
   churn,          // unregister + register + setup(), FCL's documented sequence
   churn_nosetup,  // unregister + register, relying on incremental insertion
-  last = churn_nosetup
+  // With FCL's narrow phase in the loop (issue 19): cube runs its pipeline (collideAll), the FCL
+  // managers FCL's default callback.
+  selfcollide_narrow_mt,  // cube only, on the hardware's threads; read against selfcollide_narrow
+  queries_narrow,         // 1,000 object queries, every contact
+  motion_narrow,          // 1% of the objects move, update(moved), every contact; cube: cached
+  robot_narrow,           // a 30-object robot manager moves; "does it collide?" per pose
+  last = robot_narrow
 };
 
 const char* caseName(Case c) {
@@ -522,6 +611,14 @@ const char* caseName(Case c) {
       return "churn";
     case Case::churn_nosetup:
       return "churn_nosetup";
+    case Case::selfcollide_narrow_mt:
+      return "selfcollide_narrow_mt";
+    case Case::queries_narrow:
+      return "queries_narrow";
+    case Case::motion_narrow:
+      return "motion_narrow";
+    case Case::robot_narrow:
+      return "robot_narrow";
   }
   return "?";
 }
@@ -533,7 +630,9 @@ bool isMotion(Case c) {
   return c == Case::update || c == Case::update_vector || isChurn(c);
 }
 bool manualTime(Case c) {
-  return c == Case::build || isMotion(c);
+  // Threads: the process's CPU time would add the workers' time, so wall time is measured.
+  return c == Case::build || isMotion(c) || c == Case::selfcollide_narrow_mt ||
+         c == Case::motion_narrow || c == Case::robot_narrow;
 }
 
 struct Spec {
@@ -790,8 +889,7 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       ck.counters["objects"] = double(s.dist_objs.size());
       ck.counters["queries"] = double(s.dist_queries.size());
       ck.counters["narrow_calls_per_query"] =
-          double(objectDistanceCalls(spec.m, *mgr, s.dist_queries)) /
-          double(s.dist_queries.size());
+          double(objectDistanceCalls(spec.m, *mgr, s.dist_queries)) / double(s.dist_queries.size());
       if (spec.m == Mgr::cube) {
         cube::QueryStats st;
         for (Object* q : s.dist_queries) {
@@ -800,6 +898,60 @@ Check runCheck(const Spec& spec, SceneSet& s) {
         }
         ck.counters["box_tests_per_query"] = double(st.box_tests) / double(s.dist_queries.size());
       }
+      break;
+    }
+    case Case::selfcollide_narrow_mt: {
+      if (!ref.counts.count("narrow")) ref.counts["narrow"] = narrowCollide(rm, *s.mainManager(rm));
+      const std::size_t want = ref.counts["narrow"];
+      const std::size_t got = narrowCollide(spec.m, *s.mainManager(spec.m), 0);
+      ck.counters["contacts"] = double(got);
+      ck.counters["threads"] = double(cube::hardwareThreads());
+      compare(got == want,
+              std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
+      break;
+    }
+    case Case::queries_narrow: {
+      s.derive();
+      if (!ref.counts.count("queries_narrow")) {
+        std::size_t c = 0;
+        for (Object* q : s.queries) c += narrowQuery(rm, *s.mainManager(rm), q);
+        ref.counts["queries_narrow"] = c;
+      }
+      const std::size_t want = ref.counts["queries_narrow"];
+      std::size_t got = 0;
+      for (Object* q : s.queries) got += narrowQuery(spec.m, *s.mainManager(spec.m), q);
+      ck.counters["contacts"] = double(got);
+      compare(got == want,
+              std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
+      break;
+    }
+    case Case::motion_narrow: {
+      // Three steps of the timed loop, then the contacts against a reference built afresh.
+      auto mgr = built(spec.m, s.objs, s.extent);
+      cube::NarrowPhaseCache<S> cache;
+      Motion motion(s);
+      std::size_t got = 0;
+      for (int step = 0; step < 3; ++step) {
+        const auto& moved = motion.pick();
+        motion.move();
+        mgr->update(moved);
+        got = narrowCollide(spec.m, *mgr, 1, &cache);
+      }
+      const std::size_t want = narrowCollide(rm, *built(rm, s.objs, s.extent));
+      s.restore();
+      ck.counters["contacts"] = double(got);
+      compare(got == want, "after 3 steps: " + std::to_string(got) + " contacts vs " +
+                               std::to_string(want) + " expected");
+      break;
+    }
+    case Case::robot_narrow: {
+      s.derive();
+      const std::vector<bool> want = robotAnswers(rm, *s.mainManager(rm), s);
+      const std::vector<bool> got = robotAnswers(spec.m, *s.mainManager(spec.m), s);
+      std::size_t colliding = 0;
+      for (bool b : want) colliding += b;
+      ck.counters["colliding_poses"] = double(colliding);
+      compare(got == want, "the answers at some poses differ");
       break;
     }
     case Case::update:
@@ -899,6 +1051,68 @@ void run(benchmark::State& state, const Spec& spec) {
       }
       break;
     }
+    case Case::selfcollide_narrow_mt: {
+      auto mgr = s.mainManager(spec.m);
+      for (auto _ : state) {
+        const auto t0 = Clock::now();
+        benchmark::DoNotOptimize(narrowCollide(spec.m, *mgr, 0));
+        state.SetIterationTime(seconds(Clock::now() - t0));
+      }
+      break;
+    }
+    case Case::queries_narrow: {
+      auto mgr = s.mainManager(spec.m);
+      for (auto _ : state) {
+        std::size_t c = 0;
+        for (Object* q : s.queries) c += narrowQuery(spec.m, *mgr, q);
+        benchmark::DoNotOptimize(c);
+      }
+      break;
+    }
+    case Case::motion_narrow: {
+      auto mgr = built(spec.m, s.objs, s.extent);
+      cube::NarrowPhaseCache<S> cache;
+      cube::NarrowPhaseStats st;
+      Motion motion(s);
+      state.counters["updated_per_step"] = double(motion.perStep());
+      for (auto _ : state) {
+        const auto& moved = motion.pick();
+        motion.move();
+        const auto t0 = Clock::now();
+        mgr->update(moved);
+        std::size_t c = 0;
+        if (spec.m == Mgr::cube)
+          c = cube::collideAll<S>(*mgr, allContacts(), pipeline(1, &cache, &st)).numContacts();
+        else
+          c = narrowCollide(spec.m, *mgr);
+        state.SetIterationTime(seconds(Clock::now() - t0));
+        benchmark::DoNotOptimize(c);
+      }
+      if (spec.m == Mgr::cube && st.candidate_pairs > 0) {
+        const double steps = double(state.iterations());
+        state.counters["narrow_calls_per_step"] = double(st.narrow_calls) / steps;
+        state.counters["cached_per_step"] = double(st.cached) / steps;
+      }
+      mgr.reset();
+      s.restore();
+      break;
+    }
+    case Case::robot_narrow: {
+      s.derive();
+      auto& world = *s.mainManager(spec.m);
+      RobotPath path(s);
+      auto robot = built(spec.m, s.robot, s.robot_extent);
+      int k = 0;
+      for (auto _ : state) {
+        path.pose(k);
+        k = (k + 1) % kRobotPoses;
+        const auto t0 = Clock::now();
+        robot->update();
+        benchmark::DoNotOptimize(robotCollides(spec.m, world, *robot));
+        state.SetIterationTime(seconds(Clock::now() - t0));
+      }
+      break;
+    }
     case Case::update:
     case Case::update_vector:
     case Case::churn:
@@ -951,6 +1165,12 @@ const std::size_t kSizes[] = {32, 1000, 10000, 100000};
 bool runs(Case c, const std::string& scene, std::size_t n, Mgr m) {
   if (m == Mgr::naive && n > 2000) return false;
   if (n >= 100000 && scene == "meshes") return false;
+  if (c == Case::selfcollide_narrow_mt)
+    return m == Mgr::cube && runs(Case::selfcollide_narrow, scene, n, m);
+  // The other narrow-phase cases run up to 10,000 objects.
+  if ((c == Case::queries_narrow || c == Case::motion_narrow || c == Case::robot_narrow) &&
+      n > 10000)
+    return false;
   // The update(vector) and churn cases of issue 3 run at 1,000 and 10,000 objects.
   if ((c == Case::update_vector || isChurn(c)) && (n < 1000 || n > 10000)) return false;
   // FCL 0.7's IntervalTree corrupts the heap under unregister/register churn (glibc aborts with

@@ -31,6 +31,11 @@ set(CUBE_COLLISION_NEEDS_CAIRO OFF)
 if(_cube_type STREQUAL "STATIC_LIBRARY" AND "PkgConfig::CAIRO" IN_LIST _cube_links)
   set(CUBE_COLLISION_NEEDS_CAIRO ON)
 endif()
+# The same for the OpenMP runtime of the narrow phase's threads.
+set(CUBE_COLLISION_NEEDS_OPENMP OFF)
+if(_cube_type STREQUAL "STATIC_LIBRARY" AND "OpenMP::OpenMP_CXX" IN_LIST _cube_links)
+  set(CUBE_COLLISION_NEEDS_OPENMP ON)
+endif()
 
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/CubeCollisionConfig.cmake.in
   ${PROJECT_BINARY_DIR}/CubeCollisionConfig.cmake
@@ -78,6 +83,10 @@ if(CUBE_COLLISION_NEEDS_CAIRO)
     set(_cube_cairo_libs "-lcairo")
   endif()
   set(CUBE_COLLISION_PC_LIBS "${_cube_cairo_libs} ${CUBE_COLLISION_PC_LIBS}")
+endif()
+if(CUBE_COLLISION_NEEDS_OPENMP)
+  # The compiler's OpenMP runtime, as the compiler's own flag links it (GCC: libgomp).
+  set(CUBE_COLLISION_PC_LIBS "${CUBE_COLLISION_PC_LIBS} ${OpenMP_CXX_FLAGS}")
 endif()
 string(STRIP "${CUBE_COLLISION_PC_LIBS}" CUBE_COLLISION_PC_LIBS)
 configure_file(${PROJECT_SOURCE_DIR}/cmake/cube_collision.pc.in

@@ -32,7 +32,8 @@ bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S
   if (!d.done) {
     // A pair whose tight volumes are farther apart than the best distance so far (by more than
     // the margin) would get a larger distance from FCL, which leaves the result as it is.
-    const detail::Separation<S> s = detail::separation(*o1, *o2, S(d.request.distance_tolerance));
+    const detail::Separation<S> s =
+        detail::separation(*o1, *o2, S(d.request.distance_tolerance), d.result.min_distance);
     if (!(s.lower_bound - s.margin > d.result.min_distance)) {
       ++d.narrow_calls;
       fcl::distance(o1, o2, d.request, d.result);

@@ -13,18 +13,31 @@ namespace detail {
 
 namespace {
 
-// An object's tight volumes in world coordinates: an oriented box (centre c, axes the columns
-// of R, half extents e) and a sphere about the same centre (radius r).
+// An object's tight volumes in world coordinates: a sphere (centre c, radius r) and an oriented
+// box about the same centre (axes the columns of R, half extents e). The sphere comes first and
+// costs one matrix-vector product; the box only when the spheres do not settle the pair.
 template <typename S>
 struct Tight {
+  const fcl::Transform3<S>* tf;
+  const fcl::CollisionGeometry<S>* g;
   fcl::Vector3<S> c;
-  fcl::Matrix3<S> R;
-  fcl::Vector3<S> e;
   S r;
   bool sphere;  // the geometry is a sphere: r is exact and the box adds nothing
+  fcl::Matrix3<S> R;
+  fcl::Vector3<S> e;
+
+  // The box from the geometry's local AABB (its centre replaces c); false if not finite.
+  bool withBox() {
+    const fcl::AABB<S>& local = g->aabb_local;
+    e = (local.max_ - local.min_) * S(0.5);
+    R = tf->linear();
+    c = R * ((local.max_ + local.min_) * S(0.5)) + tf->translation();
+    return e.allFinite() && R.allFinite() && c.allFinite() && (e.array() >= S(0)).all();
+  }
 };
 
-// False if the object has no finite tight volume.
+// The sphere of an object, from what FCL keeps per geometry (aabb_center, aabb_radius: the
+// local AABB's circumscribed sphere); false if the object has none that is finite.
 template <typename S>
 bool tightOf(const fcl::CollisionObject<S>& o, Tight<S>& t) {
   const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
@@ -37,14 +50,12 @@ bool tightOf(const fcl::CollisionObject<S>& o, Tight<S>& t) {
     default:
       break;
   }
-  const fcl::AABB<S>& local = g->aabb_local;
-  t.e = (local.max_ - local.min_) * S(0.5);
-  t.R = o.getRotation();
-  t.c = t.R * ((local.max_ + local.min_) * S(0.5)) + o.getTranslation();
+  t.g = g;
+  t.tf = &o.getTransform();
   t.sphere = g->getNodeType() == fcl::GEOM_SPHERE;
-  t.r = t.sphere ? static_cast<const fcl::Sphere<S>*>(g)->radius : t.e.norm();
-  return t.e.allFinite() && t.c.allFinite() && t.R.allFinite() && std::isfinite(t.r) &&
-         (t.e.array() >= S(0)).all();
+  t.c = t.tf->linear() * g->aabb_center + t.tf->translation();
+  t.r = t.sphere ? static_cast<const fcl::Sphere<S>*>(g)->radius : g->aabb_radius;
+  return t.c.allFinite() && std::isfinite(t.r) && t.r >= S(0);
 }
 
 // Distance from point p to the box b (0 inside).
@@ -88,7 +99,7 @@ S boxGap(const Tight<S>& a, const Tight<S>& b) {
 
 template <typename S>
 Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
-                         S tolerance) {
+                         S tolerance, S enough) {
   Tight<S> ta, tb;
   if (!tightOf(a, ta) || !tightOf(b, tb)) return {-std::numeric_limits<S>::infinity(), S(0)};
   const S floor = sizeof(S) >= 8 ? S(1e-6) : S(1e-4);
@@ -96,23 +107,23 @@ Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionO
   const S margin = std::max(S(2) * tolerance, floor) * (S(1) + scale);
   // The spheres: the cheapest bound, and exact for spheres.
   const S spheres = (ta.c - tb.c).norm() - ta.r - tb.r;
-  if (ta.sphere && tb.sphere) return {spheres, margin};
+  if ((ta.sphere && tb.sphere) || spheres > enough + margin) return {spheres, margin};
+  if (!ta.withBox() || !tb.withBox()) return {spheres, margin};
   if (ta.sphere) return {std::max(spheres, pointBoxDistance(ta.c, tb) - ta.r), margin};
   if (tb.sphere) return {std::max(spheres, pointBoxDistance(tb.c, ta) - tb.r), margin};
-  if (spheres > margin) return {spheres, margin};  // apart already: spare the box test
   return {std::max(spheres, boxGap(ta, tb)), margin};
 }
 
 template <typename S>
 bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance) {
-  const Separation<S> s = separation(a, b, tolerance);
+  const Separation<S> s = separation(a, b, tolerance, S(0));
   return s.lower_bound > s.margin;
 }
 
 template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
-                                               const fcl::CollisionObject<double>&, double);
+                                               const fcl::CollisionObject<double>&, double, double);
 template Separation<float> separation<float>(const fcl::CollisionObject<float>&,
-                                             const fcl::CollisionObject<float>&, float);
+                                             const fcl::CollisionObject<float>&, float, float);
 template bool surelyApart<double>(const fcl::CollisionObject<double>&,
                                   const fcl::CollisionObject<double>&, double);
 template bool surelyApart<float>(const fcl::CollisionObject<float>&,

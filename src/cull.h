@@ -8,6 +8,8 @@
 
 #include <fcl/narrowphase/collision_object.h>
 
+#include <limits>
+
 namespace cube {
 namespace detail {
 
@@ -18,7 +20,10 @@ namespace detail {
 /// within its tolerance, and this bound's own arithmetic errs by a few ulps of the coordinates.
 /// The bound is the largest of the bounding spheres' gap (exact for spheres), a sphere's gap to
 /// the other's oriented box, and the separating-axis gaps of the two oriented boxes of the
-/// geometries' local AABBs (exact along the axes for boxes).
+/// geometries' local AABBs (exact along the axes for boxes). The spheres come from what FCL keeps
+/// per geometry (aabb_center, aabb_radius, as computeLocalAABB() sets them) and the object's
+/// transform; when their gap alone exceeds enough + margin, the boxes are not looked at (the
+/// bound is then the spheres' gap).
 template <typename S>
 struct Separation {
   S lower_bound;
@@ -26,7 +31,7 @@ struct Separation {
 };
 template <typename S>
 Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
-                         S tolerance);
+                         S tolerance, S enough = std::numeric_limits<S>::infinity());
 
 /// True only if objects a and b certainly do not touch, even within the narrow phase's
 /// `tolerance` (fcl::CollisionRequest::gjk_tolerance): separation's bound beats its margin.
@@ -34,9 +39,11 @@ template <typename S>
 bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance);
 
 extern template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
-                                                      const fcl::CollisionObject<double>&, double);
+                                                      const fcl::CollisionObject<double>&, double,
+                                                      double);
 extern template Separation<float> separation<float>(const fcl::CollisionObject<float>&,
-                                                    const fcl::CollisionObject<float>&, float);
+                                                    const fcl::CollisionObject<float>&, float,
+                                                    float);
 extern template bool surelyApart<double>(const fcl::CollisionObject<double>&,
                                          const fcl::CollisionObject<double>&, double);
 extern template bool surelyApart<float>(const fcl::CollisionObject<float>&,

@@ -15,11 +15,15 @@
 
 namespace cube {
 
-int hardwareThreads() { return std::max(1, omp_get_max_threads()); }
+int hardwareThreads() {
+  return std::max(1, omp_get_max_threads());
+}
 
 namespace {
 
-int resolveThreads(int threads) { return threads > 0 ? threads : hardwareThreads(); }
+int resolveThreads(int threads) {
+  return threads > 0 ? threads : hardwareThreads();
+}
 
 // Below this many pairs a parallel region costs more than it saves.
 constexpr std::size_t kParallelMinPairs = 4;
@@ -141,8 +145,9 @@ struct NarrowPhaseCache<S>::Impl {
       request = r;
       has_request = true;
     }
-    // Read-only: safe from several threads while nothing is stored.
-    const Entry<Answer>* find(const Object* a, const Object* b) const {
+    // Reads only (the caller touches the entry later, on one thread): safe from several
+    // threads while nothing is stored.
+    Entry<Answer>* find(const Object* a, const Object* b) {
       const auto it = entries.find(Key{a, b});
       if (it == entries.end() || !it->second.a.same(*a) || !it->second.b.same(*b)) return nullptr;
       return &it->second;
@@ -203,21 +208,21 @@ enum class Answer : std::uint8_t { kApart, kCached, kComputed };
 
 template <typename S>
 using CollideCache = typename NarrowPhaseCache<S>::Impl;
+template <typename S>
+using CollideEntry = typename CollideCache<S>::template Entry<std::vector<fcl::Contact<S>>>;
+template <typename S>
+using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResult<S>>;
 
 // One pair's answer, safe to run on several threads at once: proved apart, found in the cache
-// (`cached` points at its contacts), or computed by fcl::collide into `fresh` (cleared first).
+// (`cached` is its entry), or computed by fcl::collide into `fresh` (cleared first).
 template <typename S>
 Answer answerPair(const ObjectPair<S>& pair, const fcl::CollisionRequest<S>& request,
-                  const CollideCache<S>* cache, fcl::CollisionResult<S>& fresh,
-                  const std::vector<fcl::Contact<S>>*& cached) {
+                  CollideCache<S>* cache, fcl::CollisionResult<S>& fresh,
+                  CollideEntry<S>*& cached) {
   const auto [a, b] = pair;
   fresh.clear();
-  if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance)))
-    return Answer::kApart;
-  if (const auto* e = cache ? cache->collide.find(a, b) : nullptr) {
-    cached = &e->answer;
-    return Answer::kCached;
-  }
+  if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance))) return Answer::kApart;
+  if ((cached = cache ? cache->collide.find(a, b) : nullptr) != nullptr) return Answer::kCached;
   fcl::collide(a, b, request, fresh);
   return Answer::kComputed;
 }
@@ -238,13 +243,13 @@ struct Contacts {
 // returns the pair's contacts.
 template <typename S>
 Contacts<S> recordPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
-                       const fcl::CollisionResult<S>& fresh,
-                       const std::vector<fcl::Contact<S>>* cached, NarrowPhaseStats& stats) {
+                       const fcl::CollisionResult<S>& fresh, CollideEntry<S>* cached,
+                       NarrowPhaseStats& stats) {
   const auto [a, b] = pair;
   if (kind == Answer::kCached) {
     ++stats.cached;
-    cache->collide.entries.find({a, b})->second.stamp = cache->stamp;
-    return {cached, nullptr};
+    cached->stamp = cache->stamp;
+    return {&cached->answer, nullptr};
   }
   ++stats.narrow_calls;
   if (cache != nullptr) {
@@ -260,7 +265,7 @@ Contacts<S> recordPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* 
 template <typename S>
 struct CollideStream<S>::Slot {
   Answer kind = Answer::kApart;
-  const std::vector<fcl::Contact<S>>* cached = nullptr;
+  CollideEntry<S>* cached = nullptr;
   fcl::CollisionResult<S> fresh;
 };
 
@@ -343,8 +348,7 @@ fcl::CollisionResult<S> CollideStream<S>::finish() {
 
 template <typename S>
 struct DistanceSearch<S>::Slot {
-  bool cached = false;
-  const fcl::DistanceResult<S>* from_cache = nullptr;
+  DistanceEntry<S>* cached = nullptr;
   fcl::DistanceResult<S> fresh;
 };
 
@@ -370,7 +374,8 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>
   if (result_.min_distance > 0) {
     // A pair whose tight volumes are farther apart than the best distance so far (by more than
     // the margin) would get a larger distance from FCL, which leaves the result as it is.
-    const Separation<S> s = separation(*a, *b, S(request_.distance_tolerance));
+    const Separation<S> s =
+        separation(*a, *b, S(request_.distance_tolerance), result_.min_distance);
     if (s.lower_bound - s.margin > result_.min_distance) {
       ++stats_.culled;
     } else if (threads_ == 1 && cache_ == nullptr) {
@@ -400,10 +405,8 @@ void DistanceSearch<S>::flush() {
   parallelFor(n, threads_, [&](std::size_t i) {
     Slot& s = slots_[i];
     const auto [a, b] = batch_[i];
-    const auto* e = cache_ ? cache_->distance.find(a, b) : nullptr;
-    s.cached = e != nullptr;
-    s.from_cache = e ? &e->answer : nullptr;
-    if (!s.cached) {
+    s.cached = cache_ ? cache_->distance.find(a, b) : nullptr;
+    if (s.cached == nullptr) {
       // A fresh result per pair: its answer does not depend on the other pairs, so it can be
       // kept and merged in any batch.
       s.fresh = fcl::DistanceResult<S>();
@@ -413,10 +416,10 @@ void DistanceSearch<S>::flush() {
   for (std::size_t i = 0; i < n; ++i) {
     Slot& s = slots_[i];
     const auto [a, b] = batch_[i];
-    if (s.cached) {
+    if (s.cached != nullptr) {
       ++stats_.cached;
-      cache_->distance.entries.find({a, b})->second.stamp = cache_->stamp;
-      result_.update(*s.from_cache);
+      s.cached->stamp = cache_->stamp;
+      result_.update(s.cached->answer);
     } else {
       ++stats_.narrow_calls;
       if (cache_ != nullptr) cache_->distance.store(a, b, s.fresh, cache_->stamp);
@@ -458,7 +461,7 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
   }
   std::vector<fcl::CollisionResult<S>> results(pairs.size());
   std::vector<detail::Answer> kind(pairs.size());
-  std::vector<const std::vector<fcl::Contact<S>>*> cached(pairs.size());
+  std::vector<detail::CollideEntry<S>*> cached(pairs.size());
   parallelFor(pairs.size(), resolveThreads(options.threads), [&](std::size_t i) {
     kind[i] = detail::answerPair(pairs[i], request, cache, results[i], cached[i]);
   });
@@ -469,7 +472,7 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
     }
     detail::recordPair(kind[i], pairs[i], cache, results[i], cached[i], stats);
     if (kind[i] == detail::Answer::kCached)
-      for (const fcl::Contact<S>& c : *cached[i]) results[i].addContact(c);
+      for (const fcl::Contact<S>& c : cached[i]->answer) results[i].addContact(c);
   }
   if (cache != nullptr) cache->collide.end(cache->stamp);
   addStats(options.stats, stats);
@@ -510,16 +513,16 @@ void forEachPair(
               [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
 }
 
-#define CUBE_INSTANTIATE_NARROW_PHASE(S)                                                          \
-  template class NarrowPhaseCache<S>;                                                             \
-  template std::vector<fcl::CollisionResult<S>> collidePairs(                                     \
-      const std::vector<ObjectPair<S>>&, const fcl::CollisionRequest<S>&,                         \
-      const NarrowPhaseOptions<S>&);                                                              \
-  template fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>&,               \
-                                                 const fcl::CollisionRequest<S>&,                 \
-                                                 const NarrowPhaseOptions<S>&);                   \
-  template void forEachPair(                                                                      \
-      const std::vector<ObjectPair<S>>&,                                                          \
+#define CUBE_INSTANTIATE_NARROW_PHASE(S)                                                           \
+  template class NarrowPhaseCache<S>;                                                              \
+  template std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S>>&,    \
+                                                             const fcl::CollisionRequest<S>&,      \
+                                                             const NarrowPhaseOptions<S>&);        \
+  template fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>&,                \
+                                                 const fcl::CollisionRequest<S>&,                  \
+                                                 const NarrowPhaseOptions<S>&);                    \
+  template void forEachPair(                                                                       \
+      const std::vector<ObjectPair<S>>&,                                                           \
       const std::function<void(std::size_t, fcl::CollisionObject<S>*, fcl::CollisionObject<S>*)>&, \
       int);
 

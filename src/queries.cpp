@@ -1,9 +1,8 @@
 #include "cube_collision/queries.h"
 
-#include "cube_collision/callbacks.h"
-
 #include <atomic>
 
+#include "cube_collision/callbacks.h"
 #include "narrow_phase_stream.h"
 
 namespace cube {
@@ -43,17 +42,37 @@ std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManage
 
 namespace {
 
-// Costs and a cached GJK guess travel from pair to pair through the one result: FCL's way, on
-// this thread. Everything else goes through the pipeline.
+// FCL's default callback with culling (callbacks.h), counting the pairs it is handed.
+template <typename S>
+struct CountedCollide {
+  CollisionData<S> data;
+  std::size_t candidates = 0;
+  static bool fn(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* self) {
+    auto& c = *static_cast<CountedCollide*>(self);
+    ++c.candidates;
+    return defaultCollisionCallback<S>(a, b, &c.data);
+  }
+};
+
+// On one thread without a cache, and for requests whose costs or cached GJK guess travel from
+// pair to pair through the one result, the default callback accumulates as FCL does. Otherwise
+// the pipeline runs, with the same answer.
 template <typename S, class Walk>
 fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
                                     const NarrowPhaseOptions<S>& options, const Walk& walk) {
-  if (request.enable_cost || request.enable_cached_gjk_guess) {
-    CollisionData<S> data;
-    data.request = request;
-    walk(&data, &defaultCollisionCallback<S>);
-    if (options.stats != nullptr) options.stats->narrow_calls += data.narrow_calls;
-    return data.result;
+  const int threads = options.threads > 0 ? options.threads : hardwareThreads();
+  if (request.enable_cost || request.enable_cached_gjk_guess ||
+      (threads == 1 && options.cache == nullptr)) {
+    CountedCollide<S> c;
+    c.data.request = request;
+    walk(&c, &CountedCollide<S>::fn);
+    if (NarrowPhaseStats* st = options.stats) {
+      st->candidate_pairs += c.candidates;
+      st->narrow_calls += c.data.narrow_calls;
+      if (!request.enable_cost)  // with costs nothing is culled
+        st->culled += c.candidates - c.data.narrow_calls;
+    }
+    return c.data.result;
   }
   detail::CollideStream<S> stream(request, options);
   walk(&stream, &detail::CollideStream<S>::callback);

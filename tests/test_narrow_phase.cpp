@@ -74,9 +74,8 @@ template <typename S>
     const fcl::Contact<S>&x = a.getContact(k), &y = b.getContact(k);
     if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2)
       return ::testing::AssertionFailure() << "contact " << k << ": other objects";
-    if (with_geometry &&
-        (!sameBits(x.pos, y.pos) || !sameBits(x.normal, y.normal) ||
-         std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0))
+    if (with_geometry && (!sameBits(x.pos, y.pos) || !sameBits(x.normal, y.normal) ||
+                          std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0))
       return ::testing::AssertionFailure() << "contact " << k << " differs";
   }
   return ::testing::AssertionSuccess();
@@ -170,8 +169,9 @@ TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
 }
 
 // Every kind of change sends the pairs of the changed object back to FCL: a translation by one
-// ulp, a rotation, a geometry resized in place (new local AABB), another request. Setting the same transform again changes nothing. forget() and
-// clear() drop answers. After each change the result equals an uncached query.
+// ulp, a rotation, a geometry resized in place (new local AABB), another request. Setting the same
+// transform again changes nothing. forget() and clear() drop answers. After each change the result
+// equals an uncached query.
 TYPED_TEST(NarrowPhase, EveryKindOfMotionInvalidatesTheCache) {
   using S = TypeParam;
   auto world = scene<S>(Layout::uniform, false, 300, 11);
