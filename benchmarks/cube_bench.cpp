@@ -1075,6 +1075,12 @@ void run(benchmark::State& state, const Spec& spec) {
       cube::NarrowPhaseStats st;
       Motion motion(s);
       state.counters["updated_per_step"] = double(motion.perStep());
+      // One step before the clock starts, for every manager: a loop's steady state (cube's
+      // cache filled), not its first step, is what a simulation runs.
+      const std::vector<Object*>& first = motion.pick();
+      motion.move();
+      mgr->update(first);
+      if (spec.m == Mgr::cube) cube::collideAll<S>(*mgr, allContacts(), pipeline(1, &cache));
       for (auto _ : state) {
         const auto& moved = motion.pick();
         motion.move();
@@ -1167,6 +1173,9 @@ bool runs(Case c, const std::string& scene, std::size_t n, Mgr m) {
   if (n >= 100000 && scene == "meshes") return false;
   if (c == Case::selfcollide_narrow_mt)
     return m == Mgr::cube && runs(Case::selfcollide_narrow, scene, n, m);
+  // FCL 0.7's IntervalTree does not return from the motion loop (update(moved), then collide)
+  // even at 32 objects.
+  if (c == Case::motion_narrow && m == Mgr::interval) return false;
   // The other narrow-phase cases run up to 10,000 objects.
   if ((c == Case::queries_narrow || c == Case::motion_narrow || c == Case::robot_narrow) &&
       n > 10000)

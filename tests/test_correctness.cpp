@@ -307,7 +307,9 @@ void managerVsManager(const Case& c) {
     me.naive.collide(&them.naive, &naive_hits, &Colliding<S>::record);
     std::vector<std::pair<const char*, Manager<S>*>> others{
         {"naive", &them.naive}, {"dynamic AABB tree", &them.tree}, {"cube", &them.cube}};
-    for (const auto& [name, other] : others) {
+    for (const auto& entry : others) {
+      const char* name = entry.first;
+      Manager<S>* other = entry.second;  // a plain variable: lambdas capture it (C++17)
       SCOPED_TRACE(std::string(dir == 0 ? "scene vs other, " : "other vs scene, ") + name);
       // Sorted ordered pairs: equal means every call was (this object, other object).
       const auto got = managerCalls<S>(me.cube, other);

@@ -42,7 +42,9 @@ void rowMasksPortable(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
     std::uint64_t m = 0;
     for (std::uint32_t j = i + 1; j < n; ++j) {
       bool hit = true;
-      for (int k = 0; k < 3; ++k) hit &= (f.lo(k)[i] <= f.hi(k)[j]) & (f.lo(k)[j] <= f.hi(k)[i]);
+      // Branch-free on purpose: & of the comparisons, as the SIMD tables compute them.
+      for (int k = 0; k < 3; ++k)
+        hit = hit & (f.lo(k)[i] <= f.hi(k)[j]) & (f.lo(k)[j] <= f.hi(k)[i]);
       m |= std::uint64_t(hit) << j;
     }
     rows[i] = m;
