@@ -4,6 +4,7 @@
 #include <fcl/narrowphase/distance.h>
 
 #include "cull.h"
+#include "fcl_narrow.h"
 
 namespace cube {
 
@@ -42,6 +43,38 @@ bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S
   dist = d.result.min_distance;
   return d.done || dist <= 0;
 }
+
+namespace detail {
+
+template <typename S>
+std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
+                       const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result) {
+  return fcl::collide(a, b, request, result);
+}
+
+template <typename S>
+S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
+              const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result) {
+  return fcl::distance(a, b, request, result);
+}
+
+template std::size_t fclCollide<double>(const fcl::CollisionObject<double>*,
+                                        const fcl::CollisionObject<double>*,
+                                        const fcl::CollisionRequest<double>&,
+                                        fcl::CollisionResult<double>&);
+template std::size_t fclCollide<float>(const fcl::CollisionObject<float>*,
+                                       const fcl::CollisionObject<float>*,
+                                       const fcl::CollisionRequest<float>&,
+                                       fcl::CollisionResult<float>&);
+template double fclDistance<double>(const fcl::CollisionObject<double>*,
+                                    const fcl::CollisionObject<double>*,
+                                    const fcl::DistanceRequest<double>&,
+                                    fcl::DistanceResult<double>&);
+template float fclDistance<float>(const fcl::CollisionObject<float>*,
+                                  const fcl::CollisionObject<float>*,
+                                  const fcl::DistanceRequest<float>&, fcl::DistanceResult<float>&);
+
+}  // namespace detail
 
 template bool defaultCollisionCallback<double>(fcl::CollisionObject<double>*,
                                                fcl::CollisionObject<double>*, void*);

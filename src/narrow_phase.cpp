@@ -2,15 +2,16 @@
 
 #include "cube_collision/narrow_phase.h"
 
-#include <fcl/narrowphase/collision.h>
-#include <fcl/narrowphase/distance.h>
 #include <omp.h>
 
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 #include "cull.h"
+#include "fcl_narrow.h"
 #include "narrow_phase_stream.h"
 
 namespace cube {
@@ -54,6 +55,15 @@ void parallelFor(std::size_t n, int threads, const Body& body) {
   }
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
+}
+
+// A pair list from the caller: a null object would crash inside FCL, so it is refused first.
+template <typename S>
+void checkPairs(const std::vector<ObjectPair<S>>& pairs, const char* where) {
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (pairs[i].first == nullptr || pairs[i].second == nullptr)
+      throw std::invalid_argument(std::string("cube::") + where + ": pair " + std::to_string(i) +
+                                  " holds a null object");
 }
 
 void addStats(NarrowPhaseStats* out, const NarrowPhaseStats& s) {
@@ -223,7 +233,7 @@ Answer answerPair(const ObjectPair<S>& pair, const fcl::CollisionRequest<S>& req
   fresh.clear();
   if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance))) return Answer::kApart;
   if ((cached = cache ? cache->collide.find(a, b) : nullptr) != nullptr) return Answer::kCached;
-  fcl::collide(a, b, request, fresh);
+  fclCollide(a, b, request, fresh);
   return Answer::kComputed;
 }
 
@@ -381,7 +391,7 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>
     } else if (threads_ == 1 && cache_ == nullptr) {
       // FCL's own way: one accumulating result, which a mesh pair's search is pruned by.
       ++stats_.narrow_calls;
-      fcl::distance(a, b, request_, result_);
+      fclDistance(a, b, request_, result_);
     } else {
       batch_.emplace_back(a, b);
       if (batch_.size() >= static_cast<std::size_t>(threads_)) flush();
@@ -410,7 +420,7 @@ void DistanceSearch<S>::flush() {
       // A fresh result per pair: its answer does not depend on the other pairs, so it can be
       // kept and merged in any batch.
       s.fresh = fcl::DistanceResult<S>();
-      fcl::distance(a, b, request_, s.fresh);
+      fclDistance(a, b, request_, s.fresh);
     }
   });
   for (std::size_t i = 0; i < n; ++i) {
@@ -451,6 +461,7 @@ template <typename S>
 std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S>>& pairs,
                                                   const fcl::CollisionRequest<S>& request,
                                                   const NarrowPhaseOptions<S>& options) {
+  checkPairs(pairs, "collidePairs");
   NarrowPhaseStats stats;
   stats.candidate_pairs = pairs.size();
   auto* cache =
@@ -483,6 +494,7 @@ template <typename S>
 fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
                                       const fcl::CollisionRequest<S>& request,
                                       const NarrowPhaseOptions<S>& options) {
+  checkPairs(pairs, "collideMerged");
   if (!plainRequest(request)) {
     // Costs and the GJK guess travel from pair to pair through the one result: in turn.
     fcl::CollisionResult<S> result;
@@ -490,7 +502,7 @@ fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
     stats.candidate_pairs = pairs.size();
     for (const auto& [a, b] : pairs) {
       ++stats.narrow_calls;
-      fcl::collide(a, b, request, result);
+      detail::fclCollide(a, b, request, result);
       if (!request.enable_cost && result.isCollision() &&
           result.numContacts() >= request.num_max_contacts)
         break;
@@ -509,6 +521,8 @@ void forEachPair(
     const std::vector<ObjectPair<S>>& pairs,
     const std::function<void(std::size_t, fcl::CollisionObject<S>*, fcl::CollisionObject<S>*)>& fn,
     int threads) {
+  checkPairs(pairs, "forEachPair");
+  if (!fn) throw std::invalid_argument("cube::forEachPair: empty function");
   parallelFor(pairs.size(), resolveThreads(threads),
               [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
 }

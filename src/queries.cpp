@@ -1,6 +1,7 @@
 #include "cube_collision/queries.h"
 
 #include <atomic>
+#include <stdexcept>
 
 #include "cube_collision/callbacks.h"
 #include "narrow_phase_stream.h"
@@ -151,6 +152,7 @@ struct ConcurrentCalls {
 template <typename S>
 void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
                          fcl::CollisionCallBack<S> callback, int threads) {
+  if (callback == nullptr) throw std::invalid_argument("cube::collideConcurrently: null callback");
   ConcurrentCalls<S> calls{cdata, callback, threads, {}};
   manager.collide(&calls, &ConcurrentCalls<S>::gather);
   if (!calls.stop.load()) calls.flush();

@@ -430,4 +430,30 @@ TEST(NarrowPhaseApi, CollideConcurrentlySeesEveryPairOnceAndStops) {
   }
 }
 
+// Bad input gets a clear error before any work: a null object in a pair list, an empty function,
+// a null callback.
+TEST(NarrowPhaseApi, BadInputThrowsBeforeAnyPairRuns) {
+  auto world = cube::scenes::makeScene<double>(cube::scenes::SceneOptions{});
+  cube::CubeCollisionManager<double> m;
+  m.registerObjects(world.pointers());
+  std::vector<cube::ObjectPair<double>> pairs = cube::overlappingPairs<double>(m);
+  ASSERT_GT(pairs.size(), 10u);
+  pairs[5].second = nullptr;
+  fcl::CollisionRequest<double> req;
+  cube::NarrowPhaseCache<double> cache;
+  cube::NarrowPhaseOptions<double> o;
+  o.cache = &cache;
+  EXPECT_THROW(cube::collidePairs<double>(pairs, req, o), std::invalid_argument);
+  EXPECT_THROW(cube::collideMerged<double>(pairs, req, o), std::invalid_argument);
+  EXPECT_EQ(cache.size(), 0u) << "nothing ran";
+  std::size_t calls = 0;
+  EXPECT_THROW(cube::forEachPair<double>(pairs, [&](std::size_t, fcl::CollisionObjectd*,
+                                                    fcl::CollisionObjectd*) { ++calls; }),
+               std::invalid_argument);
+  EXPECT_EQ(calls, 0u);
+  pairs[5].second = pairs[5].first;
+  EXPECT_THROW(cube::forEachPair<double>(pairs, {}), std::invalid_argument);
+  EXPECT_THROW(cube::collideConcurrently<double>(m, nullptr, nullptr), std::invalid_argument);
+}
+
 }  // namespace

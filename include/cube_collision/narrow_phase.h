@@ -71,8 +71,8 @@ class NarrowPhaseCache {
 /// How the helpers run the narrow phase.
 template <typename S>
 struct NarrowPhaseOptions {
-  /// Threads for the narrow phase: 0 = hardwareThreads(), 1 = this thread only. Results are the
-  /// same for every count. Small pair lists run on this thread whatever the count.
+  /// Threads for the narrow phase: 0 (or less) = hardwareThreads(), 1 = this thread only.
+  /// Results are the same for every count. Small pair lists run on this thread whatever the count.
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;
@@ -82,7 +82,9 @@ struct NarrowPhaseOptions {
 
 /// fcl::collide on each pair (a fresh result per pair), culled and cached as the options say, on
 /// options.threads threads. result[i] belongs to pairs[i]; a culled pair gets an empty result.
-/// With request.enable_cost or enable_cached_gjk_guess nothing is culled or cached.
+/// With request.enable_cost or enable_cached_gjk_guess nothing is culled or cached. A null object
+/// in `pairs` throws std::invalid_argument before any pair runs (here and in collideMerged and
+/// forEachPair).
 template <typename S>
 std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S>>& pairs,
                                                   const fcl::CollisionRequest<S>& request,
@@ -100,7 +102,7 @@ fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
 /// cache and stats options are not used): for callers who run their own narrow phase. fn must be
 /// safe to call concurrently; write results by index to keep them independent of the threads.
 /// An exception thrown by fn is rethrown here after the other calls finished (the first one, in
-/// pair order, if several threw).
+/// pair order, if several threw). An empty fn throws std::invalid_argument.
 template <typename S>
 void forEachPair(
     const std::vector<ObjectPair<S>>& pairs,

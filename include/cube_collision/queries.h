@@ -68,7 +68,8 @@ fcl::CollisionResult<S> collideAll(
 /// callback that is safe to call concurrently (on cdata too). Pairs are gathered in chunks from
 /// the walk; once a call returns true no new call starts and the walk stops, but calls of the
 /// same chunk already running finish. The order of the calls is not specified. options.cache
-/// and options.stats are not used. An exception from the callback is rethrown here.
+/// and options.stats are not used. An exception from the callback is rethrown here; a null
+/// callback throws std::invalid_argument.
 template <typename S>
 void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
                          fcl::CollisionCallBack<S> callback, int threads = 0);

@@ -1,0 +1,47 @@
+#pragma once
+
+// FCL's narrow phase, instantiated in one file (src/callbacks.cpp). FCL ships only its double
+// instantiations prebuilt; the float ones are compiled where fcl::collide / fcl::distance are
+// called, which takes minutes (over ten under the sanitizers, where that file is left out).
+// Every other file of the library calls FCL's narrow phase through these.
+
+#include <fcl/narrowphase/collision_object.h>
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/collision_result.h>
+#include <fcl/narrowphase/distance_request.h>
+#include <fcl/narrowphase/distance_result.h>
+
+#include <cstddef>
+
+namespace cube {
+namespace detail {
+
+/// fcl::collide(a, b, request, result).
+template <typename S>
+std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
+                       const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result);
+
+/// fcl::distance(a, b, request, result).
+template <typename S>
+S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
+              const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result);
+
+extern template std::size_t fclCollide<double>(const fcl::CollisionObject<double>*,
+                                               const fcl::CollisionObject<double>*,
+                                               const fcl::CollisionRequest<double>&,
+                                               fcl::CollisionResult<double>&);
+extern template std::size_t fclCollide<float>(const fcl::CollisionObject<float>*,
+                                              const fcl::CollisionObject<float>*,
+                                              const fcl::CollisionRequest<float>&,
+                                              fcl::CollisionResult<float>&);
+extern template double fclDistance<double>(const fcl::CollisionObject<double>*,
+                                           const fcl::CollisionObject<double>*,
+                                           const fcl::DistanceRequest<double>&,
+                                           fcl::DistanceResult<double>&);
+extern template float fclDistance<float>(const fcl::CollisionObject<float>*,
+                                         const fcl::CollisionObject<float>*,
+                                         const fcl::DistanceRequest<float>&,
+                                         fcl::DistanceResult<float>&);
+
+}  // namespace detail
+}  // namespace cube
