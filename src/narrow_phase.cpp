@@ -5,7 +5,10 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
+#include <exception>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>

@@ -5,8 +5,6 @@
 // stream tells the walk to stop as soon as the merged answer is complete, so a request for one
 // contact still stops near the first colliding pair.
 
-#include <cstdint>
-#include <exception>
 #include <vector>
 
 #include "cube_collision/narrow_phase.h"
