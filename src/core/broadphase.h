@@ -77,7 +77,11 @@ class Broadphase {
   /// Whether the next self-collide reads the pair list.
   bool pairsListed() const { return pairs_.valid(); }
 
-  // Inspection.
+  // Inspection, and the read-only entry of queries written outside the core (ray, region and
+  // swept queries): the cubes and the unbounded list as views, and where each id is.
+  Scene<S> scene() const {
+    return Scene<S>{tree_.view(), unboundedView(), table_.locations(), config_.all_pairs_limit};
+  }
   const CubeTree<S>& tree() const { return tree_; }
   const ItemArray<S>& unboundedItems() const { return unbounded_; }
   const ObjectTable<S>& table() const { return table_; }
@@ -86,9 +90,6 @@ class Broadphase {
   bool validate(std::string* why) const;
 
  private:
-  Scene<S> scene() const {
-    return Scene<S>{tree_.view(), unboundedView(), table_.locations(), config_.all_pairs_limit};
-  }
   View<S> unboundedView() const {
     return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u,
                    std::uint32_t(unbounded_.size())};
