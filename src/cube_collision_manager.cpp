@@ -7,6 +7,7 @@
 #include <fcl/narrowphase/collision_object.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -360,6 +361,65 @@ void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
       [&](Object* obj, const Box<S>& box) {
         return core_->distance(obj, box, cdata, callback, best, stats);
       });
+}
+
+template <typename S>
+void CubeCollisionManager<S>::setFilter(Object* obj, std::uint64_t category, std::uint64_t mask) {
+  refuseInsideQuery(core_.get(), "setFilter");
+  if (obj == nullptr) fail("setFilter", "null object");
+  if (!core_->setFilter(obj, detail::Filter{category, mask}))
+    fail("setFilter", "the object is not registered");
+}
+
+template <typename S>
+std::pair<std::uint64_t, std::uint64_t> CubeCollisionManager<S>::filter(const Object* obj) const {
+  const detail::Filter f = core_->filter(obj);
+  return {f.category, f.mask};
+}
+
+template <typename S>
+void CubeCollisionManager<S>::setPairFilter(std::function<bool(Object*, Object*)> keep) {
+  refuseInsideQuery(core_.get(), "setPairFilter");
+  core_->setKeep(std::move(keep));
+}
+
+namespace {
+
+template <typename S>
+void checkMargin(S margin, const char* where) {
+  if (!(margin >= S(0)) || !std::isfinite(margin))
+    fail(where, "the margin must be finite and >= 0");
+}
+
+}  // namespace
+
+template <typename S>
+void CubeCollisionManager<S>::setMargin(S margin) {
+  refuseInsideQuery(core_.get(), "setMargin");
+  checkMargin(margin, "setMargin");
+  const Object* bad =
+      core_->setDefaultMargin(margin, [](const Object* o, Box<S>& b) { b = boxOf(*o); });
+  if (bad != nullptr)
+    fail("setMargin", indexName(*core_, bad) +
+                          " has a NaN AABB coordinate; it keeps its previous AABB, the margin "
+                          "applies to every other object");
+}
+
+template <typename S>
+void CubeCollisionManager<S>::setMargin(Object* obj, S margin) {
+  refuseInsideQuery(core_.get(), "setMargin");
+  checkMargin(margin, "setMargin");
+  if (obj == nullptr) fail("setMargin", "null object");
+  if (!core_->contains(obj)) fail("setMargin", "the object is not registered");
+  const Box<S> b = boxOf(*obj);
+  if (!isValid(b))
+    fail("setMargin", indexName(*core_, obj) + " has a NaN AABB coordinate; nothing changed");
+  core_->setMargin(obj, b, margin);
+}
+
+template <typename S>
+S CubeCollisionManager<S>::margin(const Object* obj) const {
+  return core_->margin(obj);
 }
 
 template <typename S>

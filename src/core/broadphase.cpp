@@ -28,9 +28,33 @@ namespace {
 // Collide of two views; a small view against itself takes the all-pairs kernel.
 template <typename S>
 bool collideViews(std::size_t all_pairs_limit, const View<S>& a, const View<S>& b, bool self,
-                  void* data, CollideFn<S> fn, QueryStats* stats) {
-  if (self && a.slots <= all_pairs_limit) return collideAllPairs(a, data, fn, stats);
-  return collidePairs(a, b, self, data, fn, stats);
+                  void* data, CollideFn<S> fn, QueryStats* stats,
+                  const PairGate<S>* gate = nullptr) {
+  if (self && a.slots <= all_pairs_limit)
+    return collideAllPairs(a, data, fn, stats, PairKernel::best, gate);
+  return collidePairs(a, b, self, data, fn, stats, gate);
+}
+
+// Config::canonical_pairs: the callbacks for `pairs` (id of side a << 32 | id of side b) in the
+// order of (key_a(id a), key_b(id b)), each a registration number (so the order is the tree's
+// business no more); obj_a and obj_b give the objects. Stops when fn returns true.
+template <typename S, class KeyA, class KeyB, class ObjA, class ObjB>
+bool callInOrder(const std::vector<std::uint64_t>& pairs, KeyA&& key_a, KeyB&& key_b, ObjA&& obj_a,
+                 ObjB&& obj_b, void* data, CollideFn<S> fn, QueryStats* stats) {
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> order;
+  order.reserve(pairs.size());
+  for (const std::uint64_t p : pairs) {
+    const auto a = static_cast<ObjectId>(p >> 32), b = static_cast<ObjectId>(p);
+    order.emplace_back(std::uint64_t(key_a(a)) << 32 | key_b(b), p);
+  }
+  std::sort(order.begin(), order.end());
+  for (const auto& entry : order) {
+    if (stats) ++stats->callbacks;
+    if (fn(obj_a(static_cast<ObjectId>(entry.second >> 32)),
+           obj_b(static_cast<ObjectId>(entry.second)), data))
+      return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -94,7 +118,8 @@ template <typename S>
 void Broadphase<S>::add(Object* obj, const Box<S>& box) {
   assert(!contains(obj));
   pairs_.invalidate();
-  place(table_.add(obj), obj, box);
+  const ObjectId id = table_.add(obj);
+  place(id, obj, grown(box, id));
   maintain();
 }
 
@@ -109,7 +134,7 @@ void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_
     // A small batch into a large manager: insertions beat a build.
     for (std::size_t i = 0; i < n; ++i)
       if (new_ids[i] != kNone) {
-        place(new_ids[i], objs[i], boxes[i]);
+        place(new_ids[i], objs[i], grown(boxes[i], new_ids[i]));
         maintain();
       }
     return;
@@ -119,8 +144,8 @@ void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_
   extra.reserve(added);
   for (std::size_t i = 0; i < n; ++i) {
     if (new_ids[i] == kNone) continue;
-    const Item<S> item{boxes[i], objs[i], kNone, new_ids[i]};
-    if (classify(boxes[i], config_.unbounded_limit) == BoxKind::unbounded) {
+    const Item<S> item{grown(boxes[i], new_ids[i]), objs[i], kNone, new_ids[i]};
+    if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded) {
       table_.setLocation(item.id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
       unbounded_.push_back(item);
     } else {
@@ -174,7 +199,7 @@ void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::si
   for (std::size_t i = 0; i < n; ++i) {
     const ObjectId id = table_.find(objs[i]);
     if (id == kNone) continue;
-    move(objs[i], boxes[i]);
+    move(objs[i], grown(boxes[i], id));
     if (keep) moved_.push_back(id);
   }
   if (keep) {
@@ -220,50 +245,166 @@ void Broadphase<S>::clear() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Per-object properties
+
+template <typename S>
+bool Broadphase<S>::setFilter(const Object* obj, const Filter& f) {
+  const ObjectId id = table_.find(obj);
+  if (id == kNone) return false;
+  table_.setFilter(id, f);  // read by every query; the pair list holds boxes only, untouched
+  return true;
+}
+
+template <typename S>
+Filter Broadphase<S>::filter(const Object* obj) const {
+  const ObjectId id = table_.find(obj);
+  return id == kNone ? Filter{} : table_.filter(id);
+}
+
+template <typename S>
+bool Broadphase<S>::setMargin(const Object* obj, const Box<S>& box, S margin) {
+  const ObjectId id = table_.find(obj);
+  if (id == kNone) return false;
+  table_.setOwnMargin(id, margin);
+  any_margin_ = true;
+  Object* o = table_.object(id);
+  updateSome(&o, &box, 1, true);
+  return true;
+}
+
+template <typename S>
+S Broadphase<S>::margin(const Object* obj) const {
+  const ObjectId id = table_.find(obj);
+  const S own = id == kNone ? S(-1) : table_.ownMargin(id);
+  return own < S(0) ? default_margin_ : own;
+}
+
+template <typename S>
+PairGate<S> Broadphase<S>::selfGate() const {
+  PairGate<S> g;
+  g.filters_a = g.filters_b = table_.filters();
+  g.keep = keep_ ? &keep_ : nullptr;
+  if (config_.canonical_pairs) g.seq = table_.seqs();
+  return g;
+}
+
+template <typename S>
+PairGate<S> Broadphase<S>::crossGate(const Broadphase* other, const Object* obj) const {
+  PairGate<S> g;
+  g.filters_a = table_.filters();
+  if (other != nullptr) {
+    g.filters_b = other->table_.filters();
+  } else if (g.filters_a != nullptr) {
+    g.query = filter(obj);
+  }
+  g.keep = keep_ ? &keep_ : nullptr;
+  return g;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Queries
+
+// Each query has a plain path (no filter bits, predicate or canonical order: the walk reports
+// every pair of overlapping boxes) and a gated one. Canonical order gathers the pairs first and
+// calls back in the order of registration numbers.
 
 template <typename S>
 bool Broadphase<S>::collide(Object* obj, const Box<S>& box, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
-  const SingleView<S> query(obj, box);
-  return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
-    return collidePairs(a, b, false, data, fn, stats);
+  const SingleView<S> query(obj, queryBox(obj, box));
+  if (!gated())
+    return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
+      return collidePairs(a, b, false, data, fn, stats);
+    });
+  const PairGate<S> gate = crossGate(nullptr, obj);
+  if (!config_.canonical_pairs)
+    return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
+      return collidePairs(a, b, false, data, fn, stats, &gate);
+    });
+  std::vector<std::uint64_t> found;
+  forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
+    collectPairs(a, b, false, 0, found, &gate);
+    return false;
   });
+  const std::uint32_t* seq = table_.seqs();
+  return callInOrder(
+      found, [&](ObjectId a) { return seq[a]; }, [](ObjectId) { return 0u; },
+      [&](ObjectId a) { return table_.object(a); }, [&](ObjectId) { return obj; }, data, fn, stats);
 }
 
 template <typename S>
 bool Broadphase<S>::collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) const {
-  if (pairs_.valid()) return pairs_.collide(table_, data, fn, stats);
-  return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
-    return collideViews(config_.all_pairs_limit, a, b, self, data, fn, stats);
-  });
+  if (!gated()) {
+    if (pairs_.valid()) return pairs_.collide(table_, data, fn, stats);
+    return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
+      return collideViews(config_.all_pairs_limit, a, b, self, data, fn, stats);
+    });
+  }
+  const PairGate<S> gate = selfGate();
+  if (!config_.canonical_pairs) {
+    if (pairs_.valid()) return pairs_.collide(scene(), gate, data, fn, stats);
+    return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
+      return collideViews(config_.all_pairs_limit, a, b, self, data, fn, stats, &gate);
+    });
+  }
+  std::vector<std::uint64_t> found;
+  if (pairs_.valid()) {
+    pairs_.collect(scene(), gate, found);
+  } else {
+    forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
+      collectPairs(a, b, self, config_.all_pairs_limit, found, &gate);
+      return false;
+    });
+  }
+  const std::uint32_t* seq = table_.seqs();
+  const auto key = [&](ObjectId id) { return seq[id]; };
+  const auto object = [&](ObjectId id) { return table_.object(id); };
+  return callInOrder(found, key, key, object, object, data, fn, stats);
 }
 
 template <typename S>
 bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
   const Scene<S> mine = scene();
+  const bool gate_on = gated() || other.table_.filters() != nullptr;
+  const PairGate<S> gate = gate_on ? crossGate(&other, nullptr) : PairGate<S>{};
+  const PairGate<S>* g = gate_on ? &gate : nullptr;
+  std::vector<std::uint64_t> found;
   for (const View<S>& b : {other.tree_.view(), other.unboundedView()})
     if (forObjectViews(mine, b, [&](const View<S>& x, const View<S>& y, bool) {
-          return collidePairs(x, y, false, data, fn, stats);
+          if (config_.canonical_pairs) {
+            collectPairs(x, y, false, 0, found, g);
+            return false;
+          }
+          return collidePairs(x, y, false, data, fn, stats, g);
         }))
       return true;
-  return false;
+  if (!config_.canonical_pairs) return false;
+  const std::uint32_t* mine_seq = table_.seqs();
+  const std::uint32_t* other_seq = other.table_.seqs();
+  return callInOrder(
+      found, [&](ObjectId a) { return mine_seq[a]; }, [&](ObjectId b) { return other_seq[b]; },
+      [&](ObjectId a) { return table_.object(a); },
+      [&](ObjectId b) { return other.table_.object(b); }, data, fn, stats);
 }
 
 template <typename S>
 bool Broadphase<S>::distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
-  const SingleView<S> query(obj, box);
+  const SingleView<S> query(obj, queryBox(obj, box));
+  const PairGate<S> gate = crossGate(nullptr, obj);
+  const PairGate<S>* g = gated() ? &gate : nullptr;
   return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
-    return distancePairs(a, b, false, data, fn, best, stats);
+    return distancePairs(a, b, false, data, fn, best, stats, g);
   });
 }
 
 template <typename S>
 bool Broadphase<S>::distanceSelf(void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const {
+  const PairGate<S> gate = selfGate();
+  const PairGate<S>* g = gated() ? &gate : nullptr;
   return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
-    return distancePairs(a, b, self, data, fn, best, stats);
+    return distancePairs(a, b, self, data, fn, best, stats, g);
   });
 }
 
@@ -271,9 +412,11 @@ template <typename S>
 bool Broadphase<S>::distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
   const Scene<S> mine = scene();
+  const PairGate<S> gate = crossGate(&other, nullptr);
+  const PairGate<S>* g = gated() || other.table_.filters() != nullptr ? &gate : nullptr;
   for (const View<S>& b : {other.tree_.view(), other.unboundedView()})
     if (forObjectViews(mine, b, [&](const View<S>& x, const View<S>& y, bool) {
-          return distancePairs(x, y, false, data, fn, best, stats);
+          return distancePairs(x, y, false, data, fn, best, stats, g);
         }))
       return true;
   return false;

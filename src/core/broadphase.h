@@ -56,6 +56,30 @@ class Broadphase {
   void setup();
   void clear();
 
+  // Per-object properties. Boxes handed to the core are the objects' own (FCL's AABBs): the core
+  // grows each by its margin before it keeps or tests it.
+
+  /// Sets a registered object's filter bits; false if not registered. O(1), the pair list stays.
+  bool setFilter(const Object* obj, const Filter& f);
+  /// The filter bits of a registered object, or of any other (the default).
+  Filter filter(const Object* obj) const;
+  /// The predicate every pair must pass after the filter bits (empty: none).
+  void setKeep(KeepFn<S> keep) { keep_ = std::move(keep); }
+  /// Gives a registered object its own margin (>= 0) and its new box `box`; false if not
+  /// registered.
+  bool setMargin(const Object* obj, const Box<S>& box, S margin);
+  /// The margin of objects without one of their own, then update() through `read`.
+  template <class Read>
+  const Object* setDefaultMargin(S margin, Read&& read) {
+    default_margin_ = margin;
+    any_margin_ = any_margin_ || margin != S(0);
+    return updateAll(read);
+  }
+  /// The margin an object's box is grown by: its own, else the manager-wide one (also for
+  /// objects not registered here, such as query objects).
+  S margin(const Object* obj) const;
+  S defaultMargin() const { return default_margin_; }
+
   // Queries: const, no state touched, safe from any number of threads at once.
 
   /// Objects whose box overlaps `box`: fn(managed, obj, data).
@@ -104,6 +128,30 @@ class Broadphase {
   bool move(const Object* obj, const Box<S>& box);
   /// Between operations: rebuild if the policy says so, else compact a sparse tree.
   void maintain();
+  /// `box` grown by the margin of id (kNone: the manager-wide margin). Inline: update() calls it
+  /// for every object.
+  Box<S> grown(const Box<S>& box, ObjectId id) const {
+    const S own = id == kNone ? S(-1) : table_.ownMargin(id);
+    const S m = own < S(0) ? default_margin_ : own;
+    if (m == S(0)) return box;
+    Box<S> g;
+    for (int k = 0; k < 3; ++k) {
+      g.lo[k] = box.lo[k] - m;
+      g.hi[k] = box.hi[k] + m;
+    }
+    return g;
+  }
+  /// A query object's box grown by its margin; without margins in use, no lookup.
+  Box<S> queryBox(const Object* obj, const Box<S>& box) const {
+    return any_margin_ ? grown(box, table_.find(obj)) : box;
+  }
+  /// Whether pairs must pass a gate (filter bits, the predicate, canonical order).
+  bool gated() const { return table_.filters() != nullptr || keep_ || config_.canonical_pairs; }
+  /// The gate of a self query.
+  PairGate<S> selfGate() const;
+  /// The gate of a query of this manager's objects (side a) against those of `other` (null: an
+  /// object query, whose object `obj` is looked up here for its bits).
+  PairGate<S> crossGate(const Broadphase* other, const Object* obj) const;
   /// After motions: rebuild if due, then, with `keep`, keep the pair list (moved_ holds the ids
   /// whose box changed; `was_valid` whether the list was valid before).
   void afterMotion(bool keep, bool was_valid);
@@ -116,6 +164,9 @@ class Broadphase {
   Node unbounded_node_{};   // the list seen as one leaf of infinite extent
   PairList<S> pairs_;
   std::vector<ObjectId> moved_;  // update()'s scratch: ids whose box changed
+  KeepFn<S> keep_;               // the user's pair predicate (setPairFilter)
+  S default_margin_ = 0;         // manager-wide margin
+  bool any_margin_ = false;      // a margin was ever set: query objects need a lookup
   bool setup_done_ = false;
 };
 
@@ -139,6 +190,7 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
       Item<S>& it = items[p];
       if (it.obj == nullptr) continue;
       read(it.obj, b);
+      b = grown(b, it.id);
       if (sameBox(it.box, b)) continue;  // unmoved: same kind, nothing to refit
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {

@@ -134,6 +134,17 @@ struct Item {
 };
 static_assert(sizeof(Item<double>) == 64, "one object per cache line for double");
 
+/// An object's collision filter bits (as Box2D's, Bullet's and Jolt's): two objects pair only if
+/// each one's category meets the other's mask. The default pairs with everything.
+struct Filter {
+  std::uint64_t category = 1;
+  std::uint64_t mask = ~std::uint64_t(0);
+  bool isDefault() const { return category == 1 && mask == ~std::uint64_t(0); }
+};
+inline bool filtersPass(const Filter& a, const Filter& b) {
+  return ((a.category & b.mask) != 0) & ((b.category & a.mask) != 0);
+}
+
 /// The object records, each starting on a cache line for double.
 template <typename S>
 using ItemArray = std::vector<Item<S>, LineAllocator<Item<S>, 0>>;

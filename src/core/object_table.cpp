@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <numeric>
 #include <sstream>
 
@@ -79,10 +80,14 @@ ObjectId ObjectTable<S>::take(Object* obj) {
     obj_.push_back(nullptr);
     seq_.push_back(0);
     loc_.push_back(kNone);
+    filter_.emplace_back();
+    margin_.push_back(S(-1));
   }
   obj_[id] = obj;
   seq_[id] = seq;
   loc_[id] = kNone;
+  filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
+  margin_[id] = S(-1);
   ++live_;
   return id;
 }
@@ -110,6 +115,8 @@ std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n,
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
+  filter_.reserve(filter_.size() + fresh);
+  margin_.reserve(margin_.size() + fresh);
   const std::size_t mask = index_.size() - 1;
   for (std::size_t i = 0; i < n; ++i) {
     std::size_t h = hashPtr(objs[i]) & mask;
@@ -147,10 +154,19 @@ void ObjectTable<S>::remove(ObjectId id) {
 }
 
 template <typename S>
+void ObjectTable<S>::setFilter(ObjectId id, const Filter& f) {
+  filter_[id] = f;
+  any_filter_ = any_filter_ || !f.isDefault();
+}
+
+template <typename S>
 void ObjectTable<S>::clear() {
   obj_ = {};
   seq_ = {};
   loc_ = {};
+  filter_ = {};
+  margin_ = {};
+  any_filter_ = false;
   free_ = {};
   index_ = {};
   live_ = 0;
@@ -172,7 +188,8 @@ template <typename S>
 std::size_t ObjectTable<S>::bytes() const {
   return obj_.capacity() * sizeof(Object*) +
          (seq_.capacity() + loc_.capacity() + free_.capacity() + index_.capacity()) *
-             sizeof(std::uint32_t);
+             sizeof(std::uint32_t) +
+         filter_.capacity() * sizeof(Filter) + margin_.capacity() * sizeof(S);
 }
 
 template <typename S>
@@ -182,7 +199,8 @@ bool ObjectTable<S>::validate(std::string* why) const {
     if (why) *why = msg.str();
     return false;
   };
-  if (seq_.size() != obj_.size() || loc_.size() != obj_.size())
+  if (seq_.size() != obj_.size() || loc_.size() != obj_.size() || filter_.size() != obj_.size() ||
+      margin_.size() != obj_.size())
     return msg << "object table: per-id arrays differ in length", fail();
   std::size_t live = 0;
   std::vector<char> is_free(obj_.size(), 0);
@@ -201,6 +219,10 @@ bool ObjectTable<S>::validate(std::string* why) const {
     if (find(obj_[id]) != id) return msg << "object table: map misses id " << id, fail();
     if (seq_[id] >= next_seq_) return msg << "object table: id " << id << " seq ahead", fail();
     seqs.push_back(seq_[id]);
+    if (!any_filter_ && !filter_[id].isDefault())
+      return msg << "object table: id " << id << " has filter bits the queries skip", fail();
+    if (!std::isfinite(margin_[id]))
+      return msg << "object table: id " << id << " has a bad margin", fail();
   }
   std::sort(seqs.begin(), seqs.end());
   if (std::adjacent_find(seqs.begin(), seqs.end()) != seqs.end())

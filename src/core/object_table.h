@@ -50,6 +50,15 @@ class ObjectTable {
   std::uint32_t* locations() { return loc_.data(); }
   const std::uint32_t* locations() const { return loc_.data(); }
 
+  /// Filter bits of a live id (the default Filter from registration until set).
+  const Filter& filter(ObjectId id) const { return filter_[id]; }
+  void setFilter(ObjectId id, const Filter& f);
+  /// Per id; null while every object has the default bits (queries then skip the test).
+  const Filter* filters() const { return any_filter_ ? filter_.data() : nullptr; }
+  /// An object's own margin, or a negative value while it uses the manager-wide one.
+  S ownMargin(ObjectId id) const { return margin_[id]; }
+  void setOwnMargin(ObjectId id, S margin) { margin_[id] = margin; }
+
   /// Registered objects in registration order.
   void objects(std::vector<Object*>& out) const;
   /// Heap bytes owned.
@@ -66,10 +75,13 @@ class ObjectTable {
   std::vector<Object*> obj_;          // per id; nullptr: free
   std::vector<std::uint32_t> seq_;    // per id: registration number
   std::vector<std::uint32_t> loc_;    // per id: location (see location())
+  std::vector<Filter> filter_;        // per id: filter bits
+  std::vector<S> margin_;             // per id: own margin, < 0 for the manager-wide one
   std::vector<ObjectId> free_;        // ids to hand out again, last freed first
   std::vector<std::uint32_t> index_;  // open addressing: 0 empty, else id + 1 (key: obj_[id])
   std::size_t live_ = 0;
   std::uint32_t next_seq_ = 0;
+  bool any_filter_ = false;  // some live or past object had non-default bits (since clear())
 };
 
 extern template class ObjectTable<float>;

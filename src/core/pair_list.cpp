@@ -92,6 +92,32 @@ bool PairList<S>::collide(const ObjectTable<S>& table, void* data, CollideFn<S> 
 }
 
 template <typename S>
+bool PairList<S>::collide(const Scene<S>& scene, const PairGate<S>& gate, void* data,
+                          CollideFn<S> fn, QueryStats* stats) const {
+  for (const std::uint64_t p : pairs_) {
+    const bool stop =
+        gate.through(scene.item(static_cast<ObjectId>(p >> 32)),
+                     scene.item(static_cast<ObjectId>(p)), [&](const Item<S>& a, const Item<S>& b) {
+                       if (stats) ++stats->callbacks;
+                       return fn(a.obj, b.obj, data);
+                     });
+    if (stop) return true;
+  }
+  return false;
+}
+
+template <typename S>
+void PairList<S>::collect(const Scene<S>& scene, const PairGate<S>& gate,
+                          std::vector<std::uint64_t>& out) const {
+  for (const std::uint64_t p : pairs_)
+    gate.through(scene.item(static_cast<ObjectId>(p >> 32)), scene.item(static_cast<ObjectId>(p)),
+                 [&](const Item<S>& a, const Item<S>& b) {
+                   out.push_back(std::uint64_t(a.id) << 32 | b.id);
+                   return false;
+                 });
+}
+
+template <typename S>
 std::size_t PairList<S>::bytes() const {
   return (pairs_.capacity() + marks_.capacity() + found_.capacity()) * sizeof(std::uint64_t);
 }

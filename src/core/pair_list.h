@@ -37,6 +37,12 @@ class PairList {
   /// valid(). Right after a listing, the pairs come in the order and argument order of a
   /// self-collide; a refresh puts the moved objects' pairs last.
   bool collide(const ObjectTable<S>& table, void* data, CollideFn<S> fn, QueryStats* stats) const;
+  /// The same for the pairs that pass `gate` (oriented by it); `scene` finds each id's record.
+  bool collide(const Scene<S>& scene, const PairGate<S>& gate, void* data, CollideFn<S> fn,
+               QueryStats* stats) const;
+  /// Appends the pairs that pass `gate`, oriented by it, as id << 32 | id.
+  void collect(const Scene<S>& scene, const PairGate<S>& gate,
+               std::vector<std::uint64_t>& out) const;
   /// Pairs listed.
   std::size_t size() const { return pairs_.size(); }
   /// Bytes of heap memory owned.

@@ -60,8 +60,9 @@ struct CollidePolicy {
   static constexpr bool kOrdered = false;
   Sink sink;
   Counter count;
-  const PairKernels<S>* kernels;     // null in object queries, which test one box at a time
-  const Columns* columns = nullptr;  // null: leaves are tested on the exact boxes only
+  const PairKernels<S>* kernels;      // null in object queries, which test one box at a time
+  const Columns* columns = nullptr;   // null: leaves are tested on the exact boxes only
+  const PairGate<S>* gate = nullptr;  // null: every pair of overlapping boxes is reported
   bool enter(const Node& a, const Node& b, Key&) const {
     count.test();
     return overlap(a, b);
@@ -81,6 +82,11 @@ struct CollidePolicy {
   // that check comes after the box test, which rejects most pairs without reading the pointers.
   bool report(const Item<S>& x, const Item<S>& y) const {
     if (x.obj == y.obj) return false;
+    if (gate != nullptr)
+      return gate->through(x, y, [&](const Item<S>& a, const Item<S>& b) {
+        count.call();
+        return sink(a, b);
+      });
     count.call();
     return sink(x, y);
   }
@@ -191,6 +197,7 @@ struct DistancePolicy {
   DistanceFn<S> fn;
   S& best;
   Counter count;
+  const PairGate<S>* gate = nullptr;  // null: every pair near enough is called
   // Boxes that overlap are always worth a visit: with a signed-distance callback the best may
   // already be <= 0 and a pair may still penetrate deeper.
   // A square that overflows (gaps beyond 1.3e154) is infinite: pruned below a finite bound, kept
@@ -217,6 +224,11 @@ struct DistancePolicy {
     return keep(boxGap2(x.box, y.box)) && x.obj != y.obj && call(x, y);
   }
   bool call(const Item<S>& x, const Item<S>& y) const {
+    if (gate != nullptr)
+      return gate->through(x, y, [&](const Item<S>& a, const Item<S>& b) {
+        count.call();
+        return fn(a.obj, b.obj, data, best);
+      });
     count.call();
     return fn(x.obj, y.obj, data, best);
   }
@@ -380,8 +392,8 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
 }
 
 template <typename S, class Sink>
-bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink,
-                 QueryStats* stats) {
+bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink, QueryStats* stats,
+                 const PairGate<S>* gate) {
   // Against a single object (an object query) the walk tests one box at a time and needs no
   // kernel table: most calls are those, and small.
   const bool one = !self && b.root != kNone && b.nodes[b.root].count == 1;
@@ -393,36 +405,39 @@ bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink
   }
   const Columns* use = store ? &store->columns() : nullptr;
   if (stats)
-    return descend(a, b, self, CollidePolicy<S, Count, Sink>{sink, Count{stats}, kernels, use});
-  return descend(a, b, self, CollidePolicy<S, NoCount, Sink>{sink, NoCount{}, kernels, use});
+    return descend(a, b, self,
+                   CollidePolicy<S, Count, Sink>{sink, Count{stats}, kernels, use, gate});
+  return descend(a, b, self, CollidePolicy<S, NoCount, Sink>{sink, NoCount{}, kernels, use, gate});
 }
 
 }  // namespace
 
 template <typename S>
 bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
-                  QueryStats* stats) {
-  return collideWith(a, b, self, CallFn<S>{data, fn}, stats);
+                  QueryStats* stats, const PairGate<S>* gate) {
+  return collideWith(a, b, self, CallFn<S>{data, fn}, stats, gate);
 }
 
 template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
-                  std::vector<std::uint64_t>& out) {
+                  std::vector<std::uint64_t>& out, const PairGate<S>* gate) {
   const RecordIds<S> sink{&out};
   if (self && a.slots <= all_pairs_limit)
-    allPairs(a, CollidePolicy<S, NoCount, RecordIds<S>>{sink, NoCount{}, &pairKernels<S>()});
+    allPairs(a, CollidePolicy<S, NoCount, RecordIds<S>>{sink, NoCount{}, &pairKernels<S>(), nullptr,
+                                                        gate});
   else
-    collideWith(a, b, self, sink, nullptr);
+    collideWith(a, b, self, sink, nullptr, gate);
 }
 
 template <typename S>
 bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats,
-                     PairKernel kernel) {
+                     PairKernel kernel, const PairGate<S>* gate) {
   if (v.slots > kAllPairsMax) throw std::logic_error("collideAllPairs: view too large");
   if (!pairKernelAvailable(kernel)) throw std::logic_error("collideAllPairs: kernel unavailable");
   const PairKernels<S>* k = &pairKernels<S>(kernel);
-  if (stats) return allPairs(v, CollidePolicy<S, Count>{{data, fn}, Count{stats}, k});
-  return allPairs(v, CollidePolicy<S, NoCount>{{data, fn}, NoCount{}, k});
+  if (stats)
+    return allPairs(v, CollidePolicy<S, Count>{{data, fn}, Count{stats}, k, nullptr, gate});
+  return allPairs(v, CollidePolicy<S, NoCount>{{data, fn}, NoCount{}, k, nullptr, gate});
 }
 
 template <typename S>
@@ -438,9 +453,10 @@ std::uint64_t leafOverlapMask(const Item<S>* xs, std::uint32_t nx, const Item<S>
 
 template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
-                   S& best, QueryStats* stats) {
-  if (stats) return descend(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}});
-  return descend(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}});
+                   S& best, QueryStats* stats, const PairGate<S>* gate) {
+  if (stats)
+    return descend(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}, gate});
+  return descend(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}, gate});
 }
 
 template <typename S>
@@ -452,26 +468,27 @@ SingleView<S>::SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box, Objec
 }
 
 template bool collidePairs<float>(const View<float>&, const View<float>&, bool, void*,
-                                  CollideFn<float>, QueryStats*);
+                                  CollideFn<float>, QueryStats*, const PairGate<float>*);
 template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
-                                   CollideFn<double>, QueryStats*);
+                                   CollideFn<double>, QueryStats*, const PairGate<double>*);
 template void collectPairs<float>(const View<float>&, const View<float>&, bool, std::size_t,
-                                  std::vector<std::uint64_t>&);
+                                  std::vector<std::uint64_t>&, const PairGate<float>*);
 template void collectPairs<double>(const View<double>&, const View<double>&, bool, std::size_t,
-                                   std::vector<std::uint64_t>&);
+                                   std::vector<std::uint64_t>&, const PairGate<double>*);
 template bool collideAllPairs<float>(const View<float>&, void*, CollideFn<float>, QueryStats*,
-                                     PairKernel);
+                                     PairKernel, const PairGate<float>*);
 template bool collideAllPairs<double>(const View<double>&, void*, CollideFn<double>, QueryStats*,
-                                      PairKernel);
+                                      PairKernel, const PairGate<double>*);
 template std::uint64_t leafOverlapMask<float>(const Item<float>*, std::uint32_t, const Item<float>*,
                                               std::uint32_t, bool, PairKernel);
 template std::uint64_t leafOverlapMask<double>(const Item<double>*, std::uint32_t,
                                                const Item<double>*, std::uint32_t, bool,
                                                PairKernel);
 template bool distancePairs<float>(const View<float>&, const View<float>&, bool, void*,
-                                   DistanceFn<float>, float&, QueryStats*);
+                                   DistanceFn<float>, float&, QueryStats*, const PairGate<float>*);
 template bool distancePairs<double>(const View<double>&, const View<double>&, bool, void*,
-                                    DistanceFn<double>, double&, QueryStats*);
+                                    DistanceFn<double>, double&, QueryStats*,
+                                    const PairGate<double>*);
 template struct SingleView<float>;
 template struct SingleView<double>;
 

@@ -4,6 +4,7 @@
 // object queries and all distance queries (a query object is a one-leaf view).
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/geometry.h"
@@ -18,20 +19,50 @@ using CollideFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, v
 template <typename S>
 using DistanceFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void*, S&);
 
+/// A predicate on two objects: false drops the pair before any callback.
+template <typename S>
+using KeepFn = std::function<bool(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*)>;
+
+/// What a pair of overlapping boxes must also pass to reach a callback: the two objects' filter
+/// bits, the user's predicate, and, in self queries, the orientation (lower registration number
+/// first). A null member leaves its rule out; walks without a gate test nothing more.
+template <typename S>
+struct PairGate {
+  const Filter* filters_a = nullptr;   ///< per id of side a's objects; null: all default
+  const Filter* filters_b = nullptr;   ///< per id of side b's objects; null: all default
+  Filter query;                        ///< side b's object when its id is kNone
+  const KeepFn<S>* keep = nullptr;     ///< the user's predicate, if any
+  const std::uint32_t* seq = nullptr;  ///< self queries: orient pairs by these numbers
+
+  /// Calls then(x, y) on the pair, oriented, if it passes; false (the query goes on) otherwise.
+  template <class Then>
+  bool through(const Item<S>& x, const Item<S>& y, Then&& then) const {
+    const Filter fx = filters_a != nullptr ? filters_a[x.id] : Filter{};
+    const Filter fy = y.id == kNone ? query : filters_b != nullptr ? filters_b[y.id] : Filter{};
+    if (!filtersPass(fx, fy)) return false;
+    const bool swap = seq != nullptr && seq[y.id] < seq[x.id];
+    const Item<S>& first = swap ? y : x;
+    const Item<S>& second = swap ? x : y;
+    if (keep != nullptr && !(*keep)(first.obj, second.obj)) return false;
+    return then(first, second);
+  }
+};
+
 /// Calls fn(x, y, data) for every pair of distinct objects x of `a` and y of `b` whose boxes
-/// overlap (closed). With `self` (a and b are the same view) each unordered pair comes once.
-/// Returns true as soon as fn does (the query stops).
+/// overlap (closed) and that pass `gate` (if given). With `self` (a and b are the same view)
+/// each unordered pair comes once. Returns true as soon as fn does (the query stops).
 template <typename S>
 bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
-                  QueryStats* stats = nullptr);
+                  QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
 
 /// Appends to `out` every pair of distinct objects x of `a` and y of `b` whose boxes overlap
 /// (closed; with `self`, each unordered pair once) as id(x) << 32 | id(y). In the order and with
 /// the argument order in which a collide would call its callback: collidePairs, or
-/// collideAllPairs for a self view of at most `all_pairs_limit` slots.
+/// collideAllPairs for a self view of at most `all_pairs_limit` slots. With a gate, only the
+/// pairs that pass it, oriented by it (an id of kNone stays kNone).
 template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
-                  std::vector<std::uint64_t>& out);
+                  std::vector<std::uint64_t>& out, const PairGate<S>* gate = nullptr);
 
 /// Self-collide of one view without its cubes: every pair of objects is tested, several at a
 /// time in float, and pairs that pass are tested again exactly before fn is called. For small
@@ -39,7 +70,7 @@ void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all
 /// collidePairs(v, v, true, ...), in slot order. Requires v.slots <= kAllPairsMax.
 template <typename S>
 bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats = nullptr,
-                     PairKernel kernel = PairKernel::best);
+                     PairKernel kernel = PairKernel::best, const PairGate<S>* gate = nullptr);
 
 /// The box tests the walks make between two leaves (each at most kMaskLeaf objects): bit
 /// kMaskLeaf i + j of the result is set where xs[i] and ys[j] overlap (closed). With `self`, xs
@@ -53,10 +84,11 @@ std::uint64_t leafOverlapMask(const Item<S>* xs, std::uint32_t nx, const Item<S>
 
 /// Branch and bound over the same pairs: calls fn(x, y, data, best) for pairs whose box distance
 /// is below `best` (or whose boxes overlap), nearer cubes first; fn lowers `best`. Returns true
-/// as soon as fn does. `stats`, if given, counts the work done.
+/// as soon as fn does. `stats`, if given, counts the work done; pairs that do not pass `gate`
+/// (if given) are skipped.
 template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
-                   S& best, QueryStats* stats = nullptr);
+                   S& best, QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
 
 /// The two views of one broadphase, its cubes and its unbounded list, and where each id is.
 template <typename S>

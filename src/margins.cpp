@@ -1,0 +1,106 @@
+// Contacts within a margin: the manager's candidate pairs (boxes grown by the margins), culled on
+// tight volumes widened by the margins, then fcl::collide and fcl::distance.
+
+#include "cube_collision/margins.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+
+#include "cube_collision/queries.h"
+#include "cull.h"
+#include "fcl_narrow.h"
+
+namespace cube {
+
+namespace {
+
+template <typename S>
+bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
+  const fcl::NODE_TYPE t = o.getNodeType();
+  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
+}
+
+template <typename S>
+std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manager,
+                                            const std::vector<ObjectPair<S>>& pairs,
+                                            const fcl::DistanceRequest<S>& request, int threads,
+                                            NarrowPhaseStats* stats) {
+  enum : std::uint8_t { kFar, kNear };
+  std::vector<MarginContact<S>> found(pairs.size());
+  std::vector<std::uint8_t> verdict(pairs.size(), kFar);
+  std::atomic<std::size_t> culled{0}, calls{0};
+  const S tolerance = request.distance_tolerance;
+  forEachPair<S>(
+      pairs,
+      [&](std::size_t i, fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+        const S within = manager.margin(a) + manager.margin(b);
+        const auto sep = detail::separation(*a, *b, tolerance, within);
+        if (sep.lower_bound > within + sep.margin) {
+          culled.fetch_add(1, std::memory_order_relaxed);
+          return;
+        }
+        MarginContact<S>& c = found[i];
+        c.a = a;
+        c.b = b;
+        fcl::CollisionRequest<S> creq;
+        creq.gjk_solver_type = request.gjk_solver_type;
+        fcl::CollisionResult<S> cres;
+        calls.fetch_add(1, std::memory_order_relaxed);
+        if (detail::fclCollide(a, b, creq, cres) > 0) {
+          c.colliding = true;
+          verdict[i] = kNear;
+          return;
+        }
+        if (distanceUnanswered(*a) || distanceUnanswered(*b)) {
+          c.distance = a->getAABB().distance(b->getAABB());
+        } else {
+          fcl::DistanceResult<S> dres;
+          calls.fetch_add(1, std::memory_order_relaxed);
+          c.distance = detail::fclDistance(a, b, request, dres);
+          c.nearest_points[0] = dres.nearest_points[0];
+          c.nearest_points[1] = dres.nearest_points[1];
+        }
+        if (c.distance <= within) verdict[i] = kNear;
+      },
+      threads);
+  std::vector<MarginContact<S>> out;
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (verdict[i] == kNear) out.push_back(found[i]);
+  if (stats != nullptr) {
+    stats->candidate_pairs += pairs.size();
+    stats->culled += culled.load();
+    stats->narrow_calls += calls.load();
+  }
+  return out;
+}
+
+}  // namespace
+
+template <typename S>
+std::vector<MarginContact<S>> contactsWithinMargin(const CubeCollisionManager<S>& manager,
+                                                   const fcl::DistanceRequest<S>& distance_request,
+                                                   int threads, NarrowPhaseStats* stats) {
+  return withinMargins(manager, overlappingPairs<S>(manager), distance_request, threads, stats);
+}
+
+template <typename S>
+std::vector<MarginContact<S>> contactsWithinMargin(const CubeCollisionManager<S>& manager,
+                                                   fcl::CollisionObject<S>* obj,
+                                                   const fcl::DistanceRequest<S>& distance_request,
+                                                   int threads, NarrowPhaseStats* stats) {
+  return withinMargins(manager, overlappingPairs<S>(manager, obj), distance_request, threads,
+                       stats);
+}
+
+#define CUBE_MARGINS_INSTANTIATE(S)                                                             \
+  template std::vector<MarginContact<S>> contactsWithinMargin<S>(                               \
+      const CubeCollisionManager<S>&, const fcl::DistanceRequest<S>&, int, NarrowPhaseStats*);  \
+  template std::vector<MarginContact<S>> contactsWithinMargin<S>(                               \
+      const CubeCollisionManager<S>&, fcl::CollisionObject<S>*, const fcl::DistanceRequest<S>&, \
+      int, NarrowPhaseStats*);
+CUBE_MARGINS_INSTANTIATE(double)
+CUBE_MARGINS_INSTANTIATE(float)
+#undef CUBE_MARGINS_INSTANTIATE
+
+}  // namespace cube

@@ -1,0 +1,504 @@
+// Filter bits, the pair predicate, margins and canonical pair order (issue 20), each against
+// brute force over every pair of objects.
+
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/narrowphase/collision.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/margins.h"
+#include "cube_collision/queries.h"
+#include "scenes.h"
+#include "support/oracle.h"
+
+namespace {
+
+using cube::CubeCollisionManager;
+using cube::oracle::Pair;
+using cube::oracle::unordered;
+
+template <typename S>
+using Obj = fcl::CollisionObject<S>;
+
+struct Bits {
+  std::uint64_t category = 1, mask = ~std::uint64_t(0);
+};
+
+bool pass(const Bits& a, const Bits& b) {
+  return (a.category & b.mask) != 0 && (b.category & a.mask) != 0;
+}
+
+// Random bits over four groups for about two thirds of the objects; the others keep the default.
+template <typename S>
+std::map<Obj<S>*, Bits> randomBits(CubeCollisionManager<S>& m, const std::vector<Obj<S>*>& objs,
+                                   std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::map<Obj<S>*, Bits> bits;
+  for (Obj<S>* o : objs) {
+    Bits b;
+    if (rng() % 3 != 0) {
+      b.category = std::uint64_t(1) << (rng() % 4);
+      b.mask = rng() % 16;
+      m.setFilter(o, b.category, b.mask);
+      std::string why;
+      EXPECT_TRUE(m.validate(&why)) << why;
+    }
+    bits[o] = b;
+  }
+  return bits;
+}
+
+template <typename S>
+Bits bitsOf(const std::map<Obj<S>*, Bits>& bits, Obj<S>* o) {
+  const auto it = bits.find(o);
+  return it == bits.end() ? Bits{} : it->second;
+}
+
+// Brute force: overlapping AABBs that pass the bits, as sorted unordered pairs.
+template <typename S>
+std::vector<Pair<S>> bruteFiltered(const std::vector<Obj<S>*>& objs,
+                                   const std::map<Obj<S>*, Bits>& bits) {
+  std::vector<Pair<S>> out;
+  for (const auto& p : cube::oracle::bruteSelfPairs(objs))
+    if (pass(bitsOf(bits, p.first), bitsOf(bits, p.second))) out.push_back(p);
+  return out;
+}
+
+template <typename S>
+cube::scenes::Scene<S> scene(std::size_t n, std::uint32_t seed, double overlaps = 3.0) {
+  cube::scenes::SceneOptions o;
+  o.n = n;
+  o.seed = seed;
+  o.overlaps_per_object = overlaps;
+  return cube::scenes::makeScene<S>(o);
+}
+
+TEST(PairFilters, SelfCollideEqualsBruteForceOnEveryPath) {
+  for (const std::size_t n : {40u, 700u}) {  // the all-pairs kernel and the tree walk
+    auto sc = scene<double>(n, 7 + n);
+    const auto objs = sc.pointers();
+    for (const bool keep_pairs : {false, true}) {
+      cube::Config cfg;
+      cfg.keep_pairs = keep_pairs;
+      CubeCollisionManager<double> m(cfg);
+      m.registerObjects(objs);
+      m.update();  // with keep_pairs the next self-collide reads the pair list
+      const auto bits = randomBits(m, objs, 3);
+      EXPECT_EQ(m.pairsListed(), keep_pairs) << "setting bits must keep the pair list";
+      const auto want = bruteFiltered(objs, bits);
+      EXPECT_LT(want.size(), cube::oracle::bruteSelfPairs(objs).size()) << "bits filter nothing";
+      EXPECT_EQ(cube::oracle::selfPairs(m), want) << "n " << n << " keep_pairs " << keep_pairs;
+      // After motion the list is refreshed and still filtered.
+      cube::scenes::jitter(sc, 0.05, cube::scenes::typicalSize({}) * 0.5, true, 11);
+      m.update();
+      EXPECT_EQ(cube::oracle::selfPairs(m), bruteFiltered(objs, bits));
+      std::string why;
+      EXPECT_TRUE(m.validate(&why)) << why;
+    }
+  }
+}
+
+TEST(PairFilters, ObjectQueriesAndManagersEqualBruteForce) {
+  auto sc = scene<double>(500, 21);
+  auto qs = scene<double>(60, 22);
+  const auto objs = sc.pointers();
+  const auto queries = qs.pointers();
+  CubeCollisionManager<double> m;
+  m.registerObjects(objs);
+  const auto bits = randomBits(m, objs, 5);
+  // A registered query object brings its own bits; an unregistered one the default.
+  for (Obj<double>* q : {objs[3], objs[17], queries[0], queries[1]}) {
+    std::vector<Pair<double>> got, want;
+    m.collide(q, [&](Obj<double>* a, Obj<double>* b) { got.emplace_back(a, b); });
+    for (Obj<double>* o : objs)
+      if (o != q && o->getAABB().overlap(q->getAABB()) && pass(bitsOf(bits, o), bitsOf(bits, q)))
+        want.emplace_back(o, q);
+    std::sort(got.begin(), got.end());
+    std::sort(want.begin(), want.end());
+    EXPECT_EQ(got, want);
+  }
+  // Against another cube manager: each side's bits from its own manager.
+  CubeCollisionManager<double> other;
+  other.registerObjects(queries);
+  const auto other_bits = randomBits(other, queries, 9);
+  std::vector<Pair<double>> got, want;
+  m.collide(&other, [&](Obj<double>* a, Obj<double>* b) { got.emplace_back(a, b); });
+  for (const auto& p : cube::oracle::bruteCrossPairs(objs, queries))
+    if (pass(bitsOf(bits, p.first), bitsOf(other_bits, p.second))) want.push_back(p);
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, want);
+  // Against an FCL manager: its objects have the default bits.
+  fcl::DynamicAABBTreeCollisionManager<double> fcl_other;
+  fcl_other.registerObjects(queries);
+  fcl_other.setup();
+  got.clear();
+  want.clear();
+  m.collide(&fcl_other, [&](Obj<double>* a, Obj<double>* b) { got.emplace_back(a, b); });
+  for (const auto& p : cube::oracle::bruteCrossPairs(objs, queries))
+    if (pass(bitsOf(bits, p.first), Bits{})) want.push_back(p);
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, want);
+}
+
+TEST(PairFilters, PredicateAndDistance) {
+  auto sc = scene<double>(300, 31, 2.0);
+  const auto objs = sc.pointers();
+  CubeCollisionManager<double> m;
+  m.registerObjects(objs);
+  const auto bits = randomBits(m, objs, 13);
+  // Drop pairs whose two objects were created an even number apart.
+  std::map<Obj<double>*, std::size_t> index;
+  for (std::size_t i = 0; i < objs.size(); ++i) index[objs[i]] = i;
+  std::size_t asked = 0;
+  m.setPairFilter([&](Obj<double>* a, Obj<double>* b) {
+    ++asked;
+    EXPECT_TRUE(pass(bitsOf(bits, a), bitsOf(bits, b))) << "predicate asked before the bits";
+    return (index[a] + index[b]) % 2 == 1;
+  });
+  std::vector<Pair<double>> want;
+  for (const auto& p : bruteFiltered(objs, bits))
+    if ((index[p.first] + index[p.second]) % 2 == 1) want.push_back(p);
+  EXPECT_EQ(cube::oracle::selfPairs(m), want);
+  EXPECT_EQ(asked, bruteFiltered(objs, bits).size());
+  // Self distance: the minimum over the pairs that pass, by brute force with the same function.
+  double best = std::numeric_limits<double>::max();
+  m.distance(&best, &cube::oracle::narrowDistance<double>);
+  double brute = std::numeric_limits<double>::max();
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j) {
+      if (!pass(bitsOf(bits, objs[i]), bitsOf(bits, objs[j])) || (i + j) % 2 == 0) continue;
+      double d = std::numeric_limits<double>::max();
+      double tmp = d;
+      cube::oracle::narrowDistance<double>(objs[i], objs[j], &tmp, d);
+      brute = std::min(brute, tmp);
+    }
+  EXPECT_NEAR(best, brute, 1e-9 * (1 + std::fabs(brute)));
+  m.setPairFilter({});
+  EXPECT_EQ(cube::oracle::selfPairs(m), bruteFiltered(objs, bits));
+}
+
+TEST(PairFilters, NarrowPhaseSeesNoFilteredPair) {
+  auto sc = scene<double>(400, 41, 4.0);
+  const auto objs = sc.pointers();
+  CubeCollisionManager<double> m;
+  m.registerObjects(objs);
+  const auto bits = randomBits(m, objs, 17);
+  fcl::CollisionRequest<double> req(1000000);
+  cube::NarrowPhaseStats stats;
+  cube::NarrowPhaseOptions<double> opt;
+  opt.stats = &stats;
+  opt.threads = 2;
+  const auto res = cube::collideAll(m, req, opt);
+  const auto allowed = bruteFiltered(objs, bits);
+  EXPECT_EQ(stats.candidate_pairs, allowed.size());
+  std::size_t contacts = 0;
+  for (const auto& p : allowed) {
+    fcl::CollisionResult<double> r;
+    contacts += fcl::collide(p.first, p.second, req, r) > 0 ? r.numContacts() : 0;
+  }
+  EXPECT_EQ(res.numContacts(), contacts);
+}
+
+TEST(PairFilters, BadInputChangesNothing) {
+  auto sc = scene<double>(50, 51);
+  const auto objs = sc.pointers();
+  CubeCollisionManager<double> m;
+  m.registerObjects({objs[0], objs[1]});
+  m.setFilter(objs[0], 2, 6);
+  EXPECT_THROW(m.setFilter(nullptr, 1, 1), std::invalid_argument);
+  EXPECT_THROW(m.setFilter(objs[2], 1, 1), std::invalid_argument);
+  EXPECT_EQ(m.filter(objs[0]), std::make_pair(std::uint64_t(2), std::uint64_t(6)));
+  EXPECT_EQ(m.filter(objs[2]), std::make_pair(std::uint64_t(1), ~std::uint64_t(0)));
+  // From inside a callback of a query on this manager: refused.
+  bool threw = false;
+  m.collide(objs[0], [&](Obj<double>*, Obj<double>*) {
+    try {
+      m.setFilter(objs[1], 1, 1);
+    } catch (const std::logic_error&) {
+      threw = true;
+    }
+  });
+  m.registerObject(objs[2]);
+  objs[2]->setTransform(objs[0]->getTransform());
+  objs[2]->computeAABB();
+  m.update(objs[2]);
+  m.setFilter(objs[2], 2, ~std::uint64_t(0));  // meets objs[0]'s bits
+  m.collide(objs[0], [&](Obj<double>*, Obj<double>*) {
+    try {
+      m.setPairFilter({});
+    } catch (const std::logic_error&) {
+      threw = true;
+    }
+    return true;
+  });
+  EXPECT_TRUE(threw);
+  // An unregistered object that comes back starts with the default bits again.
+  m.unregisterObject(objs[0]);
+  m.registerObject(objs[0]);
+  EXPECT_EQ(m.filter(objs[0]), std::make_pair(std::uint64_t(1), ~std::uint64_t(0)));
+  std::string why;
+  EXPECT_TRUE(m.validate(&why)) << why;
+}
+
+// Margins: brute force on boxes grown by each object's margin, computed as the core defines it.
+template <typename S>
+fcl::AABB<S> grownBox(const Obj<S>* o, S m) {
+  fcl::AABB<S> b = o->getAABB();
+  for (int k = 0; k < 3; ++k) {
+    b.min_[k] = b.min_[k] - m;
+    b.max_[k] = b.max_[k] + m;
+  }
+  return b;
+}
+
+template <typename S>
+void checkMargins() {
+  auto sc = scene<S>(600, 61, 1.0);
+  auto qs = scene<S>(40, 62, 1.0);
+  const auto objs = sc.pointers();
+  const S size = S(cube::scenes::typicalSize({}));
+  CubeCollisionManager<S> m;
+  m.registerObjects(objs);
+  std::map<Obj<S>*, S> own;
+  std::mt19937 rng(5);
+  for (std::size_t i = 0; i < objs.size(); i += 3) {
+    own[objs[i]] = S(rng() % 100) / S(100) * size;
+    m.setMargin(objs[i], own[objs[i]]);
+  }
+  const S all = size / S(4);
+  m.setMargin(all);
+  const auto marginOf = [&](Obj<S>* o) { return own.count(o) ? own[o] : all; };
+  for (Obj<S>* o : objs) EXPECT_EQ(m.margin(o), marginOf(o));
+  for (int step = 0; step < 2; ++step) {
+    std::vector<Pair<S>> want;
+    for (std::size_t i = 0; i < objs.size(); ++i)
+      for (std::size_t j = i + 1; j < objs.size(); ++j)
+        if (grownBox(objs[i], marginOf(objs[i])).overlap(grownBox(objs[j], marginOf(objs[j]))))
+          want.push_back(unordered(objs[i], objs[j]));
+    std::sort(want.begin(), want.end());
+    EXPECT_GT(want.size(), cube::oracle::bruteSelfPairs(objs).size()) << "margins grow nothing";
+    EXPECT_EQ(cube::oracle::selfPairs(m), want);
+    // Query objects: a registered one grows by its margin, another by the manager-wide one.
+    for (Obj<S>* q : {objs[0], objs[1], qs.objects[0].get(), qs.objects[1].get()}) {
+      const S mq = std::find(objs.begin(), objs.end(), q) != objs.end() ? marginOf(q) : all;
+      std::vector<Obj<S>*> got, expect;
+      m.collide(q, [&](Obj<S>* a, Obj<S>*) { got.push_back(a); });
+      for (Obj<S>* o : objs)
+        if (o != q && grownBox(o, marginOf(o)).overlap(grownBox(q, mq))) expect.push_back(o);
+      std::sort(got.begin(), got.end());
+      std::sort(expect.begin(), expect.end());
+      EXPECT_EQ(got, expect);
+    }
+    std::string why;
+    EXPECT_TRUE(m.validate(&why)) << why;
+    cube::scenes::jitter(sc, 0.1, double(size), true, 71);
+    m.update();
+  }
+}
+
+TEST(Margins, EqualBruteForceOnGrownBoxes) {
+  checkMargins<double>();
+  checkMargins<float>();
+}
+
+TEST(Margins, BadInputChangesNothing) {
+  auto sc = scene<double>(10, 81);
+  const auto objs = sc.pointers();
+  CubeCollisionManager<double> m;
+  m.registerObjects({objs[0], objs[1]});
+  m.setMargin(objs[0], 0.5);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double bad : {-1.0, nan, inf}) {
+    EXPECT_THROW(m.setMargin(objs[0], bad), std::invalid_argument);
+    EXPECT_THROW(m.setMargin(bad), std::invalid_argument);
+  }
+  EXPECT_THROW(m.setMargin(nullptr, 1.0), std::invalid_argument);
+  EXPECT_THROW(m.setMargin(objs[2], 1.0), std::invalid_argument);
+  EXPECT_EQ(m.margin(objs[0]), 0.5);
+  EXPECT_EQ(m.margin(objs[1]), 0.0);
+  EXPECT_EQ(m.margin(objs[2]), 0.0);
+  std::string why;
+  EXPECT_TRUE(m.validate(&why)) << why;
+}
+
+// contactsWithinMargin against FCL's narrow phase on every pair: colliding, or fcl::distance at
+// most the two margins. Canonical order hands pairs over as brute force calls them (i < j).
+TEST(Margins, ContactsWithinMarginEqualNarrowPhaseOnEveryPair) {
+  for (const bool meshes : {false, true}) {
+    cube::scenes::SceneOptions o;
+    o.n = meshes ? 150 : 300;
+    o.seed = 111;
+    o.meshes = meshes;
+    o.overlaps_per_object = 1.0;
+    auto sc = cube::scenes::makeScene<double>(o);
+    const auto objs = sc.pointers();
+    cube::Config cfg;
+    cfg.canonical_pairs = true;
+    CubeCollisionManager<double> m(cfg);
+    m.registerObjects(objs);
+    const double size = cube::scenes::typicalSize(o);
+    m.setMargin(size * 0.2);
+    for (std::size_t i = 0; i < objs.size(); i += 5) m.setMargin(objs[i], size * 0.6);
+    std::vector<std::tuple<Obj<double>*, Obj<double>*, bool, double>> want;
+    for (std::size_t i = 0; i < objs.size(); ++i)
+      for (std::size_t j = i + 1; j < objs.size(); ++j) {
+        fcl::CollisionRequest<double> creq;
+        fcl::CollisionResult<double> cres;
+        if (fcl::collide(objs[i], objs[j], creq, cres) > 0) {
+          want.emplace_back(objs[i], objs[j], true, 0.0);
+          continue;
+        }
+        fcl::DistanceRequest<double> dreq(true);
+        fcl::DistanceResult<double> dres;
+        const double d = fcl::distance(objs[i], objs[j], dreq, dres);
+        if (d <= m.margin(objs[i]) + m.margin(objs[j]))
+          want.emplace_back(objs[i], objs[j], false, d);
+      }
+    for (const int threads : {1, 2}) {
+      cube::NarrowPhaseStats stats;
+      const auto got =
+          cube::contactsWithinMargin(m, fcl::DistanceRequest<double>(true), threads, &stats);
+      std::vector<std::tuple<Obj<double>*, Obj<double>*, bool, double>> g;
+      for (const auto& c : got) g.emplace_back(c.a, c.b, c.colliding, c.distance);
+      std::sort(g.begin(), g.end());
+      auto w = want;
+      std::sort(w.begin(), w.end());
+      EXPECT_EQ(g, w) << "meshes " << meshes << " threads " << threads;
+      EXPECT_GT(w.size(), 0u);
+      EXPECT_GT(stats.culled, 0u) << "the widened tight volumes proved no pair apart";
+    }
+    // One object against the manager: (managed, obj).
+    std::vector<Obj<double>*> got_q, want_q;
+    for (const auto& c : cube::contactsWithinMargin(m, objs[0])) {
+      EXPECT_EQ(c.b, objs[0]);
+      got_q.push_back(c.a);
+    }
+    for (const auto& t : want)
+      if (std::get<0>(t) == objs[0] || std::get<1>(t) == objs[0])
+        want_q.push_back(std::get<0>(t) == objs[0] ? std::get<1>(t) : std::get<0>(t));
+    std::sort(got_q.begin(), got_q.end());
+    std::sort(want_q.begin(), want_q.end());
+    EXPECT_EQ(got_q, want_q);
+  }
+}
+
+// Canonical order: two managers over the same registrations, with trees built differently,
+// make the same calls in the same order, and contacts from FCL's narrow phase are bit-identical.
+template <typename S>
+std::vector<Pair<S>> calls(const CubeCollisionManager<S>& m) {
+  std::vector<Pair<S>> c;
+  m.collide([&](Obj<S>* a, Obj<S>* b) { c.emplace_back(a, b); });
+  return c;
+}
+
+TEST(CanonicalPairs, SameCallsWhateverTheTree) {
+  auto sc = scene<double>(800, 91, 3.0);
+  auto qs = scene<double>(50, 92, 3.0);
+  const auto objs = sc.pointers();
+  cube::Config a_cfg;
+  a_cfg.canonical_pairs = true;
+  cube::Config b_cfg = a_cfg;
+  b_cfg.leaf_size = 2;
+  b_cfg.keep_pairs = false;
+  b_cfg.update_policy = cube::UpdatePolicy::refit;
+  CubeCollisionManager<double> a(a_cfg), b(b_cfg);
+  a.registerObjects(objs);
+  for (auto* o : objs) b.registerObject(o);
+  // b's tree is refitted after motions away and back, a's built once.
+  auto saved = std::vector<fcl::Transform3<double>>();
+  for (auto* o : objs) saved.push_back(o->getTransform());
+  cube::scenes::jitter(sc, 1.0, 500.0, true, 3);
+  b.update();
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    objs[i]->setTransform(saved[i]);
+    objs[i]->computeAABB();
+  }
+  b.update();
+  a.update();
+  const auto ca = calls(a), cb = calls(b);
+  EXPECT_EQ(ca, cb);
+  // Oriented by registration (creation order here) and sorted.
+  std::map<Obj<double>*, std::size_t> seq;
+  for (std::size_t i = 0; i < objs.size(); ++i) seq[objs[i]] = i;
+  for (std::size_t i = 0; i < ca.size(); ++i) {
+    ASSERT_LT(seq[ca[i].first], seq[ca[i].second]);
+    if (i > 0)
+      EXPECT_LT(std::make_pair(seq[ca[i - 1].first], seq[ca[i - 1].second]),
+                std::make_pair(seq[ca[i].first], seq[ca[i].second]));
+  }
+  EXPECT_EQ(cube::oracle::unorderedSorted(ca), cube::oracle::bruteSelfPairs(objs));
+  // FCL's narrow phase on the pairs as handed over: the same contacts, bit for bit.
+  const auto contacts = [](const CubeCollisionManager<double>& m) {
+    fcl::CollisionRequest<double> req(1000000, true);
+    fcl::CollisionResult<double> res;
+    m.collide([&](Obj<double>* x, Obj<double>* y) { fcl::collide(x, y, req, res); });
+    std::vector<double> out;
+    for (std::size_t i = 0; i < res.numContacts(); ++i) {
+      const auto& c = res.getContact(i);
+      for (int k = 0; k < 3; ++k) out.insert(out.end(), {c.pos[k], c.normal[k]});
+      out.push_back(c.penetration_depth);
+    }
+    return out;
+  };
+  const auto xa = contacts(a), xb = contacts(b);
+  EXPECT_FALSE(xa.empty());
+  EXPECT_TRUE(xa == xb) << "contacts differ";
+  // Object queries and manager against manager, in order too.
+  for (auto* q : {objs[5], qs.objects[0].get()}) {
+    std::vector<Pair<double>> qa, qb;
+    a.collide(q, [&](Obj<double>* x, Obj<double>* y) { qa.emplace_back(x, y); });
+    b.collide(q, [&](Obj<double>* x, Obj<double>* y) { qb.emplace_back(x, y); });
+    EXPECT_EQ(qa, qb);
+    for (std::size_t i = 1; i < qa.size(); ++i) EXPECT_LT(seq[qa[i - 1].first], seq[qa[i].first]);
+  }
+  CubeCollisionManager<double> other(a_cfg);
+  other.registerObjects(qs.pointers());
+  std::vector<Pair<double>> ma, mb;
+  a.collide(&other, [&](Obj<double>* x, Obj<double>* y) { ma.emplace_back(x, y); });
+  b.collide(&other, [&](Obj<double>* x, Obj<double>* y) { mb.emplace_back(x, y); });
+  EXPECT_EQ(ma, mb);
+  EXPECT_EQ(cube::oracle::unorderedSorted(ma),
+            cube::oracle::unorderedSorted(cube::oracle::bruteCrossPairs(objs, qs.pointers())));
+  // An early stop stops at the first pair in that order.
+  std::vector<Pair<double>> first;
+  a.collide([&](Obj<double>* x, Obj<double>* y) {
+    first.emplace_back(x, y);
+    return true;
+  });
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(first[0], ca[0]);
+}
+
+TEST(CanonicalPairs, WithFiltersAndPairList) {
+  auto sc = scene<double>(300, 101, 3.0);
+  const auto objs = sc.pointers();
+  cube::Config cfg;
+  cfg.canonical_pairs = true;
+  CubeCollisionManager<double> m(cfg);
+  m.registerObjects(objs);
+  m.update();
+  const auto bits = randomBits(m, objs, 23);
+  EXPECT_TRUE(m.pairsListed());
+  const auto c = calls(m);
+  EXPECT_EQ(cube::oracle::unorderedSorted(c), bruteFiltered(objs, bits));
+  cube::Config plain_cfg = cfg;
+  plain_cfg.keep_pairs = false;
+  CubeCollisionManager<double> plain(plain_cfg);
+  plain.registerObjects(objs);
+  for (auto* o : objs) {
+    const Bits b = bitsOf(bits, o);
+    plain.setFilter(o, b.category, b.mask);
+  }
+  EXPECT_EQ(calls(plain), c);
+}
+
+}  // namespace
