@@ -98,7 +98,7 @@ DBox sweep(const fcl::CollisionObject<S>& object, const fcl::Transform3<S>& end,
     const fcl::Vector3d v = motion.getAxis() * motion.getLinearVelocity();
     const fcl::Vector3d c0 = tf1 * m;  // the centre of the local AABB at the start
     fcl::Vector3d base = c0;
-    double arc = 0;
+    fcl::Vector3d arc = fcl::Vector3d::Zero();  // half sides of the box of the centre's arc
     if (theta > 0) {
       // The centre circles the axis: with d = c0 - p = h a + u (u normal to a), it is at
       // p + h a + D(phi) u + t v. For phi in [0, theta], theta <= pi, D(phi) u lies within
@@ -111,11 +111,14 @@ DBox sweep(const fcl::CollisionObject<S>& object, const fcl::Transform3<S>& end,
       const fcl::Vector3d u = d - h * a;
       const fcl::Vector3d u1 = std::cos(theta) * u + std::sin(theta) * a.cross(u);
       base = p + h * a + (u + u1) * 0.5;
-      arc = u.norm() * std::sin(theta * 0.5);
+      // The arc is also in the plane through the midpoint normal to a: in a disc, whose box has
+      // half sides r sqrt(1 - a_k^2).
+      const double r = u.norm() * std::sin(theta * 0.5);
+      arc = r * (fcl::Vector3d::Ones() - a.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
       scale = p.norm() + d.norm();
     }
-    // The centre is in base + [0, 1] v + ball(arc), every point within rho of the centre.
-    const fcl::Vector3d grow = fcl::Vector3d::Constant(arc + rho);
+    // The centre is in base + [0, 1] v + the arc's box, every point within rho of the centre.
+    const fcl::Vector3d grow = arc + fcl::Vector3d::Constant(rho);
     box.add(base, grow);
     box.add(base + v, grow);
     // Never smaller than the two end boxes (FCL's pose at t = 1 is where its motion ends).
