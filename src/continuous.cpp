@@ -91,7 +91,8 @@ DBox sweep(const fcl::CollisionObject<S>& object, const fcl::Transform3<S>& end,
   } else {
     // ScrewMotion: x(t) = D(t theta) (x0 - p) + p + axis * (t lv), D a rotation about the unit
     // axis by t theta, theta in [0, pi]. Read from FCL's own object, so that its quirks hold here
-    // too (below 1e-10 rad it translates by axis * lv with axis = T2 - T1 unnormalized).
+    // too: below 1e-10 rad, axis = T2 - T1 unnormalized and lv = |T2 - T1|, so the object moves
+    // by |T2 - T1| (T2 - T1) and does not end at T2.
     const fcl::ScrewMotion<double> motion(tf1, tf2);
     const double theta = motion.getAngularVelocity();
     const fcl::Vector3d p = motion.getAxisOrigin();

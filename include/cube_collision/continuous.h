@@ -12,7 +12,8 @@
 //    linearly. The swept box is the start box and its translate: exact for the box.
 //  - CCDM_SCREW (fcl::ScrewMotion): a rotation about an axis of at most pi with a translation
 //    along it. The swept box bounds the object by a sphere around its box's centre and the
-//    centre's helix by an arc bound; it is looser than TRANS's.
+//    centre's helix by an arc bound; it is looser than TRANS's. FCL 0.7's screw without a turn
+//    (under 1e-10 rad) moves by |d| d for a displacement d, not by d; the box follows FCL.
 //  - CCDM_LINEAR and CCDM_SPLINE are refused (std::invalid_argument): FCL 0.7 builds
 //    fcl::InterpMotion from two transforms without setting its reference point (left
 //    uninitialized: fcl PR #662), and fcl::SplineMotion from two transforms is an empty TODO, so
