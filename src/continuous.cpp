@@ -251,7 +251,18 @@ ObjectPairs<S> sweptPairs(const CubeCollisionManager<S>& manager,
   Config config = manager.config();
   config.keep_pairs = false;  // one self-collide: a pair list would be built for nothing
   detail::Broadphase<S> swept(config);
+  // Margins, filter bits and the pair predicate apply as in every query of the manager: each
+  // swept box grown by its object's margin, each mover with its bits.
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    const S m = core.margin(objs[i]);
+    for (int k = 0; k < 3; ++k) {
+      boxes[i].lo[k] -= m;
+      boxes[i].hi[k] += m;
+    }
+  }
   swept.addMany(objs.data(), boxes.data(), objs.size());
+  for (fcl::CollisionObject<S>* obj : objs) swept.setFilter(obj, core.filter(obj));
+  swept.setKeep(core.keep());
   Found<S> found{&table, &moving, {}, {}};
   swept.collideSelf(&found, &Found<S>::movers, nullptr);
   swept.collide(core, &found, &Found<S>::withStill, nullptr);

@@ -13,6 +13,7 @@
 #include <tuple>
 #include <vector>
 
+#include "cube_collision/continuous.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/margins.h"
 #include "cube_collision/queries.h"
@@ -307,6 +308,49 @@ void checkMargins() {
 TEST(Margins, EqualBruteForceOnGrownBoxes) {
   checkMargins<double>();
   checkMargins<float>();
+}
+
+// Swept pairs follow the same rules: swept boxes grown by the margins, bits and predicate.
+TEST(Margins, SweptPairsFollowMarginsBitsAndPredicate) {
+  auto sc = scene<double>(400, 131, 1.0);
+  const auto objs = sc.pointers();
+  const double size = cube::scenes::typicalSize({});
+  CubeCollisionManager<double> m;
+  m.registerObjects(objs);
+  const auto bits = randomBits(m, objs, 29);
+  m.setMargin(0.2 * size);
+  for (std::size_t i = 0; i < objs.size(); i += 7) m.setMargin(objs[i], 0.5 * size);
+  m.setPairFilter([&](Obj<double>* a, Obj<double>* b) { return a != objs[1] && b != objs[1]; });
+  std::vector<cube::Motion<double>> motions;
+  std::map<Obj<double>*, fcl::AABB<double>> box;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> step(-2 * size, 2 * size);
+  for (Obj<double>* o : objs) box[o] = grownBox(o, m.margin(o));
+  for (std::size_t i = 0; i < objs.size(); i += 4) {
+    fcl::Transform3d end = objs[i]->getTransform();
+    end.translation() += fcl::Vector3d(step(rng), step(rng), step(rng));
+    motions.push_back({objs[i], end});
+    const fcl::AABB<double> sw = cube::sweptBox(*objs[i], end, fcl::CCDM_TRANS);
+    fcl::AABB<double> g = sw;
+    const double mg = m.margin(objs[i]);
+    for (int k = 0; k < 3; ++k) {
+      g.min_[k] = sw.min_[k] - mg;
+      g.max_[k] = sw.max_[k] + mg;
+    }
+    box[objs[i]] = g;
+  }
+  std::vector<Pair<double>> want;
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j)
+      if ((i % 4 == 0 || j % 4 == 0) && box[objs[i]].overlap(box[objs[j]]) &&
+          pass(bitsOf(bits, objs[i]), bitsOf(bits, objs[j])) && i != 1 && j != 1)
+        want.push_back(unordered(objs[i], objs[j]));
+  std::sort(want.begin(), want.end());
+  std::vector<Pair<double>> got;
+  for (const auto& p : cube::sweptPairs(m, motions)) got.push_back(unordered(p.first, p.second));
+  std::sort(got.begin(), got.end());
+  EXPECT_FALSE(want.empty());
+  EXPECT_EQ(got, want);
 }
 
 TEST(Margins, BadInputChangesNothing) {

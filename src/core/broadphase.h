@@ -65,6 +65,7 @@ class Broadphase {
   Filter filter(const Object* obj) const;
   /// The predicate every pair must pass after the filter bits (empty: none).
   void setKeep(KeepFn<S> keep) { keep_ = std::move(keep); }
+  const KeepFn<S>& keep() const { return keep_; }
   /// Gives a registered object its own margin (>= 0) and its new box `box`; false if not
   /// registered.
   bool setMargin(const Object* obj, const Box<S>& box, S margin);
