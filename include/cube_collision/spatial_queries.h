@@ -1,0 +1,106 @@
+#pragma once
+
+// Queries that FCL's managers do not have: the objects a segment (a ray of finite length) meets,
+// first or all, and the objects in a region (a box, or within a distance of a point). They walk
+// the manager's cube hierarchy, so a query reads the few cubes near the segment or region instead
+// of every object. Compiled into the library for S = double and S = float. Const and safe from
+// any number of threads at once, like the manager's other queries; they may be called from inside
+// a manager callback.
+
+#include <fcl/math/bv/AABB.h>
+#include <fcl/narrowphase/collision_object.h>
+
+#include <optional>
+#include <vector>
+
+#include "cube_collision/cube_collision_manager.h"
+
+namespace cube {
+
+/// What decided a ray hit.
+enum class HitKind {
+  narrow_phase,  ///< FCL's narrow phase on the object's geometry (t within the tolerance)
+  box,           ///< the object's AABB: asked for (RayOptions::narrow_phase off) or no geometry
+                 ///< FCL can test a segment against (octrees, triangles, custom, none)
+};
+
+/// One object a segment meets.
+template <typename S>
+struct RayHit {
+  fcl::CollisionObject<S>* object = nullptr;
+  /// Where along the segment, in [0, 1]: the point is from + t (to - from). 0 if `from` is
+  /// already inside (a mesh is a surface: inside a closed mesh, t is where the segment leaves it).
+  S t = 0;
+  S distance = 0;           ///< t |to - from|
+  fcl::Vector3<S> point;    ///< from + t (to - from)
+  HitKind kind = HitKind::box;
+};
+
+/// How a ray query decides a hit.
+template <typename S>
+struct RayOptions {
+  /// Run FCL's narrow phase on the objects whose AABB the segment meets; off: the AABB decides
+  /// every hit and t is where the segment enters it.
+  bool narrow_phase = true;
+  /// Length along the segment within which a narrow-phase t is found: the reported point lies at
+  /// most this far beyond the first contact (or as close as S can say, for tiny values). >= 0.
+  S tolerance = S(1e-6);
+};
+
+/// The first object the segment from `from` to `to` meets (the hit with the smallest t; equal t:
+/// the earliest registered, i.e. first in getObjects()). Each object is tested exactly as
+/// raycastObject() tests it, against its AABB as of the last registration or update(); the
+/// answer equals the minimum of raycastObject() over every registered object. A segment of
+/// length 0 is the point `from`. Throws std::invalid_argument if `from` or `to` is not finite
+/// (or their difference overflows) or the tolerance is negative or NaN.
+template <typename S>
+std::optional<RayHit<S>> raycastFirst(const CubeCollisionManager<S>& manager,
+                                      const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
+                                      const RayOptions<S>& options = {});
+
+/// Every object the segment meets, by t (equal t: registration order); equal to raycastObject()
+/// on every registered object, kept where it hits. Same input checks as raycastFirst.
+template <typename S>
+std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
+                                  const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
+                                  const RayOptions<S>& options = {});
+
+/// The per-object test behind raycastFirst and raycastAll, against `box` (the object's AABB as
+/// the manager holds it; obj.getAABB() outside one).
+///
+/// Box test, in double: per axis with to_k != from_k, the segment's entry and exit are
+/// (lo_k - from_k) * (1 / (to_k - from_k)) and the same with hi_k (swapped if negative), clamped
+/// to [0, 1]; an axis where the segment does not move (or moves less than 1 / DBL_MAX) requires
+/// lo_k <= from_k <= hi_k. The box is met (closed: touching counts) if the largest entry is at
+/// most the smallest exit. No hit if it is not met.
+///
+/// Narrow phase (options.narrow_phase, and a geometry FCL can test: meshes (BVHModel), box,
+/// sphere, ellipsoid, capsule, cone, cylinder, convex, plane, halfspace): fcl::collide of the
+/// object with a capsule of radius 0 along the segment from `from` to the point at t; as t grows
+/// the capsule only grows, so bisection between the box's entry and exit finds the first contact
+/// to options.tolerance. No hit if the segment up to the box's exit does not collide. t is never
+/// below the box's entry. Other geometries (octree, triangle, custom, none) get the box hit,
+/// kind box. Same input checks as raycastFirst.
+template <typename S>
+std::optional<RayHit<S>> raycastObject(const fcl::CollisionObject<S>& obj, const fcl::AABB<S>& box,
+                                       const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
+                                       const RayOptions<S>& options = {});
+
+/// Every registered object whose AABB overlaps `box` (closed: touching counts), in registration
+/// order. Infinite bounds are allowed (a half-open region). Throws std::invalid_argument if a
+/// bound is NaN or box.min_ exceeds box.max_ on some axis.
+template <typename S>
+std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>& manager,
+                                                   const fcl::AABB<S>& box);
+
+/// Every registered object whose AABB lies within `radius` of `point` (closed), in registration
+/// order. The distance is the Euclidean one from the point to the box (0 inside), tested in
+/// double as: every per-axis gap at most radius, and the sum of the squared gaps at most radius
+/// squared (for radius above 1e150, of the squared gaps divided by radius, at most 1). This is the box's distance, not the
+/// geometry's: a box corner may be near where the object is not. radius may be infinite (every
+/// object). Throws std::invalid_argument if `point` is not finite or radius is negative or NaN.
+template <typename S>
+std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>& manager,
+                                                  const fcl::Vector3<S>& point, S radius);
+
+}  // namespace cube

@@ -1,0 +1,469 @@
+// Ray and region queries (spatial_queries.h) against loops over every registered object: the box
+// tests written again here from the header's contract, the narrow phase through raycastObject
+// (itself checked against the analytic intersections of a segment with a sphere and a box).
+
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/convex.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/spatial_queries.h"
+#include "scenes.h"
+
+namespace {
+
+template <typename S>
+using Obj = fcl::CollisionObject<S>;
+template <typename S>
+using V3 = fcl::Vector3<S>;
+
+// The box test of the contract, written apart from the library's: entry and exit along the
+// segment, or false.
+template <typename S>
+bool slab(const fcl::AABB<S>& box, const V3<S>& from, const V3<S>& to, double& entry) {
+  double lo_t = 0, hi_t = 1;
+  for (int k = 0; k < 3; ++k) {
+    const double o = from[k], l = box.min_[k], h = box.max_[k];
+    const double inv = 1.0 / (double(to[k]) - o);
+    if (!std::isfinite(inv)) {
+      if (o < l || o > h) return false;
+      continue;
+    }
+    const double t1 = (l - o) * inv, t2 = (h - o) * inv;
+    lo_t = std::max(lo_t, inv > 0 ? t1 : t2);
+    hi_t = std::min(hi_t, inv > 0 ? t2 : t1);
+  }
+  entry = lo_t;
+  return lo_t <= hi_t;
+}
+
+// A world of mixed objects: the scene generator's boxes, spheres and cylinders (half of them as
+// meshes), plus cones, ellipsoids, capsules, convexes, and one plane and one halfspace.
+template <typename S>
+struct World {
+  std::vector<std::unique_ptr<Obj<S>>> own;
+  std::vector<Obj<S>*> objs;
+
+  World(std::size_t n, std::uint32_t seed, bool flat = true) {
+    for (int mesh = 0; mesh < 2; ++mesh) {
+      cube::scenes::SceneOptions o;
+      o.n = n / 2;
+      o.seed = seed + mesh;
+      o.meshes = mesh == 1;
+      o.half_extent = 50;
+      o.overlaps_per_object = 2.0;
+      auto sc = cube::scenes::makeScene<S>(o);
+      for (auto& p : sc.objects) own.push_back(std::move(p));
+    }
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-45, 45), size(0.5, 4);
+    std::normal_distribution<double> g(0, 1);
+    auto verts = std::make_shared<std::vector<V3<S>>>(
+        std::vector<V3<S>>{{-1, -1, -1}, {1, -1, -1}, {0, 1, -1}, {0, 0, 1}});
+    auto faces = std::make_shared<std::vector<int>>(
+        std::vector<int>{3, 0, 1, 2, 3, 0, 3, 1, 3, 1, 3, 2, 3, 2, 3, 0});
+    for (std::size_t i = 0; i < n / 10; ++i) {
+      std::shared_ptr<fcl::CollisionGeometry<S>> geo;
+      const S a = S(size(rng));
+      switch (i % 4) {
+        case 0: geo = std::make_shared<fcl::Cone<S>>(a, 2 * a); break;
+        case 1: geo = std::make_shared<fcl::Ellipsoid<S>>(a, a / 2, a * S(0.7)); break;
+        case 2: geo = std::make_shared<fcl::Capsule<S>>(a / 2, a); break;
+        default: geo = std::make_shared<fcl::Convex<S>>(verts, 4, faces, true); break;
+      }
+      Eigen::Quaternion<double> q(g(rng), g(rng), g(rng), g(rng));
+      q.normalize();
+      fcl::Transform3<S> tf = fcl::Transform3<S>::Identity();
+      tf.linear() = q.toRotationMatrix().cast<S>();
+      tf.translation() = V3<S>(S(u(rng)), S(u(rng)), S(u(rng)));
+      own.push_back(std::make_unique<Obj<S>>(geo, tf));
+    }
+    if (flat) {
+      own.push_back(std::make_unique<Obj<S>>(std::make_shared<fcl::Plane<S>>(V3<S>(1, 0, 0), 30)));
+      own.push_back(std::make_unique<Obj<S>>(
+          std::make_shared<fcl::Halfspace<S>>(V3<S>(0.3, -1, 0.2).normalized(), 40)));
+    }
+    // Shuffled, so that registration order is not kind order.
+    std::shuffle(own.begin(), own.end(), rng);
+    for (auto& p : own) {
+      p->computeAABB();
+      objs.push_back(p.get());
+    }
+  }
+};
+
+// The segments of the tests: random, axis-parallel, zero-length, from inside an object, lying
+// on a box face, ending exactly on a box face.
+template <typename S>
+std::vector<std::pair<V3<S>, V3<S>>> segments(const std::vector<Obj<S>*>& objs, int n,
+                                              std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-60, 60);
+  std::uniform_int_distribution<std::size_t> pick(0, objs.size() - 1);
+  std::vector<std::pair<V3<S>, V3<S>>> out;
+  const auto point = [&] { return V3<S>(S(u(rng)), S(u(rng)), S(u(rng))); };
+  for (int i = 0; i < n; ++i) {
+    const V3<S> a = point();
+    V3<S> b = point();
+    const fcl::AABB<S>& box = objs[pick(rng)]->getAABB();
+    switch (i % 7) {
+      case 0:
+      case 1:
+        out.emplace_back(a, b);
+        break;
+      case 2: {  // axis-parallel
+        b = a;
+        b[i % 3] = S(u(rng));
+        out.emplace_back(a, b);
+        break;
+      }
+      case 3:  // zero length
+        out.emplace_back(a, a);
+        break;
+      case 4:  // from inside an object's box (usually the object)
+        if (std::isfinite(box.center()[0] + box.center()[1] + box.center()[2]))
+          out.emplace_back(box.center(), b);
+        break;
+      case 5: {  // on the box's max-x face, moving in y and z only
+        V3<S> f = box.center(), t = b;
+        f[0] = t[0] = box.max_[0];
+        if (std::isfinite(f.sum() + t.sum())) out.emplace_back(f, t);
+        break;
+      }
+      default: {  // along x, ending exactly on the box's min-x face
+        V3<S> f = box.center(), t = box.center();
+        f[0] = box.min_[0] - S(10);
+        t[0] = box.min_[0];
+        if (std::isfinite(f.sum() + t.sum())) out.emplace_back(f, t);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+// Every registered object tested: the box test above, then raycastObject.
+template <typename S>
+std::vector<cube::RayHit<S>> bruteRay(const cube::CubeCollisionManager<S>& m, const V3<S>& from,
+                                      const V3<S>& to, const cube::RayOptions<S>& opt) {
+  std::vector<Obj<S>*> objs;
+  m.getObjects(objs);
+  std::vector<cube::RayHit<S>> hits;
+  for (Obj<S>* o : objs) {
+    double entry;
+    const bool met = slab(o->getAABB(), from, to, entry);
+    const auto h = cube::raycastObject(*o, o->getAABB(), from, to, opt);
+    if (!met) {
+      EXPECT_FALSE(h.has_value()) << "raycastObject hit an object whose box the segment misses";
+      continue;
+    }
+    if (!opt.narrow_phase) {
+      EXPECT_TRUE(h.has_value());
+      if (h) {
+        EXPECT_EQ(double(h->t), double(S(entry)));
+      }
+    }
+    if (h) {
+      EXPECT_GE(double(h->t), double(S(entry)));
+      hits.push_back(*h);
+    }
+  }
+  // Stable: equal t keeps registration order.
+  std::stable_sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  return hits;
+}
+
+template <typename S>
+void expectSameHits(const std::vector<cube::RayHit<S>>& got,
+                    const std::vector<cube::RayHit<S>>& want, const std::string& where) {
+  ASSERT_EQ(got.size(), want.size()) << where;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].object, want[i].object) << where << " hit " << i;
+    EXPECT_EQ(got[i].t, want[i].t) << where << " hit " << i;
+    EXPECT_EQ(got[i].kind, want[i].kind) << where << " hit " << i;
+    EXPECT_EQ(got[i].distance, want[i].distance) << where << " hit " << i;
+  }
+}
+
+template <typename S>
+void checkRays(const cube::CubeCollisionManager<S>& m, const std::vector<Obj<S>*>& objs, int n,
+               std::uint32_t seed, std::size_t* narrow_hits = nullptr) {
+  for (const bool narrow : {false, true}) {
+    cube::RayOptions<S> opt;
+    opt.narrow_phase = narrow;
+    for (const auto& [from, to] : segments(objs, n, seed)) {
+      const std::string where = std::string(narrow ? "narrow" : "box") + " segment " +
+                                std::to_string(from[0]) + "," + std::to_string(from[1]) + "," +
+                                std::to_string(from[2]) + " -> " + std::to_string(to[0]) + "," +
+                                std::to_string(to[1]) + "," + std::to_string(to[2]);
+      const auto want = bruteRay(m, from, to, opt);
+      expectSameHits(cube::raycastAll(m, from, to, opt), want, where);
+      const auto first = cube::raycastFirst(m, from, to, opt);
+      ASSERT_EQ(first.has_value(), !want.empty()) << where;
+      if (first) expectSameHits<S>({*first}, {want.front()}, where + " (first)");
+      if (narrow_hits)
+        for (const auto& h : want) *narrow_hits += h.kind == cube::HitKind::narrow_phase;
+    }
+  }
+}
+
+template <typename S>
+std::vector<Obj<S>*> bruteInBox(const cube::CubeCollisionManager<S>& m, const fcl::AABB<S>& q) {
+  std::vector<Obj<S>*> objs, out;
+  m.getObjects(objs);
+  for (Obj<S>* o : objs) {
+    const fcl::AABB<S>& b = o->getAABB();
+    bool in = true;
+    for (int k = 0; k < 3; ++k) in = in && b.min_[k] <= q.max_[k] && q.min_[k] <= b.max_[k];
+    if (in) out.push_back(o);
+  }
+  return out;
+}
+
+template <typename S>
+std::vector<Obj<S>*> bruteNear(const cube::CubeCollisionManager<S>& m, const V3<S>& p, S r) {
+  std::vector<Obj<S>*> objs, out;
+  m.getObjects(objs);
+  for (Obj<S>* o : objs) {
+    const fcl::AABB<S>& b = o->getAABB();
+    double sum = 0;
+    bool far = false;
+    for (int k = 0; k < 3; ++k) {
+      const double gap = std::max({0.0, double(b.min_[k]) - p[k], double(p[k]) - b.max_[k]});
+      far = far || gap > r;
+      sum += gap * gap;
+    }
+    if (!far && sum <= double(r) * double(r)) out.push_back(o);
+  }
+  return out;
+}
+
+template <typename S>
+void checkRegions(const cube::CubeCollisionManager<S>& m, const std::vector<Obj<S>*>& objs,
+                  std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-60, 60), r(0, 15);
+  std::uniform_int_distribution<std::size_t> pick(0, objs.size() - 1);
+  for (int i = 0; i < 100; ++i) {
+    fcl::AABB<S> q(V3<S>(S(u(rng)), S(u(rng)), S(u(rng))), V3<S>(S(u(rng)), S(u(rng)), S(u(rng))));
+    if (i % 4 == 1) q = fcl::AABB<S>(q.center());  // a point
+    if (i % 4 == 2) {  // touching an object's box from +x, face on face
+      const fcl::AABB<S>& b = objs[pick(rng)]->getAABB();
+      if (std::isfinite(b.max_[0])) q = fcl::AABB<S>(b.max_, b.max_ + V3<S>(5, 5, 5));
+    }
+    if (i % 4 == 3) q.min_[1] = -std::numeric_limits<S>::infinity();  // a half-open region
+    EXPECT_EQ(cube::objectsInBox(m, q), bruteInBox(m, q)) << "box query " << i;
+    const V3<S> p(S(u(rng)), S(u(rng)), S(u(rng)));
+    const S radius = i % 10 == 0 ? S(0) : S(r(rng));
+    EXPECT_EQ(cube::objectsNear(m, p, radius), bruteNear(m, p, radius)) << "near query " << i;
+  }
+  // Infinite radius: every object, in registration order.
+  std::vector<Obj<S>*> all;
+  m.getObjects(all);
+  EXPECT_EQ(cube::objectsNear(m, V3<S>(0, 0, 0), std::numeric_limits<S>::infinity()), all);
+}
+
+template <typename S>
+class SpatialQueries : public ::testing::Test {};
+using Scalars = ::testing::Types<double, float>;
+TYPED_TEST_SUITE(SpatialQueries, Scalars);
+
+TYPED_TEST(SpatialQueries, RaysEqualBruteForceInMixedScenes) {
+  using S = TypeParam;
+  World<S> w(300, 5);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  ASSERT_TRUE(m.validate());
+  std::size_t narrow_hits = 0;
+  checkRays(m, w.objs, 140, 17, &narrow_hits);
+  EXPECT_GT(narrow_hits, 20u) << "the narrow phase should decide many hits";
+}
+
+TYPED_TEST(SpatialQueries, RaysEqualBruteForceInLargeBoxScene) {
+  using S = TypeParam;
+  World<S> w(4000, 9, false);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  cube::RayOptions<S> box_only;
+  box_only.narrow_phase = false;
+  for (const auto& [from, to] : segments(w.objs, 300, 3))
+    expectSameHits(cube::raycastAll(m, from, to, box_only), bruteRay(m, from, to, box_only),
+                   "large scene");
+  checkRays(m, w.objs, 30, 4);
+}
+
+TYPED_TEST(SpatialQueries, RegionsEqualBruteForce) {
+  using S = TypeParam;
+  World<S> w(600, 21);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  checkRegions(m, w.objs, 8);
+}
+
+TYPED_TEST(SpatialQueries, ResultsFollowUpdatesAndUnregistration) {
+  using S = TypeParam;
+  World<S> w(400, 33);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> step(-8, 8);
+  for (int round = 0; round < 3; ++round) {
+    for (std::size_t i = round; i < w.objs.size(); i += 3) {
+      Obj<S>* o = w.objs[i];
+      o->setTranslation(o->getTranslation() + V3<S>(S(step(rng)), S(step(rng)), S(step(rng))));
+      o->computeAABB();
+    }
+    m.update();
+    ASSERT_TRUE(m.validate());
+    checkRays(m, w.objs, 40, 100 + round);
+    checkRegions(m, w.objs, 200 + round);
+    for (std::size_t i = round; i < w.objs.size(); i += 17) m.unregisterObject(w.objs[i]);
+    ASSERT_TRUE(m.validate());
+    std::vector<Obj<S>*> left;
+    m.getObjects(left);
+    checkRays(m, left, 40, 300 + round);
+    checkRegions(m, left, 400 + round);
+  }
+}
+
+// The narrow-phase t against the analytic first contact of a segment with a sphere and with a
+// rotated box (slabs in the box's frame).
+TYPED_TEST(SpatialQueries, NarrowPhaseMatchesAnalyticIntersections) {
+  using S = TypeParam;
+  const double tol = std::is_same<S, float>::value ? 2e-4 : 1e-6;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-6, 6);
+  std::normal_distribution<double> g(0, 1);
+  const S radius = 2;
+  const V3<S> centre(1, -0.5, 0.25);
+  Obj<S> ball(std::make_shared<fcl::Sphere<S>>(radius));
+  ball.setTranslation(centre);
+  ball.computeAABB();
+  const V3<S> half(1.5, 0.75, 2);
+  Eigen::Quaternion<double> q(0.9, 0.2, -0.3, 0.1);
+  q.normalize();
+  const fcl::Matrix3<S> R = q.toRotationMatrix().cast<S>();
+  Obj<S> box(std::make_shared<fcl::Box<S>>(2 * half), R, centre);
+  box.computeAABB();
+  int ball_hits = 0, box_hits = 0;
+  cube::RayOptions<S> opt;
+  opt.tolerance = S(1e-7);
+  for (int i = 0; i < 300; ++i) {
+    const V3<S> from(S(u(rng)), S(u(rng)), S(u(rng)));
+    const V3<S> to(S(u(rng)), S(u(rng)), S(u(rng)));
+    const double len = (to - from).template cast<double>().norm();
+    const Eigen::Vector3d o = from.template cast<double>(), d = (to - from).template cast<double>();
+    // Sphere: |o + t d - c|^2 = r^2.
+    {
+      const Eigen::Vector3d oc = o - centre.template cast<double>();
+      const double a = d.squaredNorm(), b = 2 * oc.dot(d), c = oc.squaredNorm() - radius * radius;
+      const double disc = b * b - 4 * a * c;
+      double t = -1;
+      if (c <= 0) t = 0;
+      else if (disc >= 0) {
+        const double t0 = (-b - std::sqrt(disc)) / (2 * a);
+        if (t0 >= 0 && t0 <= 1) t = t0;
+      }
+      const auto h = cube::raycastObject(ball, ball.getAABB(), from, to, opt);
+      // Grazing segments are left to either answer: the margin is what GJK may say there.
+      const double line_gap = oc.cross(d).norm() / d.norm();
+      const bool grazing = std::abs(line_gap - radius) < 1e-3;
+      if (!grazing && std::abs(t - 1) * len > 1e-3) {
+        ASSERT_EQ(h.has_value(), t >= 0) << "sphere segment " << i;
+        if (h) {
+          ++ball_hits;
+          EXPECT_EQ(h->kind, cube::HitKind::narrow_phase);
+          EXPECT_NEAR(double(h->t) * len, t * len, tol * 10) << "sphere segment " << i;
+          EXPECT_NEAR(double(h->distance), t * len, tol * 10);
+        }
+      }
+    }
+    // Box: slabs in its frame.
+    {
+      const Eigen::Matrix3d Rd = R.template cast<double>();
+      const Eigen::Vector3d lo = Rd.transpose() * (o - centre.template cast<double>());
+      const Eigen::Vector3d ld = Rd.transpose() * d;
+      double tn = 0, tf = 1, slack = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k) {
+        const double h = half[k];
+        double a = (-h - lo[k]) / ld[k], b = (h - lo[k]) / ld[k];
+        if (a > b) std::swap(a, b);
+        tn = std::max(tn, a);
+        tf = std::min(tf, b);
+      }
+      slack = std::min(std::abs(tf - tn), std::min(std::abs(tn - 1), std::abs(tf))) * len;
+      const auto h = cube::raycastObject(box, box.getAABB(), from, to, opt);
+      if (slack > 1e-3) {
+        ASSERT_EQ(h.has_value(), tn <= tf) << "box segment " << i;
+        if (h) {
+          ++box_hits;
+          EXPECT_EQ(h->kind, cube::HitKind::narrow_phase);
+          EXPECT_NEAR(double(h->t) * len, tn * len, tol * 10) << "box segment " << i;
+        }
+      }
+    }
+  }
+  EXPECT_GT(ball_hits, 30);
+  EXPECT_GT(box_hits, 30);
+}
+
+TYPED_TEST(SpatialQueries, EmptyManagerFindsNothing) {
+  using S = TypeParam;
+  cube::CubeCollisionManager<S> m;
+  EXPECT_FALSE(cube::raycastFirst(m, V3<S>(0, 0, 0), V3<S>(1, 1, 1)).has_value());
+  EXPECT_TRUE(cube::raycastAll(m, V3<S>(0, 0, 0), V3<S>(1, 1, 1)).empty());
+  EXPECT_TRUE(cube::objectsInBox(m, fcl::AABB<S>(V3<S>(-1, -1, -1), V3<S>(1, 1, 1))).empty());
+  EXPECT_TRUE(cube::objectsNear(m, V3<S>(0, 0, 0), S(100)).empty());
+}
+
+TYPED_TEST(SpatialQueries, BadInputThrowsAndChangesNothing) {
+  using S = TypeParam;
+  World<S> w(100, 3);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  const S nan = std::numeric_limits<S>::quiet_NaN(), inf = std::numeric_limits<S>::infinity();
+  const V3<S> ok(0, 0, 0), far(10, 10, 10);
+  for (const V3<S>& bad : {V3<S>(nan, 0, 0), V3<S>(0, inf, 0), V3<S>(0, 0, -inf)}) {
+    EXPECT_THROW(cube::raycastFirst(m, bad, far), std::invalid_argument);
+    EXPECT_THROW(cube::raycastAll(m, ok, bad), std::invalid_argument);
+    EXPECT_THROW(cube::raycastObject(*w.objs[0], w.objs[0]->getAABB(), bad, far),
+                 std::invalid_argument);
+    EXPECT_THROW(cube::objectsNear(m, bad, S(1)), std::invalid_argument);
+  }
+  const S big = std::numeric_limits<S>::max();
+  EXPECT_THROW(cube::raycastAll(m, V3<S>(-big, 0, 0), V3<S>(big, 0, 0)), std::invalid_argument);
+  for (const S tol : {S(-1), nan}) {
+    cube::RayOptions<S> opt;
+    opt.tolerance = tol;
+    EXPECT_THROW(cube::raycastFirst(m, ok, far, opt), std::invalid_argument);
+    EXPECT_THROW(cube::raycastAll(m, ok, far, opt), std::invalid_argument);
+  }
+  for (const S r : {S(-1), nan, -inf})
+    EXPECT_THROW(cube::objectsNear(m, ok, r), std::invalid_argument);
+  fcl::AABB<S> nan_box(ok, far);
+  nan_box.max_[1] = nan;
+  EXPECT_THROW(cube::objectsInBox(m, nan_box), std::invalid_argument);
+  fcl::AABB<S> inverted(ok, far);
+  std::swap(inverted.min_[2], inverted.max_[2]);
+  EXPECT_THROW(cube::objectsInBox(m, inverted), std::invalid_argument);
+  EXPECT_TRUE(m.validate());
+  EXPECT_EQ(m.size(), w.objs.size());
+}
+
+}  // namespace
