@@ -226,8 +226,8 @@ struct RayQuery {
   double tol_t;
   const detail::ObjectTable<S>& table;
 
-  RayQuery(const CubeCollisionManager<S>& m, const fcl::Vector3<S>& from,
-           const fcl::Vector3<S>& to, const RayOptions<S>& o)
+  RayQuery(const CubeCollisionManager<S>& m, const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
+           const RayOptions<S>& o)
       : seg(makeSegment(from, to)), tol_t(0), table(m.core().table()) {
     if (o.narrow_phase) {
       caster.emplace(from, to);
@@ -492,20 +492,20 @@ std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>&
   return region(manager, pred);
 }
 
-#define CUBE_SPATIAL_INSTANTIATE(S)                                                            \
-  template std::optional<RayHit<S>> raycastFirst<S>(                                           \
-      const CubeCollisionManager<S>&, const fcl::Vector3<S>&, const fcl::Vector3<S>&,          \
-      const RayOptions<S>&);                                                                   \
-  template std::vector<RayHit<S>> raycastAll<S>(const CubeCollisionManager<S>&,                \
-                                                const fcl::Vector3<S>&, const fcl::Vector3<S>&, \
-                                                const RayOptions<S>&);                         \
-  template std::optional<RayHit<S>> raycastObject<S>(                                          \
-      const fcl::CollisionObject<S>&, const fcl::AABB<S>&, const fcl::Vector3<S>&,             \
-      const fcl::Vector3<S>&, const RayOptions<S>&);                                           \
-  template std::vector<fcl::CollisionObject<S>*> objectsInBox<S>(                              \
-      const CubeCollisionManager<S>&, const fcl::AABB<S>&);                                    \
-  template std::vector<fcl::CollisionObject<S>*> objectsNear<S>(                               \
-      const CubeCollisionManager<S>&, const fcl::Vector3<S>&, S);
+#define CUBE_SPATIAL_INSTANTIATE(S)                                                                \
+  template std::optional<RayHit<S>> raycastFirst<S>(const CubeCollisionManager<S>&,                \
+                                                    const fcl::Vector3<S>&,                        \
+                                                    const fcl::Vector3<S>&, const RayOptions<S>&); \
+  template std::vector<RayHit<S>> raycastAll<S>(const CubeCollisionManager<S>&,                    \
+                                                const fcl::Vector3<S>&, const fcl::Vector3<S>&,    \
+                                                const RayOptions<S>&);                             \
+  template std::optional<RayHit<S>> raycastObject<S>(                                              \
+      const fcl::CollisionObject<S>&, const fcl::AABB<S>&, const fcl::Vector3<S>&,                 \
+      const fcl::Vector3<S>&, const RayOptions<S>&);                                               \
+  template std::vector<fcl::CollisionObject<S>*> objectsInBox<S>(const CubeCollisionManager<S>&,   \
+                                                                 const fcl::AABB<S>&);             \
+  template std::vector<fcl::CollisionObject<S>*> objectsNear<S>(const CubeCollisionManager<S>&,    \
+                                                                const fcl::Vector3<S>&, S);
 
 CUBE_SPATIAL_INSTANTIATE(double)
 CUBE_SPATIAL_INSTANTIATE(float)

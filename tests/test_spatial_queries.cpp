@@ -82,10 +82,18 @@ struct World {
       std::shared_ptr<fcl::CollisionGeometry<S>> geo;
       const S a = S(size(rng));
       switch (i % 4) {
-        case 0: geo = std::make_shared<fcl::Cone<S>>(a, 2 * a); break;
-        case 1: geo = std::make_shared<fcl::Ellipsoid<S>>(a, a / 2, a * S(0.7)); break;
-        case 2: geo = std::make_shared<fcl::Capsule<S>>(a / 2, a); break;
-        default: geo = std::make_shared<fcl::Convex<S>>(verts, 4, faces, true); break;
+        case 0:
+          geo = std::make_shared<fcl::Cone<S>>(a, 2 * a);
+          break;
+        case 1:
+          geo = std::make_shared<fcl::Ellipsoid<S>>(a, a / 2, a * S(0.7));
+          break;
+        case 2:
+          geo = std::make_shared<fcl::Capsule<S>>(a / 2, a);
+          break;
+        default:
+          geo = std::make_shared<fcl::Convex<S>>(verts, 4, faces, true);
+          break;
       }
       Eigen::Quaternion<double> q(g(rng), g(rng), g(rng), g(rng));
       q.normalize();
@@ -185,7 +193,8 @@ std::vector<cube::RayHit<S>> bruteRay(const cube::CubeCollisionManager<S>& m, co
     }
   }
   // Stable: equal t keeps registration order.
-  std::stable_sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  std::stable_sort(hits.begin(), hits.end(),
+                   [](const auto& a, const auto& b) { return a.t < b.t; });
   return hits;
 }
 
@@ -263,7 +272,7 @@ void checkRegions(const cube::CubeCollisionManager<S>& m, const std::vector<Obj<
   for (int i = 0; i < 100; ++i) {
     fcl::AABB<S> q(V3<S>(S(u(rng)), S(u(rng)), S(u(rng))), V3<S>(S(u(rng)), S(u(rng)), S(u(rng))));
     if (i % 4 == 1) q = fcl::AABB<S>(q.center());  // a point
-    if (i % 4 == 2) {  // touching an object's box from +x, face on face
+    if (i % 4 == 2) {                              // touching an object's box from +x, face on face
       const fcl::AABB<S>& b = objs[pick(rng)]->getAABB();
       if (std::isfinite(b.max_[0])) q = fcl::AABB<S>(b.max_, b.max_ + V3<S>(5, 5, 5));
     }
@@ -375,7 +384,8 @@ TYPED_TEST(SpatialQueries, NarrowPhaseMatchesAnalyticIntersections) {
       const double a = d.squaredNorm(), b = 2 * oc.dot(d), c = oc.squaredNorm() - radius * radius;
       const double disc = b * b - 4 * a * c;
       double t = -1;
-      if (c <= 0) t = 0;
+      if (c <= 0)
+        t = 0;
       else if (disc >= 0) {
         const double t0 = (-b - std::sqrt(disc)) / (2 * a);
         if (t0 >= 0 && t0 <= 1) t = t0;

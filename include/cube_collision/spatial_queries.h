@@ -31,8 +31,8 @@ struct RayHit {
   /// Where along the segment, in [0, 1]: the point is from + t (to - from). 0 if `from` is
   /// already inside (a mesh is a surface: inside a closed mesh, t is where the segment leaves it).
   S t = 0;
-  S distance = 0;           ///< t |to - from|
-  fcl::Vector3<S> point;    ///< from + t (to - from)
+  S distance = 0;         ///< t |to - from|
+  fcl::Vector3<S> point;  ///< from + t (to - from)
   HitKind kind = HitKind::box;
 };
 
@@ -96,9 +96,10 @@ std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>
 /// Every registered object whose AABB lies within `radius` of `point` (closed), in registration
 /// order. The distance is the Euclidean one from the point to the box (0 inside), tested in
 /// double as: every per-axis gap at most radius, and the sum of the squared gaps at most radius
-/// squared (for radius above 1e150, of the squared gaps divided by radius, at most 1). This is the box's distance, not the
-/// geometry's: a box corner may be near where the object is not. radius may be infinite (every
-/// object). Throws std::invalid_argument if `point` is not finite or radius is negative or NaN.
+/// squared (for radius above 1e150, of the squared gaps divided by radius, at most 1). This is the
+/// box's distance, not the geometry's: a box corner may be near where the object is not. radius may
+/// be infinite (every object). Throws std::invalid_argument if `point` is not finite or radius is
+/// negative or NaN.
 template <typename S>
 std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>& manager,
                                                   const fcl::Vector3<S>& point, S radius);
