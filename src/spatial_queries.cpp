@@ -164,8 +164,9 @@ class Caster {
   fcl::CollisionObject<S> obj_;
 };
 
-// One hit before it is made public: t in double for exact comparisons, and the registration
-// number for ties.
+// One hit before it is made public: t in double as found, and the registration number for ties.
+// Hits are ordered by t as published (rounded to S), then by registration: for float, two hits
+// a double tells apart may be equal.
 template <typename S>
 struct Found {
   double t;
@@ -176,7 +177,8 @@ struct Found {
 
 template <typename S>
 bool earlier(const Found<S>& a, const Found<S>& b) {
-  return a.t < b.t || (a.t == b.t && a.seq < b.seq);
+  const S ta = S(a.t), tb = S(b.t);
+  return ta < tb || (ta == tb && a.seq < b.seq);
 }
 
 // The per-object test of raycastObject. `bound`: a hit beyond it is of no interest (the walk's
@@ -281,8 +283,11 @@ struct FirstVisitor {
   RayQuery<S>& q;
   std::optional<Found<S>>& best;
   std::vector<std::pair<double, std::uint32_t>>& order;  // a leaf's objects by entry
+  // Beyond this t nothing can beat or tie the best: the next value of S above the best's
+  // published t (a t below it may still round to the same S and win on registration order).
+  double limit = kInf;
 
-  double bound() const { return best ? best->t : kInf; }
+  double bound() const { return limit; }
   static bool before(State x, State y) { return x < y; }
   bool keep(State entry) const { return entry <= bound(); }
   bool enter(std::uint32_t child, int, State, State& entry) const {
@@ -292,7 +297,10 @@ struct FirstVisitor {
   }
   void offer(const Item<S>& it) {
     Found<S> f;
-    if (q.test(it, bound(), f) && (!best || earlier(f, *best))) best = f;
+    if (q.test(it, bound(), f) && (!best || earlier(f, *best))) {
+      best = f;
+      limit = double(std::nextafter(S(f.t), std::numeric_limits<S>::infinity()));
+    }
   }
   Step at(std::uint32_t cube, State) {
     const Node& n = tree.nodes[cube];

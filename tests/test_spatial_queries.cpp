@@ -20,6 +20,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cube_collision/cube_collision_manager.h"
@@ -431,6 +432,40 @@ TYPED_TEST(SpatialQueries, NarrowPhaseMatchesAnalyticIntersections) {
   }
   EXPECT_GT(ball_hits, 30);
   EXPECT_GT(box_hits, 30);
+}
+
+// The queries share nothing: four threads at once get what one thread got.
+TYPED_TEST(SpatialQueries, ConcurrentQueriesAgree) {
+  using S = TypeParam;
+  World<S> w(500, 41);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  const auto segs = segments(w.objs, 60, 43);
+  std::vector<std::vector<cube::RayHit<S>>> want;
+  std::vector<std::vector<Obj<S>*>> want_near;
+  for (const auto& [from, to] : segs) {
+    want.push_back(cube::raycastAll(m, from, to));
+    want_near.push_back(cube::objectsNear(m, from, S(6)));
+  }
+  std::vector<int> mismatches(4, 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      for (int round = 0; round < 3; ++round)
+        for (std::size_t i = 0; i < segs.size(); ++i) {
+          const auto got = cube::raycastAll(m, segs[i].first, segs[i].second);
+          const auto first = cube::raycastFirst(m, segs[i].first, segs[i].second);
+          bool same = got.size() == want[i].size();
+          for (std::size_t j = 0; same && j < got.size(); ++j)
+            same = got[j].object == want[i][j].object && got[j].t == want[i][j].t;
+          same = same && first.has_value() == !want[i].empty() &&
+                 (!first || (first->object == want[i][0].object && first->t == want[i][0].t));
+          same = same && cube::objectsNear(m, segs[i].first, S(6)) == want_near[i];
+          mismatches[t] += !same;
+        }
+    });
+  for (auto& th : threads) th.join();
+  for (int t = 0; t < 4; ++t) EXPECT_EQ(mismatches[t], 0) << "thread " << t;
 }
 
 TYPED_TEST(SpatialQueries, EmptyManagerFindsNothing) {
