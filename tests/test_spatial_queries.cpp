@@ -167,6 +167,18 @@ std::vector<std::pair<V3<S>, V3<S>>> segments(const std::vector<Obj<S>*>& objs, 
   return out;
 }
 
+// The box the manager holds for o: its AABB grown by its margin (0 unless margins are set).
+template <typename S>
+fcl::AABB<S> heldBox(const cube::CubeCollisionManager<S>& m, const Obj<S>* o) {
+  const S g = m.margin(o);
+  fcl::AABB<S> b = o->getAABB();
+  for (int k = 0; k < 3; ++k) {
+    b.min_[k] = b.min_[k] - g;
+    b.max_[k] = b.max_[k] + g;
+  }
+  return b;
+}
+
 // Every registered object tested: the box test above, then raycastObject.
 template <typename S>
 std::vector<cube::RayHit<S>> bruteRay(const cube::CubeCollisionManager<S>& m, const V3<S>& from,
@@ -176,8 +188,9 @@ std::vector<cube::RayHit<S>> bruteRay(const cube::CubeCollisionManager<S>& m, co
   std::vector<cube::RayHit<S>> hits;
   for (Obj<S>* o : objs) {
     double entry;
-    const bool met = slab(o->getAABB(), from, to, entry);
-    const auto h = cube::raycastObject(*o, o->getAABB(), from, to, opt);
+    const fcl::AABB<S> box = heldBox(m, o);
+    const bool met = slab(box, from, to, entry);
+    const auto h = cube::raycastObject(*o, box, from, to, opt);
     if (!met) {
       EXPECT_FALSE(h.has_value()) << "raycastObject hit an object whose box the segment misses";
       continue;
@@ -238,7 +251,7 @@ std::vector<Obj<S>*> bruteInBox(const cube::CubeCollisionManager<S>& m, const fc
   std::vector<Obj<S>*> objs, out;
   m.getObjects(objs);
   for (Obj<S>* o : objs) {
-    const fcl::AABB<S>& b = o->getAABB();
+    const fcl::AABB<S> b = heldBox(m, o);
     bool in = true;
     for (int k = 0; k < 3; ++k) in = in && b.min_[k] <= q.max_[k] && q.min_[k] <= b.max_[k];
     if (in) out.push_back(o);
@@ -251,7 +264,7 @@ std::vector<Obj<S>*> bruteNear(const cube::CubeCollisionManager<S>& m, const V3<
   std::vector<Obj<S>*> objs, out;
   m.getObjects(objs);
   for (Obj<S>* o : objs) {
-    const fcl::AABB<S>& b = o->getAABB();
+    const fcl::AABB<S> b = heldBox(m, o);
     double sum = 0;
     bool far = false;
     for (int k = 0; k < 3; ++k) {
@@ -350,6 +363,20 @@ TYPED_TEST(SpatialQueries, ResultsFollowUpdatesAndUnregistration) {
     checkRays(m, left, 40, 300 + round);
     checkRegions(m, left, 400 + round);
   }
+}
+
+// With margins (margins.h) the manager's boxes are grown: the queries test those, as the loop
+// over every object does with the grown boxes; the narrow phase still sees the geometry.
+TYPED_TEST(SpatialQueries, MarginsGrowTheTestedBoxes) {
+  using S = TypeParam;
+  World<S> w(300, 61);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  m.setMargin(S(0.75));
+  for (std::size_t i = 0; i < w.objs.size(); i += 5) m.setMargin(w.objs[i], S(3));
+  ASSERT_TRUE(m.validate());
+  checkRays(m, w.objs, 60, 62);
+  checkRegions(m, w.objs, 63);
 }
 
 // The narrow-phase t against the analytic first contact of a segment with a sphere and with a

@@ -49,8 +49,9 @@ struct RayOptions {
 
 /// The first object the segment from `from` to `to` meets (the hit with the smallest t; equal t:
 /// the earliest registered, i.e. first in getObjects()). Each object is tested exactly as
-/// raycastObject() tests it, against its AABB as of the last registration or update(); the
-/// answer equals the minimum of raycastObject() over every registered object. A segment of
+/// raycastObject() tests it, against the box the manager holds for it: its AABB as of the last
+/// registration or update(), grown by its margin if margins are set (setMargin). The answer
+/// equals the minimum of raycastObject() with that box over every registered object. A segment of
 /// length 0 is the point `from`. Throws std::invalid_argument if `from` or `to` is not finite
 /// (or their difference overflows) or the tolerance is negative or NaN.
 template <typename S>
@@ -86,20 +87,21 @@ std::optional<RayHit<S>> raycastObject(const fcl::CollisionObject<S>& obj, const
                                        const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
                                        const RayOptions<S>& options = {});
 
-/// Every registered object whose AABB overlaps `box` (closed: touching counts), in registration
-/// order. Infinite bounds are allowed (a half-open region). Throws std::invalid_argument if a
-/// bound is NaN or box.min_ exceeds box.max_ on some axis.
+/// Every registered object whose AABB (the box the manager holds, as for raycastFirst) overlaps
+/// `box` (closed: touching counts), in registration order. Infinite bounds are allowed (a
+/// half-open region). Throws std::invalid_argument if a bound is NaN or box.min_ exceeds
+/// box.max_ on some axis.
 template <typename S>
 std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>& manager,
                                                    const fcl::AABB<S>& box);
 
-/// Every registered object whose AABB lies within `radius` of `point` (closed), in registration
-/// order. The distance is the Euclidean one from the point to the box (0 inside), tested in
-/// double as: every per-axis gap at most radius, and the sum of the squared gaps at most radius
-/// squared (for radius above 1e150, of the squared gaps divided by radius, at most 1). This is the
-/// box's distance, not the geometry's: a box corner may be near where the object is not. radius may
-/// be infinite (every object). Throws std::invalid_argument if `point` is not finite or radius is
-/// negative or NaN.
+/// Every registered object whose AABB (the box the manager holds, as for raycastFirst) lies
+/// within `radius` of `point` (closed), in registration order. The distance is the Euclidean one
+/// from the point to the box (0 inside), tested in double as: every per-axis gap at most radius,
+/// and the sum of the squared gaps at most radius squared (for radius above 1e150, of the squared
+/// gaps divided by radius, at most 1). This is the box's distance, not the geometry's: a box
+/// corner may be near where the object is not. radius may be infinite (every object). Throws
+/// std::invalid_argument if `point` is not finite or radius is negative or NaN.
 template <typename S>
 std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>& manager,
                                                   const fcl::Vector3<S>& point, S radius);
