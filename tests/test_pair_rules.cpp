@@ -475,9 +475,10 @@ TEST(CanonicalPairs, SameCallsWhateverTheTree) {
   for (std::size_t i = 0; i < objs.size(); ++i) seq[objs[i]] = i;
   for (std::size_t i = 0; i < ca.size(); ++i) {
     ASSERT_LT(seq[ca[i].first], seq[ca[i].second]);
-    if (i > 0)
+    if (i > 0) {
       EXPECT_LT(std::make_pair(seq[ca[i - 1].first], seq[ca[i - 1].second]),
                 std::make_pair(seq[ca[i].first], seq[ca[i].second]));
+    }
   }
   EXPECT_EQ(cube::oracle::unorderedSorted(ca), cube::oracle::bruteSelfPairs(objs));
   // FCL's narrow phase on the pairs as handed over: the same contacts, bit for bit.
