@@ -342,14 +342,14 @@ bool Broadphase<S>::collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) 
   }
   const PairGate<S> gate = selfGate();
   if (!config_.canonical_pairs) {
-    if (pairs_.valid()) return pairs_.collide(scene(), gate, data, fn, stats);
+    if (pairs_.valid()) return pairs_.collide(table_, gate, data, fn, stats);
     return forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
       return collideViews(config_.all_pairs_limit, a, b, self, data, fn, stats, &gate);
     });
   }
   std::vector<std::uint64_t> found;
   if (pairs_.valid()) {
-    pairs_.collect(scene(), gate, found);
+    pairs_.collect(table_, gate, found);
   } else {
     forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
       collectPairs(a, b, self, config_.all_pairs_limit, found, &gate);

@@ -92,29 +92,46 @@ bool PairList<S>::collide(const ObjectTable<S>& table, void* data, CollideFn<S> 
 }
 
 template <typename S>
-bool PairList<S>::collide(const Scene<S>& scene, const PairGate<S>& gate, void* data,
-                          CollideFn<S> fn, QueryStats* stats) const {
-  for (const std::uint64_t p : pairs_) {
-    const bool stop =
-        gate.through(scene.item(static_cast<ObjectId>(p >> 32)),
-                     scene.item(static_cast<ObjectId>(p)), [&](const Item<S>& a, const Item<S>& b) {
-                       if (stats) ++stats->callbacks;
-                       return fn(a.obj, b.obj, data);
-                     });
-    if (stop) return true;
+template <class Then>
+bool PairList<S>::forPassing(const ObjectTable<S>& table, const PairGate<S>& gate,
+                             Then&& then) const {
+  const auto id = [](ObjectId i) { return i; };
+  const auto obj = [&](ObjectId i) { return table.object(i); };
+  // Blocks of 64 pairs: the bits first, without a branch per pair, then the rest of the rules
+  // and the calls for the pairs left. Only ids and the per-id arrays are read, never a record.
+  for (std::size_t base = 0; base < pairs_.size(); base += 64) {
+    const std::uint64_t* block = pairs_.data() + base;
+    const std::size_t n = std::min<std::size_t>(64, pairs_.size() - base);
+    std::uint64_t pass = n == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    if (gate.hasBits())
+      pass = gate.passing(pass, [&](unsigned b) {
+        return gate.bitsOf(static_cast<ObjectId>(block[b] >> 32), static_cast<ObjectId>(block[b]));
+      });
+    for (; pass != 0; pass &= pass - 1) {
+      const std::uint64_t p = block[__builtin_ctzll(pass)];
+      if (gate.finish(static_cast<ObjectId>(p >> 32), static_cast<ObjectId>(p), id, obj, then))
+        return true;
+    }
   }
   return false;
 }
 
 template <typename S>
-void PairList<S>::collect(const Scene<S>& scene, const PairGate<S>& gate,
+bool PairList<S>::collide(const ObjectTable<S>& table, const PairGate<S>& gate, void* data,
+                          CollideFn<S> fn, QueryStats* stats) const {
+  return forPassing(table, gate, [&](ObjectId a, ObjectId b) {
+    if (stats) ++stats->callbacks;
+    return fn(table.object(a), table.object(b), data);
+  });
+}
+
+template <typename S>
+void PairList<S>::collect(const ObjectTable<S>& table, const PairGate<S>& gate,
                           std::vector<std::uint64_t>& out) const {
-  for (const std::uint64_t p : pairs_)
-    gate.through(scene.item(static_cast<ObjectId>(p >> 32)), scene.item(static_cast<ObjectId>(p)),
-                 [&](const Item<S>& a, const Item<S>& b) {
-                   out.push_back(std::uint64_t(a.id) << 32 | b.id);
-                   return false;
-                 });
+  forPassing(table, gate, [&](ObjectId a, ObjectId b) {
+    out.push_back(std::uint64_t(a) << 32 | b);
+    return false;
+  });
 }
 
 template <typename S>

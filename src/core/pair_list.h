@@ -37,11 +37,11 @@ class PairList {
   /// valid(). Right after a listing, the pairs come in the order and argument order of a
   /// self-collide; a refresh puts the moved objects' pairs last.
   bool collide(const ObjectTable<S>& table, void* data, CollideFn<S> fn, QueryStats* stats) const;
-  /// The same for the pairs that pass `gate` (oriented by it); `scene` finds each id's record.
-  bool collide(const Scene<S>& scene, const PairGate<S>& gate, void* data, CollideFn<S> fn,
+  /// The same for the pairs that pass `gate` (oriented by it).
+  bool collide(const ObjectTable<S>& table, const PairGate<S>& gate, void* data, CollideFn<S> fn,
                QueryStats* stats) const;
   /// Appends the pairs that pass `gate`, oriented by it, as id << 32 | id.
-  void collect(const Scene<S>& scene, const PairGate<S>& gate,
+  void collect(const ObjectTable<S>& table, const PairGate<S>& gate,
                std::vector<std::uint64_t>& out) const;
   /// Pairs listed.
   std::size_t size() const { return pairs_.size(); }
@@ -51,6 +51,10 @@ class PairList {
   bool validate(const Scene<S>& scene, std::string* why) const;
 
  private:
+  // Calls then(a, b) on the ids of each pair that passes `gate`, oriented; stops when it says so.
+  template <class Then>
+  bool forPassing(const ObjectTable<S>& table, const PairGate<S>& gate, Then&& then) const;
+
   std::vector<std::uint64_t> pairs_;  // id of the callback's first object << 32 | second's
   std::vector<std::uint64_t> marks_;  // refresh: one bit per id, the moved ones set
   std::vector<std::uint64_t> found_;  // refresh: the moved objects' pairs

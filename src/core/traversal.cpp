@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "core/kernels/box_ops.h"
@@ -63,6 +64,10 @@ struct CollidePolicy {
   const PairKernels<S>* kernels;      // null in object queries, which test one box at a time
   const Columns* columns = nullptr;   // null: leaves are tested on the exact boxes only
   const PairGate<S>* gate = nullptr;  // null: every pair of overlapping boxes is reported
+  // Self walks with filter bits: the bits per slot of the view starting at slot_base, gathered
+  // once per call, so that a leaf's bits are read from one or two cache lines.
+  const Filter* slot_bits = nullptr;
+  const Item<S>* slot_base = nullptr;
   bool enter(const Node& a, const Node& b, Key&) const {
     count.test();
     return overlap(a, b);
@@ -81,16 +86,38 @@ struct CollidePolicy {
   // Called for boxes that touch. An object never meets itself (two managers may share objects);
   // that check comes after the box test, which rejects most pairs without reading the pointers.
   bool report(const Item<S>& x, const Item<S>& y) const {
+    if (gate != nullptr && !gate->bitsPass(x.id, y.id)) return false;
+    return reportPassed(x, y);
+  }
+  // The same for a pair whose filter bits are known to pass (see passing()).
+  bool reportPassed(const Item<S>& x, const Item<S>& y) const {
     if (x.obj == y.obj) return false;
     if (gate != nullptr)
-      return gate->through(x, y, [&](const Item<S>& a, const Item<S>& b) {
-        count.call();
-        return sink(a, b);
-      });
+      return gate->finish(
+          x, y, [](const Item<S>& i) { return i.id; }, [](const Item<S>& i) { return i.obj; },
+          [&](const Item<S>& a, const Item<S>& b) {
+            count.call();
+            return sink(a, b);
+          });
     count.call();
     return sink(x, y);
   }
   bool leaf(const Item<S>& x, const Item<S>& y) const { return touches(x, y) && report(x, y); }
+  // `hits` without the pairs that the filter bits drop: bit b stands for xs[i(b)], ys[j(b)].
+  // Self walks read the bits in slot order (slot_bits); others by id.
+  template <class I, class J>
+  std::uint64_t passing(std::uint64_t hits, const Item<S>* xs, I&& i, const Item<S>* ys,
+                        J&& j) const {
+    if (gate == nullptr || !gate->hasBits() || hits == 0) return hits;
+    if (slot_bits != nullptr) {
+      const Filter* fx = slot_bits + (xs - slot_base);
+      const Filter* fy = slot_bits + (ys - slot_base);
+      return PairGate<S>::passing(hits,
+                                  [&](unsigned b) { return std::make_pair(fx + i(b), fy + j(b)); });
+    }
+    return PairGate<S>::passing(hits,
+                                [&](unsigned b) { return gate->bitsOf(xs[i(b)].id, ys[j(b)].id); });
+  }
 };
 
 // The callbacks for the set bits of `hits`, in order; apart, so that the test loop stays small.
@@ -98,13 +125,16 @@ struct CollidePolicy {
 template <bool Recheck, typename S, class Policy>
 [[gnu::noinline]] bool reportHits(std::uint64_t hits, const Item<S>* xs, const Item<S>* ys,
                                   const Policy& p) {
+  hits = p.passing(
+      hits, xs, [](unsigned b) { return b / kMaskLeaf; }, ys,
+      [](unsigned b) { return b % kMaskLeaf; });
   while (hits != 0) {
     const unsigned b = static_cast<unsigned>(__builtin_ctzll(hits));
     hits &= hits - 1;
     const Item<S>& x = xs[b / kMaskLeaf];
     const Item<S>& y = ys[b % kMaskLeaf];
     if (Recheck && !overlap(x.box, y.box)) continue;
-    if (p.report(x, y)) return true;
+    if (p.reportPassed(x, y)) return true;
   }
   return false;
 }
@@ -181,9 +211,14 @@ bool allPairs(const View<S>& v, const Policy& p) {
   }
   for (std::uint32_t r = 0; r < h; ++r) {
     const std::uint32_t i = hit_rows[r];
-    for (std::uint64_t m = rows[i]; m != 0; m &= m - 1) {
+    const std::uint64_t row = p.passing(
+        rows[i], v.items, [&](unsigned) { return slot[i]; }, v.items,
+        [&](unsigned j) { return slot[j]; });
+    for (std::uint64_t m = row; m != 0; m &= m - 1) {
       const std::uint32_t j = static_cast<std::uint32_t>(__builtin_ctzll(m));
-      if (p.leaf(v.items[slot[i]], v.items[slot[j]])) return true;
+      const Item<S>& x = v.items[slot[i]];
+      const Item<S>& y = v.items[slot[j]];
+      if (p.touches(x, y) && p.reportPassed(x, y)) return true;
     }
   }
   return false;
@@ -404,10 +439,21 @@ bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink
     kernels->fill(a.items, nullptr, a.slots, store->columns(), 0);
   }
   const Columns* use = store ? &store->columns() : nullptr;
-  if (stats)
-    return descend(a, b, self,
-                   CollidePolicy<S, Count, Sink>{sink, Count{stats}, kernels, use, gate});
-  return descend(a, b, self, CollidePolicy<S, NoCount, Sink>{sink, NoCount{}, kernels, use, gate});
+  std::vector<Filter> bits;
+  if (self && gate != nullptr && gate->filters_a != nullptr) {
+    bits.resize(a.slots);  // dead slots keep the default bits; no pair reaches them
+    for (std::uint32_t s = 0; s < a.slots; ++s)
+      if (a.items[s].obj != nullptr) bits[s] = gate->filters_a[a.items[s].id];
+  }
+  const auto run = [&](auto count) {
+    CollidePolicy<S, decltype(count), Sink> p{sink, count, kernels, use, gate};
+    if (!bits.empty()) {
+      p.slot_bits = bits.data();
+      p.slot_base = a.items;
+    }
+    return descend(a, b, self, p);
+  };
+  return stats ? run(Count{stats}) : run(NoCount{});
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "core/geometry.h"
@@ -34,17 +35,50 @@ struct PairGate {
   const KeepFn<S>* keep = nullptr;     ///< the user's predicate, if any
   const std::uint32_t* seq = nullptr;  ///< self queries: orient pairs by these numbers
 
+  /// The filter bits of the objects with ids x and y (y may be kNone: the query object).
+  std::pair<const Filter*, const Filter*> bitsOf(ObjectId x, ObjectId y) const {
+    static constexpr Filter kAll{};
+    const Filter* fx = filters_a != nullptr ? filters_a + x : &kAll;
+    const Filter* fy = y == kNone ? &query : filters_b != nullptr ? filters_b + y : &kAll;
+    return {fx, fy};
+  }
+  /// Whether the filter bits let the objects with ids x and y pair.
+  bool bitsPass(ObjectId x, ObjectId y) const {
+    const auto f = bitsOf(x, y);
+    return filtersPass(*f.first, *f.second);
+  }
+  /// Whether there are bits to test (else every pair passes them).
+  bool hasBits() const { return filters_a != nullptr || filters_b != nullptr; }
+  /// `bits` with the pairs whose filter bits do not pass cleared; bits_of(b) points at bit b's
+  /// two Filters. No branch per pair: whether a pair passes is a coin toss for the branch predictor
+  /// when groups are mixed, and a mispredicted branch costs more than the test.
+  template <class BitsOf>
+  static std::uint64_t passing(std::uint64_t bits, BitsOf&& bits_of) {
+    std::uint64_t out = bits;
+    for (std::uint64_t m = bits; m != 0; m &= m - 1) {
+      const unsigned b = static_cast<unsigned>(__builtin_ctzll(m));
+      const auto f = bits_of(b);
+      out &= ~(std::uint64_t(!filtersPass(*f.first, *f.second)) << b);
+    }
+    return out;
+  }
+  /// The rules after the bits, for a pair whose bits passed: orientation and the predicate.
+  /// x and y are records or ids; obj(x) gives the object. Calls then(first, second) if it passes;
+  /// false (the query goes on) otherwise.
+  template <class T, class IdOf, class ObjOf, class Then>
+  bool finish(const T& x, const T& y, IdOf&& id, ObjOf&& obj, Then&& then) const {
+    const bool swap = seq != nullptr && seq[id(y)] < seq[id(x)];
+    const T& first = swap ? y : x;
+    const T& second = swap ? x : y;
+    if (keep != nullptr && !(*keep)(obj(first), obj(second))) return false;
+    return then(first, second);
+  }
   /// Calls then(x, y) on the pair, oriented, if it passes; false (the query goes on) otherwise.
   template <class Then>
   bool through(const Item<S>& x, const Item<S>& y, Then&& then) const {
-    const Filter fx = filters_a != nullptr ? filters_a[x.id] : Filter{};
-    const Filter fy = y.id == kNone ? query : filters_b != nullptr ? filters_b[y.id] : Filter{};
-    if (!filtersPass(fx, fy)) return false;
-    const bool swap = seq != nullptr && seq[y.id] < seq[x.id];
-    const Item<S>& first = swap ? y : x;
-    const Item<S>& second = swap ? x : y;
-    if (keep != nullptr && !(*keep)(first.obj, second.obj)) return false;
-    return then(first, second);
+    if (!bitsPass(x.id, y.id)) return false;
+    return finish(
+        x, y, [](const Item<S>& i) { return i.id; }, [](const Item<S>& i) { return i.obj; }, then);
   }
 };
 
