@@ -732,9 +732,9 @@ TYPED_TEST(Dynamic, PairListKeepsWalkOrderAndStops) {
     SCOPED_TRACE("n " + std::to_string(n));
     auto sc = scene<S>(n, 34);
     const auto objs = sc.pointers();
-    Config off;
-    off.keep_pairs = false;
-    CubeCollisionManager<S> listed, walked(off);
+    Config on;
+    on.keep_pairs = true;
+    CubeCollisionManager<S> listed(on), walked;
     for (auto* m : {&listed, &walked}) {
       m->registerObjects(objs);
       m->setup();

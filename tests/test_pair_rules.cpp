@@ -528,6 +528,7 @@ TEST(CanonicalPairs, WithFiltersAndPairList) {
   const auto objs = sc.pointers();
   cube::Config cfg;
   cfg.canonical_pairs = true;
+  cfg.keep_pairs = true;
   CubeCollisionManager<double> m(cfg);
   m.registerObjects(objs);
   m.update();

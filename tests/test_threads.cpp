@@ -182,7 +182,9 @@ TEST(Threads, ConcurrentQueriesAllGetNaivesAnswer) {
 TEST(Threads, ConcurrentQueriesAfterEachUpdate) {
   auto scene = sceneOf(1200, 9);
   const std::vector<Object*> objs = scene.pointers();
-  cube::CubeCollisionManager<S> m;
+  cube::Config listed;
+  listed.keep_pairs = true;
+  cube::CubeCollisionManager<S> m(listed);
   m.registerObjects(objs);
   m.setup();
   std::mt19937 rng(10);

@@ -35,18 +35,22 @@ struct Config {
   /// See UpdatePolicy.
   UpdatePolicy update_policy = UpdatePolicy::automatic;
 
-  /// update() and update(objects) keep the list of overlapping pairs, and a self-collide that
-  /// follows calls the callback for those pairs without walking the cubes (as FCL's SaP manager
-  /// keeps its pairs). The first such update, and the first after the objects were rearranged
-  /// (registrations, removals, setup() rebuilding, update(obj)), lists every pair with one
-  /// self walk; later ones query only the objects that moved, and a rebuild inside update()
-  /// renumbers the list. An update that moved more than a quarter of the objects drops the list
-  /// (then self-collide walks, as without it), and so does update(obj), so that a loop of
-  /// single updates costs no more than before. Trade-off: each update costs more (a query per
-  /// moved object and a pass over the list, or a listing), which a caller who never
-  /// self-collides pays for nothing; the list takes 8 bytes per overlapping pair. Same pairs
-  /// either way; right after a listing in the same order, later the moved objects' pairs last.
-  bool keep_pairs = true;
+  /// For loops of update() + self-collide (simulations, motion steps): update() and
+  /// update(objects) keep the list of overlapping pairs, and a self-collide that follows calls
+  /// the callback for those pairs without walking the cubes (as FCL's SaP manager keeps its
+  /// pairs). The first such update, and the first after the objects were rearranged
+  /// (registrations, removals, setup() rebuilding, update(obj)), lists every pair with one self
+  /// walk; later ones query only the objects that moved, and a rebuild inside update() changes
+  /// nothing in the list (it holds ids). An update that moved more than a quarter of the
+  /// objects drops the list (then self-collide walks), and so does update(obj), so that a loop
+  /// of single updates costs no more than without it. Off by default: a const query cannot ask
+  /// for the list without hidden mutable state, so the caller says so. Trade-off: each update
+  /// costs more (a query per moved object and a pass over the list, or a listing: about a self
+  /// walk), which a caller who runs only object queries would pay for nothing; a self-collide
+  /// after small motions reads the list instead of walking. 8 bytes per overlapping pair. Same
+  /// pairs either way; right after a listing in the same order, later the moved objects' pairs
+  /// last.
+  bool keep_pairs = false;
 
   /// With UpdatePolicy::automatic: rebuild when the total surface area of the cubes per object
   /// exceeds this multiple of its value right after the last build (must be > 1). Trade-off: a

@@ -114,6 +114,8 @@ inline std::vector<Config> configs() {
   // with a limit of 8 sequences cross between the kernel and the walk.
   for (int i : {1, 3, 7, 9, 10}) out[i].all_pairs_limit = 0;
   out[11].all_pairs_limit = 8;
+  // The pair list (off by default) in two thirds of them, so that sequences run both paths.
+  for (int i = 0; i < 12; ++i) out[i].keep_pairs = i % 3 != 0;
   return out;
 }
 
@@ -121,7 +123,8 @@ inline std::string describe(const Config& c) {
   std::ostringstream s;
   s << "{leaf_size " << c.leaf_size << ", max_depth " << c.max_depth << ", policy "
     << int(c.update_policy) << ", threshold " << c.rebuild_threshold << ", unbounded_limit "
-    << c.unbounded_limit << ", all_pairs_limit " << c.all_pairs_limit << "}";
+    << c.unbounded_limit << ", all_pairs_limit " << c.all_pairs_limit << ", keep_pairs "
+    << c.keep_pairs << "}";
   return s.str();
 }
 
