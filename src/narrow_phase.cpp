@@ -180,6 +180,8 @@ struct NarrowPhaseCache<S>::Impl {
   };
 
   Table<std::vector<fcl::Contact<S>>, fcl::CollisionRequest<S>> collide;
+  // The pair that gave the first contact of the last collide with contacts (last_hit_first).
+  ObjectPair<S> last_hit{nullptr, nullptr};
   Table<fcl::DistanceResult<S>, fcl::DistanceRequest<S>> distance;
   std::uint64_t stamp = 0;
 };
@@ -197,12 +199,15 @@ template <typename S>
 void NarrowPhaseCache<S>::clear() {
   impl_->collide.entries.clear();
   impl_->distance.entries.clear();
+  impl_->last_hit = {nullptr, nullptr};
 }
 
 template <typename S>
 void NarrowPhaseCache<S>::forget(const fcl::CollisionObject<S>* obj) {
   impl_->collide.forget(obj);
   impl_->distance.forget(obj);
+  if (impl_->last_hit.first == obj || impl_->last_hit.second == obj)
+    impl_->last_hit = {nullptr, nullptr};
 }
 
 template <typename S>
@@ -289,8 +294,9 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
       stats_out_(options.stats),
       cache_(options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)),
-      // A one-contact request most often stops early: a small first chunk wastes little.
-      chunk_limit_(request.num_max_contacts <= 1 ? 8 : 64) {
+      // A one-contact request most often stops early: a small first chunk wastes little, and on
+      // one thread (nothing to share out) a chunk of one wastes nothing.
+      chunk_limit_(request.num_max_contacts > 1 ? 64 : threads_ == 1 ? 1 : 8) {
   if (cache_ != nullptr) {
     cache_->collide.begin(request);
     ++cache_->stamp;
@@ -306,8 +312,22 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>*
   chunk_.emplace_back(a, b);
   if (chunk_.size() >= chunk_limit_) {
     flush();
-    chunk_limit_ = std::min<std::size_t>(chunk_limit_ * 2, 1024);
+    if (threads_ > 1 || request_.num_max_contacts > 1)
+      chunk_limit_ = std::min<std::size_t>(chunk_limit_ * 2, 1024);
   }
+  return done_;
+}
+
+template <typename S>
+ObjectPair<S> CollideStream<S>::lastHit(NarrowPhaseCache<S>& cache) {
+  return cache.impl().last_hit;
+}
+
+template <typename S>
+bool CollideStream<S>::pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+  if (done_) return true;
+  chunk_.emplace_back(a, b);
+  flush();
   return done_;
 }
 
@@ -342,6 +362,7 @@ void CollideStream<S>::flush() {
     if (done_) continue;  // computed in the same chunk: kept for the cache, not merged
     const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
     const std::size_t take = std::min(room, contacts.size());
+    if (cache_ != nullptr && take > 0 && result_.numContacts() == 0) cache_->last_hit = chunk_[i];
     for (std::size_t k = 0; k < take; ++k) result_.addContact(contacts[k]);
     if (result_.isCollision() && result_.numContacts() >= max_contacts) done_ = true;
   }

@@ -24,6 +24,11 @@ class CollideStream {
 
   /// Adds one candidate pair. True once the result is complete: the walk may stop.
   bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
+  /// The pair that gave the first contact of the last collide with contacts that used `cache`
+  /// (nullptrs if none, or forgotten since).
+  static ObjectPair<S> lastHit(NarrowPhaseCache<S>& cache);
+  /// push, answering this pair before any other is pushed (what is pending goes with it).
+  bool pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
   /// Runs what is pending and returns the merged result. Call once, at the end.
   fcl::CollisionResult<S> finish();
 

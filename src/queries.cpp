@@ -1,5 +1,6 @@
 #include "cube_collision/queries.h"
 
+#include <algorithm>
 #include <atomic>
 #include <stdexcept>
 
@@ -74,6 +75,28 @@ fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
         st->culled += c.candidates - c.data.narrow_calls;
     }
     return c.data.result;
+  }
+  if (options.last_hit_first && options.cache != nullptr) {
+    const ObjectPair<S> hit = detail::CollideStream<S>::lastHit(*options.cache);
+    if (hit.first != nullptr) {
+      // Only a candidate of this query may come first: gather them all, move it to the front
+      // (in the orientation this walk gives it) and answer it alone before the others.
+      std::vector<ObjectPair<S>> pairs;
+      walk(&pairs, &collectPair<S>);
+      const ObjectPair<S> swapped(hit.second, hit.first);
+      const auto it = std::find_if(pairs.begin(), pairs.end(), [&](const ObjectPair<S>& p) {
+        return p == hit || p == swapped;
+      });
+      detail::CollideStream<S> stream(request, options);
+      bool done = false;
+      if (it != pairs.end()) {
+        std::rotate(pairs.begin(), it, it + 1);
+        done = stream.pushAlone(pairs.front().first, pairs.front().second);
+      }
+      for (std::size_t i = it != pairs.end(); i < pairs.size() && !done; ++i)
+        done = stream.push(pairs[i].first, pairs[i].second);
+      return stream.finish();
+    }
   }
   detail::CollideStream<S> stream(request, options);
   walk(&stream, &detail::CollideStream<S>::callback);

@@ -168,6 +168,64 @@ TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
   EXPECT_EQ(cache.size(), first.narrow_calls);
 }
 
+// NarrowPhaseOptions::last_hit_first: a robot of 24 objects stepping through a world, asking
+// "does anything collide?" at each pose. The answer equals a plain collideAll at every pose; a
+// reported contact belongs to a candidate pair that FCL says collides; and at poses where the
+// last pair still collides the answer takes a single pair (one narrow-phase call or cached
+// answer, nothing culled).
+TYPED_TEST(NarrowPhase, LastHitFirstKeepsTheAnswerAndTestsThatPairFirst) {
+  using S = TypeParam;
+  // Meshes: their boxes and tight volumes overlap long before the triangles meet.
+  auto world = scene<S>(Layout::uniform, true, 600, 21);
+  auto robot = scene<S>(Layout::uniform, true, 24, 22);
+  cube::CubeCollisionManager<S> w, r;
+  w.registerObjects(world.pointers());
+  r.registerObjects(robot.pointers());
+  const fcl::CollisionRequest<S> any;  // one contact: stops at the first collision
+  cube::NarrowPhaseCache<S> cache;
+  cube::NarrowPhaseOptions<S> plain, fast;
+  plain.threads = fast.threads = 1;
+  fast.cache = &cache;
+  fast.last_hit_first = true;
+  std::size_t colliding = 0, one_pair = 0;
+  for (int pose = 0; pose < 40; ++pose) {
+    for (auto* o : robot.pointers()) {
+      o->setTranslation(o->getTranslation() + fcl::Vector3<S>(S(0.05), S(0.02), 0));
+      o->computeAABB();
+    }
+    r.update();
+    cube::NarrowPhaseStats ps, fs;
+    plain.stats = &ps;
+    fast.stats = &fs;
+    const auto want = cube::collideAll<S>(w, r, any, plain);
+    const auto got = cube::collideAll<S>(w, r, any, fast);
+    ASSERT_EQ(got.isCollision(), want.isCollision()) << "pose " << pose;
+    if (!got.isCollision()) continue;
+    ++colliding;
+    ASSERT_EQ(got.numContacts(), 1u);
+    const fcl::Contact<S>& c = got.getContact(0);
+    bool found = false;
+    for (const auto& [a, b] : cube::overlappingPairs<S>(w, r)) {
+      if (a->collisionGeometry().get() != c.o1 || b->collisionGeometry().get() != c.o2) continue;
+      fcl::CollisionResult<S> res;
+      found = found || fcl::collide(a, b, any, res) > 0;
+    }
+    EXPECT_TRUE(found) << "pose " << pose << ": the contact is not from a colliding candidate";
+    one_pair += fs.narrow_calls + fs.cached == 1 && fs.culled == 0;
+  }
+  ASSERT_GT(colliding, 10u) << "the path must collide often for the test to mean anything";
+  EXPECT_GT(one_pair * 2, colliding) << one_pair << " of " << colliding;
+  // After clear() nothing is remembered: the query runs as without the option.
+  cache.clear();
+  cube::NarrowPhaseStats a, b;
+  plain.stats = &a;
+  fast.stats = &b;
+  plain.cache = nullptr;
+  const auto x = cube::collideAll<S>(w, r, any, plain);
+  const auto y = cube::collideAll<S>(w, r, any, fast);
+  EXPECT_TRUE(sameContacts(x, y, false));
+}
+
 // Every kind of change sends the pairs of the changed object back to FCL: a translation by one
 // ulp, a rotation, a geometry resized in place (new local AABB), another request. Setting the same
 // transform again changes nothing. forget() and clear() drop answers. After each change the result

@@ -78,6 +78,15 @@ struct NarrowPhaseOptions {
   NarrowPhaseCache<S>* cache = nullptr;
   /// If set, the query's counts are added to it.
   NarrowPhaseStats* stats = nullptr;
+  /// collideAll only, with a cache: test first the pair that gave the first contact of the
+  /// last collide that used this cache, if it is a candidate pair of this query (for "is this
+  /// state valid?" loops over nearby states, where it most often still collides and answers in
+  /// one narrow-phase call). Whether anything collides is the same; which contacts a request
+  /// that stops early reports is not (that pair's come first), hence the opt-in. Trade-off: the
+  /// candidate pairs are gathered first (the whole broadphase walk, without the early stop), so
+  /// it pays where narrow-phase calls dominate (meshes, a robot against a world), not for large
+  /// scenes of simple shapes.
+  bool last_hit_first = false;
 };
 
 /// fcl::collide on each pair (a fresh result per pair), culled and cached as the options say, on
