@@ -7,7 +7,13 @@
 
 #include "cube_collision/spatial_queries.h"
 
+#include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
+#include <fcl/geometry/shape/sphere.h>
 
 #include <algorithm>
 #include <cmath>
@@ -127,8 +133,8 @@ bool narrowable(const fcl::CollisionObject<S>& obj) {
   }
 }
 
-// The narrow phase of one query: a capsule of radius 0 from `from` along the segment, stretched
-// to each t asked. Owned by the query (one per call), so queries share nothing.
+// The bisection of the other geometries: a capsule of radius 0 from `from` along the segment,
+// stretched to each t asked. Owned by the query (one per call), so queries share nothing.
 template <typename S>
 class Caster {
  public:
@@ -144,7 +150,6 @@ class Caster {
       rot_ = Eigen::Quaternion<S>::FromTwoVectors(fcl::Vector3<S>::UnitZ(), d_ / S(len_))
                  .toRotationMatrix();
   }
-  double length() const { return len_; }
   // Whether the part of the segment from t = 0 to t meets the object.
   bool reaches(const fcl::CollisionObject<S>& obj, double t) {
     cap_->lz = S(t * len_);
@@ -162,6 +167,181 @@ class Caster {
   fcl::Matrix3<S> rot_;
   std::shared_ptr<fcl::Capsule<S>> cap_;
   fcl::CollisionObject<S> obj_;
+};
+
+// The closed interval of t, on the whole line o + t d, where the line is inside a convex set;
+// empty when lo > hi.
+struct Span {
+  double lo, hi;
+};
+constexpr Span kAll{-kInf, kInf};
+constexpr Span kEmpty{kInf, -kInf};
+
+Span meet(Span a, Span b) {
+  return {a.lo > b.lo ? a.lo : b.lo, a.hi < b.hi ? a.hi : b.hi};
+}
+
+// Within r of the origin, over the first `dims` coordinates (3: a ball, 2: an infinite cylinder
+// along z). Solved from the line's closest point to the centre rather than from |o|^2 - r^2, so
+// that a distant origin loses no precision in the discriminant; a tangent line gives one point.
+Span ball(const double* o, const double* d, double r, int dims) {
+  double a = 0, b = 0, oo = 0;
+  for (int k = 0; k < dims; ++k) {
+    a += d[k] * d[k];
+    b += o[k] * d[k];
+    oo += o[k] * o[k];
+  }
+  if (a == 0) return oo <= r * r ? kAll : kEmpty;  // no motion in these coordinates
+  const double mid = -b / a;                       // t of the closest point
+  double q2 = 0;
+  for (int k = 0; k < dims; ++k) {
+    const double q = o[k] + mid * d[k];
+    q2 += q * q;
+  }
+  const double gap = r * r - q2;
+  if (!(gap >= 0)) return kEmpty;
+  const double half = std::sqrt(gap / a);
+  return {mid - half, mid + half};
+}
+
+// lo <= o + t d <= hi on one coordinate.
+Span slab(double o, double d, double lo, double hi) {
+  if (d == 0) return lo <= o && o <= hi ? kAll : kEmpty;
+  double a = (lo - o) / d, b = (hi - o) / d;  // finite or infinite, never NaN: d != 0
+  if (d < 0) std::swap(a, b);
+  return {a, b};
+}
+
+// The first t in [0, 1] of a span, or kInf.
+double firstIn(Span s) {
+  s = meet(s, Span{0, 1});
+  return s.lo <= s.hi ? s.lo : kInf;
+}
+
+// The first t in [0, 1] at which the segment o + t d (in the geometry's frame) is in the closed
+// solid, kInf if never; false if the geometry is not one solved here (or its sizes are not
+// finite and >= 0), which leaves it to the bisection. FCL 0.7's frames: everything centred on the
+// origin; box: `side` full lengths; capsule and cylinder: axis z, from -lz/2 to lz/2; ellipsoid:
+// `radii` along x, y, z; plane n.x = d (a surface); halfspace n.x <= d (solid).
+template <typename S>
+bool exactFirst(const fcl::CollisionGeometry<S>& geo, const double* o, const double* d, double& t) {
+  const auto ok = [](double v) { return v >= 0 && v < kInf; };
+  switch (geo.getNodeType()) {
+    case fcl::GEOM_SPHERE: {
+      const double r = static_cast<const fcl::Sphere<S>&>(geo).radius;
+      if (!ok(r)) return false;
+      t = firstIn(ball(o, d, r, 3));
+      return true;
+    }
+    case fcl::GEOM_ELLIPSOID: {
+      // Scaled to the unit ball: t is unchanged by a linear map of the segment.
+      const auto& radii = static_cast<const fcl::Ellipsoid<S>&>(geo).radii;
+      double so[3], sd[3];
+      for (int k = 0; k < 3; ++k) {
+        const double r = radii[k];
+        if (!(ok(r) && r > 0)) return false;
+        so[k] = o[k] / r;
+        sd[k] = d[k] / r;
+      }
+      t = firstIn(ball(so, sd, 1, 3));
+      return true;
+    }
+    case fcl::GEOM_BOX: {
+      const auto& side = static_cast<const fcl::Box<S>&>(geo).side;
+      Span s = kAll;
+      for (int k = 0; k < 3; ++k) {
+        const double h = 0.5 * double(side[k]);
+        if (!ok(h)) return false;
+        s = meet(s, slab(o[k], d[k], -h, h));
+      }
+      t = firstIn(s);
+      return true;
+    }
+    case fcl::GEOM_CYLINDER: {
+      const auto& c = static_cast<const fcl::Cylinder<S>&>(geo);
+      const double r = c.radius, h = 0.5 * double(c.lz);
+      if (!ok(r) || !ok(h)) return false;
+      t = firstIn(meet(ball(o, d, r, 2), slab(o[2], d[2], -h, h)));
+      return true;
+    }
+    case fcl::GEOM_CAPSULE: {
+      // A union of convex parts: the cylinder between the end centres and the two end balls;
+      // the first t in the union is the first over the parts.
+      const auto& c = static_cast<const fcl::Capsule<S>&>(geo);
+      const double r = c.radius, h = 0.5 * double(c.lz);
+      if (!ok(r) || !ok(h)) return false;
+      t = firstIn(meet(ball(o, d, r, 2), slab(o[2], d[2], -h, h)));
+      for (const double z : {-h, h}) {
+        const double oz[3] = {o[0], o[1], o[2] - z};
+        t = std::min(t, firstIn(ball(oz, d, r, 3)));
+      }
+      return true;
+    }
+    case fcl::GEOM_HALFSPACE:
+    case fcl::GEOM_PLANE: {
+      const bool solid = geo.getNodeType() == fcl::GEOM_HALFSPACE;
+      const fcl::Vector3<S>& n = solid ? static_cast<const fcl::Halfspace<S>&>(geo).n
+                                       : static_cast<const fcl::Plane<S>&>(geo).n;
+      const double off = solid ? double(static_cast<const fcl::Halfspace<S>&>(geo).d)
+                               : double(static_cast<const fcl::Plane<S>&>(geo).d);
+      const double f0 = double(n[0]) * o[0] + double(n[1]) * o[1] + double(n[2]) * o[2] - off;
+      const double slope = double(n[0]) * d[0] + double(n[1]) * d[1] + double(n[2]) * d[2];
+      if (!std::isfinite(f0) || !std::isfinite(slope)) return false;
+      t = kInf;
+      if (f0 == 0 || (solid && f0 < 0)) {
+        t = 0;
+      } else if ((f0 > 0 && slope < 0) || (f0 < 0 && slope > 0)) {
+        const double at = -f0 / slope;  // > 0; infinite if slope is tiny
+        if (at <= 1) t = at;
+      }
+      return true;
+    }
+    default:
+      return false;
+  }
+}
+
+// The narrow phase of one query: the segment in double for the exact tests, and the bisection's
+// capsule, made on first use only (most scenes need none).
+template <typename S>
+class Narrow {
+ public:
+  Narrow(const fcl::Vector3<S>& from, const fcl::Vector3<S>& to, S tolerance)
+      : from_(from), to_(to) {
+    for (int k = 0; k < 3; ++k) {
+      o_[k] = double(from[k]);
+      d_[k] = double(to[k]) - double(from[k]);
+    }
+    // As the bisection's capsule measures it.
+    const double len = double((to - from).norm());
+    tol_t_ = len > 0 ? double(tolerance) / len : kInf;
+  }
+  double tolT() const { return tol_t_; }
+  Caster<S>& caster() {
+    if (!caster_) caster_.emplace(from_, to_);
+    return *caster_;
+  }
+  // exactFirst on the object's geometry, the segment taken into its frame.
+  bool exact(const fcl::CollisionObject<S>& obj, double& t) const {
+    const fcl::Transform3<S>& tf = obj.getTransform();
+    double rel[3], lo[3], ld[3];
+    for (int k = 0; k < 3; ++k) rel[k] = o_[k] - double(tf.translation()[k]);
+    for (int j = 0; j < 3; ++j) {  // R^T: the object's axes are R's columns
+      lo[j] = ld[j] = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double r = double(tf.linear()(k, j));
+        lo[j] += r * rel[k];
+        ld[j] += r * d_[k];
+      }
+    }
+    return exactFirst(*obj.collisionGeometry(), lo, ld, t);
+  }
+
+ private:
+  fcl::Vector3<S> from_, to_;
+  double o_[3], d_[3];
+  double tol_t_;
+  std::optional<Caster<S>> caster_;
 };
 
 // One hit before it is made public: t in double as found, and the registration number for ties.
@@ -186,23 +366,32 @@ bool earlier(const Found<S>& a, const Found<S>& b) {
 // not depend on `bound`, so a pruned walk finds the same t as a loop over every object.
 template <typename S, class T>
 bool hitOne(const Segment& s, const T* lo, const T* hi, const fcl::CollisionObject<S>& obj,
-            Caster<S>* caster, double tol_t, double bound, double& t, HitKind& kind) {
+            Narrow<S>* narrow, double bound, double& t, HitKind& kind) {
   double enter, exit;
   if (!crossBox(s, lo, hi, enter, exit) || enter > bound) return false;
-  if (caster == nullptr || !narrowable(obj)) {
+  if (narrow == nullptr || !narrowable(obj)) {
     t = enter;
     kind = HitKind::box;
     return true;
   }
-  if (!caster->reaches(obj, exit)) return false;
   kind = HitKind::narrow_phase;
+  double first;
+  if (narrow->exact(obj, first)) {
+    // The same answer the bisection converges to: no hit unless the segment meets the object
+    // by the box's exit, and never before the box's entry.
+    if (first > exit) return false;
+    t = first > enter ? first : enter;
+    return true;
+  }
+  Caster<S>& caster = narrow->caster();
+  if (!caster.reaches(obj, exit)) return false;
   double a = enter, b = exit;  // a: no contact yet (or enter), b: contact
-  if (caster->reaches(obj, a)) b = a;
-  while (b - a > tol_t) {
+  if (caster.reaches(obj, a)) b = a;
+  while (b - a > narrow->tolT()) {
     if (a > bound) return false;
     const double mid = a + (b - a) * 0.5;
     if (!(mid > a && mid < b)) break;  // as close as double can say
-    (caster->reaches(obj, mid) ? b : a) = mid;
+    (caster.reaches(obj, mid) ? b : a) = mid;
   }
   t = b;
   return true;
@@ -224,23 +413,18 @@ RayHit<S> publish(const Found<S>& f, const fcl::Vector3<S>& from, const fcl::Vec
 template <typename S>
 struct RayQuery {
   Segment seg;
-  std::optional<Caster<S>> caster;
-  double tol_t;
+  std::optional<Narrow<S>> narrow_phase;
   const detail::ObjectTable<S>& table;
 
   RayQuery(const CubeCollisionManager<S>& m, const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
            const RayOptions<S>& o)
-      : seg(makeSegment(from, to)), tol_t(0), table(m.core().table()) {
-    if (o.narrow_phase) {
-      caster.emplace(from, to);
-      tol_t = caster->length() > 0 ? double(o.tolerance) / caster->length() : kInf;
-    }
+      : seg(makeSegment(from, to)), table(m.core().table()) {
+    if (o.narrow_phase) narrow_phase.emplace(from, to, o.tolerance);
   }
-  Caster<S>* narrow() { return caster ? &*caster : nullptr; }
+  Narrow<S>* narrow() { return narrow_phase ? &*narrow_phase : nullptr; }
   bool test(const Item<S>& it, double bound, Found<S>& f) {
     if (it.obj == nullptr) return false;
-    if (!hitOne(seg, it.box.lo, it.box.hi, *it.obj, narrow(), tol_t, bound, f.t, f.kind))
-      return false;
+    if (!hitOne(seg, it.box.lo, it.box.hi, *it.obj, narrow(), bound, f.t, f.kind)) return false;
     f.seq = table.seq(it.id);
     f.obj = it.obj;
     return true;
@@ -305,11 +489,12 @@ struct FirstVisitor {
   Step at(std::uint32_t cube, State) {
     const Node& n = tree.nodes[cube];
     if (!n.isLeaf()) return Step::open;
-    if (!q.caster) {  // box hits are cheap: no order needed
+    if (!q.narrow_phase) {  // box hits are cheap: no order needed
       for (std::uint32_t i = n.first; i < n.first + n.count; ++i) offer(tree.items[i]);
       return Step::skip;
     }
-    // The narrow phase is dear: nearest boxes first, so that the bound prunes the others.
+    // The narrow phase costs more (the bisection much more): nearest boxes first, so that the
+    // bound prunes the others.
     order.clear();
     for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
       double a, b;
@@ -410,19 +595,15 @@ std::optional<RayHit<S>> raycastObject(const fcl::CollisionObject<S>& obj, const
                                        const RayOptions<S>& options) {
   checkRay(from, to, options);
   const Segment seg = makeSegment(from, to);
-  std::optional<Caster<S>> caster;
-  double tol_t = 0;
-  if (options.narrow_phase) {
-    caster.emplace(from, to);
-    tol_t = caster->length() > 0 ? double(options.tolerance) / caster->length() : kInf;
-  }
+  std::optional<Narrow<S>> narrow;
+  if (options.narrow_phase) narrow.emplace(from, to, options.tolerance);
   S lo[3], hi[3];
   for (int k = 0; k < 3; ++k) {
     lo[k] = box.min_[k];
     hi[k] = box.max_[k];
   }
   Found<S> f{0, 0, const_cast<fcl::CollisionObject<S>*>(&obj), HitKind::box};
-  if (!hitOne(seg, lo, hi, obj, caster ? &*caster : nullptr, tol_t, kInf, f.t, f.kind))
+  if (!hitOne(seg, lo, hi, obj, narrow ? &*narrow : nullptr, kInf, f.t, f.kind))
     return std::nullopt;
   return publish(f, from, to);
 }
