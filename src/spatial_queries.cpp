@@ -361,6 +361,33 @@ bool earlier(const Found<S>& a, const Found<S>& b) {
   return ta < tb || (ta == tb && a.seq < b.seq);
 }
 
+// The narrow phase of hitOne, given where the segment enters and leaves the object's box. Kept
+// out of line: the box test it follows is the walk's inner loop, and stays small.
+template <typename S>
+[[gnu::noinline]] bool narrowHit(const fcl::CollisionObject<S>& obj, Narrow<S>& narrow,
+                                 double enter, double exit, double bound, double& t) {
+  double first;
+  if (narrow.exact(obj, first)) {
+    // The answer the bisection converges to: no hit unless the segment meets the object by the
+    // box's exit, and never before the box's entry.
+    if (first > exit) return false;
+    t = first > enter ? first : enter;
+    return true;
+  }
+  Caster<S>& caster = narrow.caster();
+  if (!caster.reaches(obj, exit)) return false;
+  double a = enter, b = exit;  // a: no contact yet (or enter), b: contact
+  if (caster.reaches(obj, a)) b = a;
+  while (b - a > narrow.tolT()) {
+    if (a > bound) return false;
+    const double mid = a + (b - a) * 0.5;
+    if (!(mid > a && mid < b)) break;  // as close as double can say
+    (caster.reaches(obj, mid) ? b : a) = mid;
+  }
+  t = b;
+  return true;
+}
+
 // The per-object test of raycastObject. `bound`: a hit beyond it is of no interest (the walk's
 // best so far), and the bisection may give up once it is passed; the t returned otherwise does
 // not depend on `bound`, so a pruned walk finds the same t as a loop over every object.
@@ -375,26 +402,7 @@ bool hitOne(const Segment& s, const T* lo, const T* hi, const fcl::CollisionObje
     return true;
   }
   kind = HitKind::narrow_phase;
-  double first;
-  if (narrow->exact(obj, first)) {
-    // The same answer the bisection converges to: no hit unless the segment meets the object
-    // by the box's exit, and never before the box's entry.
-    if (first > exit) return false;
-    t = first > enter ? first : enter;
-    return true;
-  }
-  Caster<S>& caster = narrow->caster();
-  if (!caster.reaches(obj, exit)) return false;
-  double a = enter, b = exit;  // a: no contact yet (or enter), b: contact
-  if (caster.reaches(obj, a)) b = a;
-  while (b - a > narrow->tolT()) {
-    if (a > bound) return false;
-    const double mid = a + (b - a) * 0.5;
-    if (!(mid > a && mid < b)) break;  // as close as double can say
-    (caster.reaches(obj, mid) ? b : a) = mid;
-  }
-  t = b;
-  return true;
+  return narrowHit(obj, *narrow, enter, exit, bound, t);
 }
 
 template <typename S>
