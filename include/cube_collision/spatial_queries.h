@@ -19,7 +19,9 @@ namespace cube {
 
 /// What decided a ray hit.
 enum class HitKind {
-  narrow_phase,  ///< FCL's narrow phase on the object's geometry (t within the tolerance)
+  narrow_phase,  ///< the object's geometry: exact for spheres, boxes, capsules, cylinders,
+                 ///< ellipsoids, planes and halfspaces; FCL's narrow phase, t within the
+                 ///< tolerance, for the others (see raycastObject)
   box,           ///< the object's AABB: asked for (RayOptions::narrow_phase off) or no geometry
                  ///< FCL can test a segment against (octrees, triangles, custom, none)
 };
@@ -39,11 +41,13 @@ struct RayHit {
 /// How a ray query decides a hit.
 template <typename S>
 struct RayOptions {
-  /// Run FCL's narrow phase on the objects whose AABB the segment meets; off: the AABB decides
-  /// every hit and t is where the segment enters it.
+  /// Test the geometry of the objects whose AABB the segment meets (see raycastObject); off: the
+  /// AABB decides every hit and t is where the segment enters it.
   bool narrow_phase = true;
-  /// Length along the segment within which a narrow-phase t is found: the reported point lies at
-  /// most this far beyond the first contact (or as close as S can say, for tiny values). >= 0.
+  /// For the geometries found by bisection (meshes, cones, convexes; see raycastObject): length
+  /// along the segment within which t is found, the reported point lying at most this far beyond
+  /// the first contact (or as close as S can say, for tiny values). The geometries solved exactly
+  /// do not use it. >= 0.
   S tolerance = S(1e-6);
 };
 
@@ -76,12 +80,22 @@ std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
 /// most the smallest exit. No hit if it is not met.
 ///
 /// Narrow phase (options.narrow_phase, and a geometry FCL can test: meshes (BVHModel), box,
-/// sphere, ellipsoid, capsule, cone, cylinder, convex, plane, halfspace): fcl::collide of the
-/// object with a capsule of radius 0 along the segment from `from` to the point at t; as t grows
-/// the capsule only grows, so bisection between the box's entry and exit finds the first contact
-/// to options.tolerance. No hit if the segment up to the box's exit does not collide. t is never
-/// below the box's entry. Other geometries (octree, triangle, custom, none) get the box hit,
-/// kind box. Same input checks as raycastFirst.
+/// sphere, ellipsoid, capsule, cone, cylinder, convex, plane, halfspace): t is the first point of
+/// the segment, up to the box's exit, in the object (closed: touching counts; 0 if `from` is
+/// already inside a solid), raised to the box's entry if below it; no hit if there is none. t is
+/// never below the box's entry.
+/// - Exact, in double, for spheres, boxes, capsules, cylinders, ellipsoids (all radii > 0),
+///   planes and halfspaces whose sizes are finite and >= 0: the segment is taken into the
+///   object's frame (FCL 0.7's: centred on the origin; box: `side` full lengths; capsule and
+///   cylinder: axis z from -lz/2 to lz/2; ellipsoid: `radii` along x, y, z; plane: the surface
+///   n.x = d; halfspace: the solid n.x <= d) and met with slabs and quadratics. Rounding aside,
+///   this is the exact first contact; options.tolerance is not used.
+/// - By bisection for the others (meshes, cones, convexes, and the primitives above with other
+///   sizes): fcl::collide of the object with a capsule of radius 0 along the segment from `from`
+///   to the point at t; as t grows the capsule only grows, so bisection between the box's entry
+///   and exit finds the first contact to options.tolerance, as FCL's GJK sees contact.
+/// Both give kind narrow_phase. Other geometries (octree, triangle, custom, none) get the box
+/// hit, kind box. Same input checks as raycastFirst.
 template <typename S>
 std::optional<RayHit<S>> raycastObject(const fcl::CollisionObject<S>& obj, const fcl::AABB<S>& box,
                                        const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
