@@ -77,6 +77,7 @@ void pairFilters(benchmark::State& state, std::size_t n, bool masked, bool narro
   cube::CubeCollisionManagerd m;
   m.registerObjects(objs);
   if (masked) halfMask(m, objs);
+  m.update();  // as after any change: lays the cubes out by filter group (Config::filter_groups)
   const fcl::CollisionRequestd request(100000000);
   cube::NarrowPhaseOptions<double> one;
   one.threads = 1;

@@ -117,6 +117,8 @@ HierarchyView<S>::HierarchyView(const CubeCollisionManager<S>& manager) {
     const detail::Node& n = nodes[raw[k]];
     s.surface_area += detail::surfaceArea(n);
     s.volume += volumeOf(n);
+    if (h.view().groups != nullptr && h.view().groups[raw[k]] != detail::kMixedGroup)
+      ++s.one_group_cubes;
     if (!n.isLeaf()) continue;
     ++s.leaves;
     if (s.leaf_size_histogram.size() <= n.count) s.leaf_size_histogram.resize(n.count + 1, 0);
@@ -197,6 +199,7 @@ std::ostream& operator<<(std::ostream& os, const HierarchyStats& s) {
   os << "total cube surface area " << s.surface_area << ", volume " << s.volume << "\n";
   os << "quality ratio (area / area at last build) " << s.quality_ratio << ", rebuild threshold "
      << s.rebuild_threshold << ", builds " << s.builds << "\n";
+  if (s.one_group_cubes > 0) os << "cubes of one filter group: " << s.one_group_cubes << "\n";
   os << "garbage: " << s.dead_cubes << " dead cubes, " << s.dead_object_slots
      << " dead object slots\n";
   os << "memory: " << s.bytes << " bytes, " << s.bytes_per_object << " per object\n";

@@ -15,6 +15,7 @@
 
 #include "cube_collision/continuous.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/inspect.h"
 #include "cube_collision/margins.h"
 #include "cube_collision/queries.h"
 #include "scenes.h"
@@ -545,6 +546,211 @@ TEST(CanonicalPairs, WithFiltersAndPairList) {
     plain.setFilter(o, b.category, b.mask);
   }
   EXPECT_EQ(calls(plain), c);
+}
+
+// Filter groups (Config::filter_groups): a few distinct bits, which the cubes keep apart after
+// update(). Every answer must equal brute force whether the cubes carry groups or not, through
+// registrations, removals, bit changes and motion, with validate() after each mutation.
+enum class Arrangement { two_worlds, static_scene, few_random };
+
+Bits arranged(Arrangement a, std::size_t i, std::mt19937& rng, const std::vector<Bits>& kinds) {
+  switch (a) {
+    case Arrangement::two_worlds:  // each half pairs only within itself
+      return Bits{std::uint64_t(1) << (i % 2), std::uint64_t(1) << (i % 2)};
+    case Arrangement::static_scene:  // one in ten moves; the rest pair only with movers
+      return i % 10 == 0 ? Bits{1, 3} : Bits{2, 1};
+    case Arrangement::few_random:
+      return kinds[rng() % kinds.size()];
+  }
+  return Bits{};
+}
+
+template <typename S>
+std::vector<Pair<S>> objectPairs(const CubeCollisionManager<S>& m, Obj<S>* q) {
+  std::vector<Pair<S>> got;
+  m.collide(q, [&](Obj<S>* a, Obj<S>* b) { got.push_back(unordered(a, b)); });
+  std::sort(got.begin(), got.end());
+  return got;
+}
+
+template <typename S>
+void checkGroups(Arrangement arrangement, std::uint32_t seed) {
+  SCOPED_TRACE("arrangement " + std::to_string(int(arrangement)) + " seed " + std::to_string(seed));
+  auto sc = scene<S>(600, seed);
+  auto more = scene<S>(80, seed + 1);
+  std::vector<Obj<S>*> objs = sc.pointers();
+  std::mt19937 rng(seed);
+  std::vector<Bits> kinds;
+  for (int k = 0; k < 5; ++k)
+    kinds.push_back(Bits{std::uint64_t(1) << (rng() % 3), std::uint64_t(rng() % 8)});
+  cube::Config off;
+  off.filter_groups = 0;
+  CubeCollisionManager<S> m, ref(off);
+  std::map<Obj<S>*, Bits> bits;
+  const auto setBits = [&](Obj<S>* o, const Bits& b) {
+    bits[o] = b;
+    m.setFilter(o, b.category, b.mask);
+    ref.setFilter(o, b.category, b.mask);
+    std::string why;
+    ASSERT_TRUE(m.validate(&why)) << why;
+  };
+  const auto check = [&](const char* when) {
+    SCOPED_TRACE(when);
+    std::string why;
+    ASSERT_TRUE(m.validate(&why)) << why;
+    const auto want = bruteFiltered(objs, bits);
+    EXPECT_EQ(cube::oracle::selfPairs(m), want);
+    EXPECT_EQ(cube::oracle::selfPairs(ref), want);
+    for (std::size_t i = 0; i < objs.size(); i += 37) {
+      std::vector<Pair<S>> brute;
+      for (Obj<S>* o : objs)
+        if (o != objs[i] && o->getAABB().overlap(objs[i]->getAABB()) &&
+            pass(bitsOf(bits, o), bitsOf(bits, objs[i])))
+          brute.push_back(unordered(o, objs[i]));
+      std::sort(brute.begin(), brute.end());
+      EXPECT_EQ(objectPairs(m, objs[i]), brute) << "object query " << i;
+    }
+  };
+  m.registerObjects(objs);
+  ref.registerObjects(objs);
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    setBits(objs[i], arranged(arrangement, i, rng, kinds));
+  const auto groupCubes = [](const CubeCollisionManager<S>& x) {
+    return cube::HierarchyView<S>(x).stats().one_group_cubes;
+  };
+  EXPECT_EQ(groupCubes(m), 0u) << "groups are laid out by update(), not setFilter";
+  check("bits set, before update");
+  m.update();
+  ref.update();
+  // Groups are kept apart when some two of the distinct bits in use (or one with itself)
+  // cannot pair: always in two worlds and the static scene, by chance with random bits.
+  std::vector<Bits> used;
+  for (const auto& [o, b] : bits)
+    if (std::none_of(used.begin(), used.end(),
+                     [&](const Bits& u) { return u.category == b.category && u.mask == b.mask; }))
+      used.push_back(b);
+  bool apart = false;
+  for (const Bits& x : used)
+    for (const Bits& y : used) apart = apart || !pass(x, y);
+  EXPECT_TRUE(apart || arrangement == Arrangement::few_random);
+  EXPECT_EQ(groupCubes(m) > 0, apart);
+  EXPECT_EQ(groupCubes(ref), 0u);
+  check("after update");
+  if (arrangement != Arrangement::few_random) {
+    // Cube pairs of groups that cannot pair are dropped whole: fewer box tests.
+    cube::QueryStats grouped, plain;
+    cube::oracle::Calls<S> c1, c2;
+    m.collide(&c1, &cube::oracle::Calls<S>::record, &grouped);
+    ref.collide(&c2, &cube::oracle::Calls<S>::record, &plain);
+    EXPECT_LT(grouped.box_tests, plain.box_tests);
+    if (arrangement == Arrangement::static_scene) {
+      EXPECT_LT(grouped.box_tests * 2, plain.box_tests) << "the static objects' pairs walked";
+    }
+  }
+  // Registrations one by one go into the cubes of their group.
+  const auto extra = more.pointers();
+  for (std::size_t i = 0; i < extra.size(); ++i) {
+    m.registerObject(extra[i]);
+    ref.registerObject(extra[i]);
+    objs.push_back(extra[i]);
+    setBits(extra[i], arranged(arrangement, i, rng, kinds));
+  }
+  check("after registrations");
+  m.update();
+  ref.update();
+  check("after registrations and update");
+  // Removals, enough to compact the cubes.
+  for (std::size_t i = 0; i < objs.size(); i += 1 + (i % 3 != 0)) {
+    m.unregisterObject(objs[i]);
+    ref.unregisterObject(objs[i]);
+    bits.erase(objs[i]);
+    objs[i] = nullptr;
+    std::string why;
+    ASSERT_TRUE(m.validate(&why)) << why;
+  }
+  objs.erase(std::remove(objs.begin(), objs.end(), nullptr), objs.end());
+  check("after removals");
+  // Bits changed: groups forgotten until the next update, answers the same either way.
+  for (std::size_t i = 0; i < objs.size(); i += 7)
+    setBits(objs[i], arranged(arrangement, i + 1, rng, kinds));
+  check("bits changed");
+  cube::scenes::jitter(sc, 0.3, cube::scenes::typicalSize({}) * 0.5, true, seed + 2);
+  m.update();
+  ref.update();
+  check("after motion and update");
+  // Manager against manager, both with groups.
+  CubeCollisionManager<S> other;
+  std::map<Obj<S>*, Bits> other_bits;
+  for (Obj<S>* o : extra) {
+    other.registerObject(o);
+    const Bits b = arranged(arrangement, other_bits.size(), rng, kinds);
+    other.setFilter(o, b.category, b.mask);
+    other_bits[o] = b;
+  }
+  other.update();
+  std::vector<Pair<S>> got, want;
+  m.collide(&other, [&](Obj<S>* a, Obj<S>* b) { got.emplace_back(a, b); });
+  for (const auto& p : cube::oracle::bruteCrossPairs(objs, extra))
+    if (pass(bitsOf(bits, p.first), bitsOf(other_bits, p.second))) want.push_back(p);
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, want) << "manager against manager";
+}
+
+TEST(FilterGroups, CubesKeepGroupsApartAndAnswersEqualBruteForce) {
+  for (const Arrangement a :
+       {Arrangement::two_worlds, Arrangement::static_scene, Arrangement::few_random}) {
+    checkGroups<double>(a, 61);
+    checkGroups<float>(a, 62);
+  }
+  checkGroups<double>(Arrangement::few_random, 63);
+}
+
+TEST(FilterGroups, DistanceAndNarrowPhaseSkipNoAllowedPair) {
+  auto sc = scene<double>(200, 71, 2.0);
+  const auto objs = sc.pointers();
+  CubeCollisionManager<double> m;
+  m.registerObjects(objs);
+  std::map<Obj<double>*, Bits> bits;
+  std::mt19937 rng(5);
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    bits[objs[i]] = arranged(Arrangement::static_scene, i, rng, {});
+    m.setFilter(objs[i], bits[objs[i]].category, bits[objs[i]].mask);
+  }
+  m.update();
+  ASSERT_GT(cube::HierarchyView<double>(m).stats().one_group_cubes, 0u);
+  double best = std::numeric_limits<double>::max();
+  m.distance(&best, &cube::oracle::narrowDistance<double>);
+  double brute = std::numeric_limits<double>::max();
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j) {
+      if (!pass(bits[objs[i]], bits[objs[j]])) continue;
+      double d = std::numeric_limits<double>::max();
+      double tmp = d;
+      cube::oracle::narrowDistance<double>(objs[i], objs[j], &tmp, d);
+      brute = std::min(brute, tmp);
+    }
+  EXPECT_NEAR(best, brute, 1e-9 * (1 + std::fabs(brute)));
+  fcl::CollisionRequest<double> req(1000000);
+  cube::NarrowPhaseStats stats;
+  cube::NarrowPhaseOptions<double> opt;
+  opt.stats = &stats;
+  const auto res = cube::collideAll(m, req, opt);
+  const auto allowed = bruteFiltered(objs, bits);
+  EXPECT_EQ(stats.candidate_pairs, allowed.size());
+  std::size_t contacts = 0;
+  for (const auto& p : allowed) {
+    fcl::CollisionResult<double> r;
+    contacts += fcl::collide(p.first, p.second, req, r) > 0 ? r.numContacts() : 0;
+  }
+  EXPECT_EQ(res.numContacts(), contacts);
+}
+
+TEST(FilterGroups, ConfigOutOfRangeThrows) {
+  cube::Config c;
+  c.filter_groups = -1;
+  EXPECT_THROW(CubeCollisionManager<double>{c}, std::invalid_argument);
+  c.filter_groups = 65;
+  EXPECT_THROW(CubeCollisionManager<double>{c}, std::invalid_argument);
 }
 
 }  // namespace

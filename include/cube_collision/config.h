@@ -105,6 +105,19 @@ struct Config {
   /// saves the rest of the walk; QueryStats then count no box tests.
   bool canonical_pairs = false;
 
+  /// Filter groups (objects with equal filter bits, CubeCollisionManager::setFilter) that the
+  /// cubes keep apart. When at most this many groups are in use and some two of them (or one
+  /// with itself) cannot pair, a build splits a cube holding several groups between groups
+  /// before any median split, and each cube records the group of its objects: a walk then drops
+  /// a pair of cubes whose groups cannot pair, and tests no bits within pairs of one-group
+  /// leaves that can (a static scene whose objects do not pair with each other costs only its
+  /// pairs with the moving ones). Groups are laid out by builds: after bits change, the next
+  /// update() or setup() rebuilds; until then every pair is tested bit by bit. 0: off, at most
+  /// 64. Trade-off: each group spans the whole scene, so an object query descends one subtree
+  /// per group, and pairs of groups that do pair are walked as separate subtrees, which
+  /// overlap; past a few groups that costs more than the dropped pairs save.
+  int filter_groups = 8;
+
   /// Throws std::invalid_argument naming the first knob out of range.
   void check() const;
 };

@@ -69,8 +69,12 @@ struct HierarchyStats {
   std::size_t dead_cubes = 0;         ///< unreachable cubes awaiting compaction
   std::size_t dead_object_slots = 0;  ///< removed objects' slots awaiting compaction
   std::size_t builds = 0;             ///< full builds so far
-  std::size_t bytes = 0;              ///< heap bytes owned by the hierarchy
-  double bytes_per_object = 0;        ///< bytes / all registered objects (0 if none)
+  /// Live cubes whose objects all have one filter group (equal filter bits), when the cubes keep
+  /// groups apart (Config::filter_groups; laid out by update() or setup() after bits change);
+  /// 0 when they do not.
+  std::size_t one_group_cubes = 0;
+  std::size_t bytes = 0;        ///< heap bytes owned by the hierarchy
+  double bytes_per_object = 0;  ///< bytes / all registered objects (0 if none)
 };
 
 /// Writes the statistics as a few human-readable lines.

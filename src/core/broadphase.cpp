@@ -19,6 +19,8 @@ void Config::check() const {
     throw std::invalid_argument("cube::Config: unbounded_limit must be > 0");
   if (all_pairs_limit > kMaxAllPairsLimit)
     throw std::invalid_argument("cube::Config: all_pairs_limit must be <= 64");
+  if (filter_groups < 0 || filter_groups > 64)
+    throw std::invalid_argument("cube::Config: filter_groups must be in [0, 64]");
 }
 
 namespace detail {
@@ -104,9 +106,15 @@ void Broadphase<S>::unplace(ObjectId id) {
 }
 
 template <typename S>
+void Broadphase<S>::rebuild(const std::vector<Item<S>>& extra) {
+  tree_.rebuild(ids(), extra);
+  regroup_due_ = false;
+}
+
+template <typename S>
 void Broadphase<S>::maintain() {
   if (policy_.dueAfterChange(tree_))
-    tree_.rebuild(ids());
+    rebuild();
   else
     tree_.compactIfSparse(ids());
 }
@@ -153,7 +161,7 @@ void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_
     }
   }
   unbounded_node_.count = std::uint32_t(unbounded_.size());
-  tree_.rebuild(ids(), extra);
+  rebuild(extra);
 }
 
 template <typename S>
@@ -212,8 +220,8 @@ void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::si
 
 template <typename S>
 void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
-  if (policy_.dueAfterUpdate(tree_))
-    tree_.rebuild(ids());
+  if (regroup_due_ || policy_.dueAfterUpdate(tree_))
+    rebuild();
   else
     tree_.compactIfSparse(ids());
   if (!keep) return;
@@ -229,7 +237,7 @@ void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
 
 template <typename S>
 void Broadphase<S>::setup() {
-  if (policy_.dueAtSetup(tree_, !setup_done_)) tree_.rebuild(ids());
+  if (regroup_due_ || policy_.dueAtSetup(tree_, !setup_done_)) rebuild();
   setup_done_ = true;
 }
 
@@ -237,6 +245,7 @@ template <typename S>
 void Broadphase<S>::clear() {
   table_.clear();
   tree_.clear();
+  regroup_due_ = false;
   unbounded_ = {};
   unbounded_node_.count = 0;
   pairs_.release();
@@ -251,7 +260,13 @@ template <typename S>
 bool Broadphase<S>::setFilter(const Object* obj, const Filter& f) {
   const ObjectId id = table_.find(obj);
   if (id == kNone) return false;
-  table_.setFilter(id, f);  // read by every query; the pair list holds boxes only, untouched
+  // Read by every query; the pair list holds boxes only, untouched. The cubes' groups are no
+  // longer true: forgotten now (O(1)), laid out again by the next update() or setup(), not
+  // here, so that a loop setting many objects' bits rebuilds once.
+  if (table_.setFilter(id, f)) {
+    tree_.forgetGroups();
+    regroup_due_ = table_.separable(config_.filter_groups);
+  }
   return true;
 }
 
@@ -283,6 +298,7 @@ template <typename S>
 PairGate<S> Broadphase<S>::selfGate() const {
   PairGate<S> g;
   g.filters_a = g.filters_b = table_.filters();
+  g.groups_a = g.groups_b = table_.groupFilters();
   g.keep = keep_ ? &keep_ : nullptr;
   if (config_.canonical_pairs) g.seq = table_.seqs();
   return g;
@@ -292,8 +308,10 @@ template <typename S>
 PairGate<S> Broadphase<S>::crossGate(const Broadphase* other, const Object* obj) const {
   PairGate<S> g;
   g.filters_a = table_.filters();
+  g.groups_a = table_.groupFilters();
   if (other != nullptr) {
     g.filters_b = other->table_.filters();
+    g.groups_b = other->table_.groupFilters();
   } else if (g.filters_a != nullptr) {
     g.query = filter(obj);
   }
@@ -433,7 +451,8 @@ std::size_t Broadphase<S>::bytes() const {
 
 template <typename S>
 bool Broadphase<S>::validate(std::string* why) const {
-  if (!table_.validate(why) || !tree_.validate(table_.locations(), why)) return false;
+  if (!table_.validate(why) || !tree_.validate(table_.locations(), table_.groups(), why))
+    return false;
   std::ostringstream msg;
   auto fail = [&]() {
     if (why) *why = msg.str();

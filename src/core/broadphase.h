@@ -119,7 +119,13 @@ class Broadphase {
     return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u,
                    std::uint32_t(unbounded_.size())};
   }
-  IdArrays ids() { return IdArrays{table_.seqs(), table_.locations()}; }
+  /// With the filter groups the tree should keep apart, if any (see CubeTree::rebuild).
+  IdArrays ids() {
+    const bool apart = table_.separable(config_.filter_groups);
+    return IdArrays{table_.seqs(), table_.locations(), apart ? table_.groups() : nullptr};
+  }
+  /// Builds the tree afresh over everything in it plus `extra`.
+  void rebuild(const std::vector<Item<S>>& extra = {});
   /// Puts a registered id with a valid box where its kind says: the cubes or the unbounded list.
   void place(ObjectId id, Object* obj, const Box<S>& box);
   /// Takes an id out of wherever it is.
@@ -169,6 +175,7 @@ class Broadphase {
   S default_margin_ = 0;         // manager-wide margin
   bool any_margin_ = false;      // a margin was ever set: query objects need a lookup
   bool setup_done_ = false;
+  bool regroup_due_ = false;  // filter groups changed: the next update() or setup() rebuilds
 };
 
 template <typename S>

@@ -214,6 +214,17 @@ void splitRecords(BuildRecord* first, BuildRecord* mid, BuildRecord* last, const
   selectNth(first, mid, last, longestAxis(bounds), scratch);
 }
 
+// Where a cube whose records are sorted by filter group (rg, per record) and hold more than
+// one group splits: at the group boundary nearest its median, so that both children get some.
+std::uint32_t groupBoundary(const Group* rg, std::uint32_t b, std::uint32_t e) {
+  const std::uint32_t mid = b + (e - b) / 2;
+  const auto lo = std::uint32_t(std::lower_bound(rg + b, rg + e, rg[mid]) - rg);
+  const auto hi = std::uint32_t(std::upper_bound(rg + b, rg + e, rg[mid]) - rg);
+  if (lo == b) return hi;
+  if (hi == e) return lo;
+  return mid - lo <= hi - mid ? lo : hi;
+}
+
 // Within a leaf, registration order: the callback order does not depend on history.
 void sortLeaf(BuildRecord* first, BuildRecord* last) {
   if (last - first <= kRankMax)
@@ -245,6 +256,7 @@ std::uint32_t CubeTree<S>::addChildren(std::uint32_t cube, std::uint32_t begin,
   nodes_.push_back(right);
   parent_.push_back(cube);
   parent_.push_back(cube);
+  if (!group_.empty()) group_.resize(nodes_.size(), kMixedGroup);
   nodes_[cube].first = c;
   nodes_[cube].count = 0;
   return c;
@@ -265,6 +277,7 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
   };
   nodes_.clear();
   parent_.clear();
+  group_.clear();
   dead_nodes_ = 0;
   root_ = kNone;
   area_ = 0;
@@ -278,6 +291,21 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
       rec[r].seq = ids.seq[it.id];
       rec[r].item = p;
       ++r;
+    }
+    // With groups: the records sorted by group (counting sort), rg[i] the group of rec[i]. The
+    // median selections below permute only within one group, so rg stays true.
+    std::vector<Group> rg;
+    if (ids.group != nullptr) {
+      std::uint32_t start[kMixedGroup + 2] = {};
+      for (const BuildRecord& x : rec) ++start[ids.group[itemAt(x.item).id] + 1];
+      for (int g = 0; g <= kMixedGroup; ++g) start[g + 1] += start[g];
+      rg.resize(n);
+      for (const BuildRecord& x : rec) {
+        const Group g = ids.group[itemAt(x.item).id];
+        rg[start[g]] = g;
+        scratch[start[g]++] = x;
+      }
+      rec.swap(scratch);
     }
     // Every lower child holds a multiple of leaf_size objects (splitCount), so the leaves are
     // full but one: at most 2 ceil(n / leaf_size) - 1 cubes, fewer under max_depth. Reserving
@@ -301,13 +329,22 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
           // The cube's sides: the union of its objects' rounded bounds, which is what refitting
           // makes of them (rounding out is monotonic), so no refit follows the build.
           unionOfRecords(rec.data() + b, rec.data() + e, nodes_[cube]);
-          if (e - b <= static_cast<std::uint32_t>(config_.leaf_size) || !canSplit(depth)) {
+          // Groups apart first, even in a small cube: a leaf of one group is one whose pairs
+          // need no filter test.
+          const bool mixed = !rg.empty() && rg[b] != rg[e - 1];
+          if ((e - b <= static_cast<std::uint32_t>(config_.leaf_size) && !mixed) ||
+              !canSplit(depth)) {
             sortLeaf(rec.data() + b, rec.data() + e);
             return Step::skip;
           }
-          const std::uint32_t m = b + splitCount(e - b, config_.leaf_size);
-          splitRecords(rec.data() + b, rec.data() + m, rec.data() + e, nodes_[cube],
-                       scratch.data() + b);
+          std::uint32_t m;
+          if (mixed) {
+            m = groupBoundary(rg.data(), b, e);
+          } else {
+            m = b + splitCount(e - b, config_.leaf_size);
+            splitRecords(rec.data() + b, rec.data() + m, rec.data() + e, nodes_[cube],
+                         scratch.data() + b);
+          }
           addChildren(cube, b, m, e);
           return Step::open;
         },
@@ -330,6 +367,7 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
         }
     }
     for (const Node& node : nodes_) area_ += surfaceArea(node);
+    if (ids.group != nullptr) setGroups(ids.group);
   } else {
     items_.clear();
   }
@@ -348,6 +386,28 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
 }
 
 template <typename S>
+Group CubeTree<S>::leafGroup(const Node& leaf, const Group* group) const {
+  const Group g = group[items_[leaf.first].id];
+  for (std::uint32_t p = leaf.first + 1; p < leaf.first + leaf.count; ++p)
+    if (group[items_[p].id] != g) return kMixedGroup;
+  return g;
+}
+
+template <typename S>
+void CubeTree<S>::setGroups(const Group* group) {
+  group_.assign(nodes_.size(), kMixedGroup);
+  // Children always have larger indices than their parent: one backward pass is bottom-up.
+  for (std::size_t i = nodes_.size(); i-- > 0;) {
+    const Node& n = nodes_[i];
+    if (isDead(n)) continue;
+    if (n.isLeaf())
+      group_[i] = leafGroup(n, group);
+    else if (group_[n.first] == group_[n.first + 1])
+      group_[i] = group_[n.first];
+  }
+}
+
+template <typename S>
 double CubeTree<S>::quality() const {
   if (live_ == 0 || built_live_ == 0) return 1.0;
   if (built_area_ <= 0) return area_ > 0 ? std::numeric_limits<double>::infinity() : 1.0;
@@ -358,6 +418,7 @@ template <typename S>
 void CubeTree<S>::clear() {
   nodes_ = {};
   parent_ = {};
+  group_ = {};
   items_ = {};
   root_ = kNone;
   live_ = dead_items_ = dead_nodes_ = 0;
@@ -413,12 +474,18 @@ void CubeTree<S>::refitAll() {
 // Incremental changes
 
 template <typename S>
-std::uint32_t CubeTree<S>::chooseLeaf(const Box<S>& box) const {
+std::uint32_t CubeTree<S>::chooseLeaf(const Box<S>& box, Group group) const {
   float lo[3], hi[3];
   roundOut(box, lo, hi);
   std::uint32_t cube = root_;
+  const bool by_group = !group_.empty() && group != kMixedGroup;
   while (!nodes_[cube].isLeaf()) {
     const std::uint32_t c = nodes_[cube].first;
+    // Into the child of its own group if only one is: the cubes above then stay apart.
+    if (by_group && (group_[c] == group) != (group_[c + 1] == group)) {
+      cube = group_[c] == group ? c : c + 1;
+      continue;
+    }
     double growth[2];
     for (int i = 0; i < 2; ++i) {
       Node u = nodes_[c + i];
@@ -488,8 +555,21 @@ void CubeTree<S>::splitLeaf(std::uint32_t leaf, IdArrays ids) {
   }
   Node bounds = nodes_[leaf];
   unionOfRecords(rec.data(), rec.data() + rec.size(), bounds);
-  const std::uint32_t half = (e - b) / 2;
-  splitRecords(rec.data(), rec.data() + half, rec.data() + rec.size(), bounds, scratch.data());
+  std::uint32_t half = (e - b) / 2;
+  // A leaf of several groups splits between groups first, as the build does.
+  const Group* group = ids.group != nullptr && !group_.empty() ? ids.group : nullptr;
+  std::vector<Group> rg;
+  if (group != nullptr) {
+    const auto groupOf = [&](const BuildRecord& x) { return group[items_[x.item].id]; };
+    std::stable_sort(rec.begin(), rec.end(), [&](const BuildRecord& x, const BuildRecord& y) {
+      return groupOf(x) < groupOf(y);
+    });
+    for (const BuildRecord& x : rec) rg.push_back(groupOf(x));
+  }
+  if (!rg.empty() && rg.front() != rg.back())
+    half = groupBoundary(rg.data(), 0, e - b);
+  else
+    splitRecords(rec.data(), rec.data() + half, rec.data() + rec.size(), bounds, scratch.data());
   sortLeaf(rec.data(), rec.data() + half);
   sortLeaf(rec.data() + half, rec.data() + rec.size());
   const std::uint32_t c = addChildren(leaf, b, b + half, e);
@@ -499,6 +579,10 @@ void CubeTree<S>::splitLeaf(std::uint32_t leaf, IdArrays ids) {
     items_[b + i] = range[i];
     items_[b + i].leaf = i < half ? c : c + 1;
     ids.loc[range[i].id] = b + i;
+  }
+  if (group != nullptr) {
+    group_[c] = leafGroup(nodes_[c], group);
+    group_[c + 1] = leafGroup(nodes_[c + 1], group);
   }
   area_ += refitCube(c);
   area_ += refitCube(c + 1);
@@ -516,6 +600,8 @@ void CubeTree<S>::startRoot(Item<S> item, IdArrays ids) {
   root.count = 1;
   nodes_.push_back(root);
   parent_.push_back(kNone);
+  group_.clear();
+  if (ids.group != nullptr) group_.push_back(ids.group[item.id]);
   root_ = 0;
   item.leaf = 0;
   items_.push_back(item);
@@ -534,8 +620,14 @@ void CubeTree<S>::insert(Item<S> item, IdArrays ids) {
     startRoot(item, ids);
     return;
   }
-  const std::uint32_t leaf = chooseLeaf(item.box);
+  if (ids.group == nullptr) group_ = {};  // groups no longer wanted: they could not be kept
+  const Group g = group_.empty() ? kMixedGroup : ids.group[item.id];
+  const std::uint32_t leaf = chooseLeaf(item.box, g);
   growLeaf(leaf, item, ids);
+  if (!group_.empty())
+    for (std::uint32_t c = leaf; c != kNone && group_[c] != kMixedGroup && group_[c] != g;
+         c = parent_[c])
+      group_[c] = kMixedGroup;
   if (nodes_[leaf].count > static_cast<std::uint32_t>(config_.leaf_size) && canSplit(depthOf(leaf)))
     splitLeaf(leaf, ids);
   refitPath(leaf);
@@ -565,6 +657,7 @@ void CubeTree<S>::remove(std::uint32_t pos, IdArrays ids) {
   if (leaf == root_) {
     nodes_.clear();
     parent_.clear();
+    group_.clear();
     items_.clear();
     root_ = kNone;
     dead_items_ = dead_nodes_ = 0;
@@ -578,6 +671,10 @@ void CubeTree<S>::remove(std::uint32_t pos, IdArrays ids) {
   area_ -= surfaceArea(nodes_[up]);
   area_churn_ += surfaceArea(nodes_[up]);
   nodes_[up] = nodes_[sibling];
+  if (!group_.empty()) {  // the cubes above held both; holding fewer groups, they stay true
+    group_[up] = group_[sibling];
+    group_[c] = group_[c + 1] = kMixedGroup;
+  }
   const Node& moved = nodes_[up];
   if (moved.isLeaf()) {
     for (std::uint32_t p = moved.first; p < moved.first + moved.count; ++p) items_[p].leaf = up;
@@ -623,12 +720,18 @@ void CubeTree<S>::compactIfSparse(IdArrays ids) {
   // Re-lay the same tree depth-first: same cubes, same leaves, no dead slots.
   NodeArray nodes;
   std::vector<std::uint32_t> parents;
+  std::vector<Group> groups;
   ItemArray<S> items;
   nodes.reserve(live_nodes);
   parents.reserve(live_nodes);
   items.reserve(live_);
-  nodes.push_back(nodes_[root_]);
-  parents.push_back(kNone);
+  const bool grouped = !group_.empty();
+  const auto copy = [&](std::uint32_t from, std::uint32_t up) {
+    nodes.push_back(nodes_[from]);
+    parents.push_back(up);
+    if (grouped) groups.push_back(group_[from]);
+  };
+  copy(root_, kNone);
   // The state is the cube's index in the new array.
   walkPreorder(
       nodes_, root_, 0u,
@@ -644,15 +747,14 @@ void CubeTree<S>::compactIfSparse(IdArrays ids) {
           return Step::skip;
         }
         nodes[to].first = static_cast<std::uint32_t>(nodes.size());
-        nodes.push_back(nodes_[n.first]);
-        nodes.push_back(nodes_[n.first + 1]);
-        parents.push_back(to);
-        parents.push_back(to);
+        copy(n.first, to);
+        copy(n.first + 1, to);
         return Step::open;
       },
       [&](int which, std::uint32_t to) { return nodes[to].first + std::uint32_t(which); });
   nodes_.swap(nodes);
   parent_.swap(parents);
+  group_.swap(groups);
   items_.swap(items);
   root_ = 0;
   dead_items_ = dead_nodes_ = 0;
@@ -661,14 +763,14 @@ void CubeTree<S>::compactIfSparse(IdArrays ids) {
 template <typename S>
 std::size_t CubeTree<S>::bytes() const {
   return nodes_.capacity() * sizeof(Node) + parent_.capacity() * sizeof(std::uint32_t) +
-         items_.capacity() * sizeof(Item<S>);
+         group_.capacity() * sizeof(Group) + items_.capacity() * sizeof(Item<S>);
 }
 
 // ---------------------------------------------------------------------------------------------
 // Invariants
 
 template <typename S>
-bool CubeTree<S>::validate(const std::uint32_t* loc, std::string* why) const {
+bool CubeTree<S>::validate(const std::uint32_t* loc, const Group* group, std::string* why) const {
   std::ostringstream msg;
   auto fail = [&]() {
     if (why) *why = msg.str();
@@ -754,6 +856,23 @@ bool CubeTree<S>::validate(const std::uint32_t* loc, std::string* why) const {
   const double scale = std::max({1e-300, total_area, area_churn_});
   if (std::fabs(total_area - area_) > (1e-9 + 4e-16 * double(area_steps_)) * scale)
     return msg << "tracked area " << area_ << " differs from " << total_area, fail();
+  if (!group_.empty()) {
+    if (group_.size() != nodes_.size() || group == nullptr)
+      return msg << "cube groups without a group per cube or per id", fail();
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      const Node& n = nodes_[i];
+      const Group g = group_[i];
+      if (g == kMixedGroup || isDead(n)) continue;
+      bool ok = true;
+      if (n.isLeaf()) {
+        for (std::uint32_t p = n.first; p < n.first + n.count; ++p)
+          ok = ok && group[items_[p].id] == g;
+      } else {
+        ok = group_[n.first] == g && group_[n.first + 1] == g;
+      }
+      if (!ok) return msg << "cube " << i << " has group " << int(g) << " but holds others", fail();
+    }
+  }
   return true;
 }
 

@@ -19,6 +19,9 @@ namespace detail {
 struct IdArrays {
   const std::uint32_t* seq;
   std::uint32_t* loc;
+  /// Per id: its filter group, when the core wants groups kept apart (ObjectTable::separable);
+  /// null otherwise. See CubeTree::rebuild.
+  const Group* group = nullptr;
 };
 
 template <typename S>
@@ -32,15 +35,24 @@ class CubeTree {
   bool empty() const { return live_ == 0; }
   /// What the traversals walk.
   View<S> view() const {
-    return View<S>{nodes_.data(), items_.data(), root_, std::uint32_t(items_.size())};
+    return View<S>{nodes_.data(), items_.data(), root_, std::uint32_t(items_.size()),
+                   group_.empty() ? nullptr : group_.data()};
   }
 
   /// Builds the cubes from scratch over the live slots plus `extra` (items not yet in the tree,
-  /// whose ids have no slot yet). The same objects always give the same tree.
+  /// whose ids have no slot yet). The same objects always give the same tree. With ids.group,
+  /// a cube holding several filter groups splits between groups first (at the boundary nearest
+  /// its median), and each cube records the group of its objects (View::groups), which the
+  /// walks use to drop pairs of cubes that cannot pair; without, no cube records one.
   void rebuild(IdArrays ids, const std::vector<Item<S>>& extra = {});
-  /// Puts one item (finite box, id without a slot) into the leaf it enlarges least, splitting
-  /// the leaf if it overflows.
+  /// Puts one item (finite box, id without a slot) into the leaf it enlarges least (with groups:
+  /// a cube of its own group first), splitting the leaf if it overflows. The cubes' groups stay
+  /// true: those that gain another group become mixed. Without ids.group they are forgotten.
   void insert(Item<S> item, IdArrays ids);
+  /// Forgets the cubes' groups (an object's group changed); the next rebuild makes them again.
+  void forgetGroups() { group_ = {}; }
+  /// Whether the cubes record groups.
+  bool grouped() const { return !group_.empty(); }
   /// Takes the object at `slot` out of its leaf; an emptied leaf merges its sibling upwards.
   void remove(std::uint32_t slot, IdArrays ids);
   /// Re-lays the tree without its dead cubes and slots when they outnumber the live ones.
@@ -79,8 +91,9 @@ class CubeTree {
   std::size_t deadSlots() const { return dead_items_; }
   /// Heap bytes owned.
   std::size_t bytes() const;
-  /// Checks every invariant of the cubes and that `loc` points each live id at its slot.
-  bool validate(const std::uint32_t* loc, std::string* why) const;
+  /// Checks every invariant of the cubes, that `loc` points each live id at its slot and, if the
+  /// cubes record groups, that each one's group is that of all its objects by `group` (per id).
+  bool validate(const std::uint32_t* loc, const Group* group, std::string* why) const;
 
  private:
   void growLeaf(std::uint32_t leaf, const Item<S>& item, IdArrays ids);
@@ -88,7 +101,9 @@ class CubeTree {
                             std::uint32_t end);
   void splitLeaf(std::uint32_t leaf, IdArrays ids);
   void splitCrowded(std::uint32_t top, IdArrays ids);
-  std::uint32_t chooseLeaf(const Box<S>& box) const;
+  std::uint32_t chooseLeaf(const Box<S>& box, Group group) const;
+  void setGroups(const Group* group);
+  Group leafGroup(const Node& leaf, const Group* group) const;
   std::uint32_t depthOf(std::uint32_t cube) const;
   bool canSplit(std::uint32_t depth) const;
   double refitCube(std::uint32_t cube);
@@ -97,6 +112,7 @@ class CubeTree {
   Config config_;
   NodeArray nodes_;
   std::vector<std::uint32_t> parent_;  // per cube; kNone for the root and dead cubes
+  std::vector<Group> group_;           // per cube, or empty: no groups recorded
   std::uint32_t root_ = kNone;
   ItemArray<S> items_;  // leaf order; dead slots have obj == nullptr
   std::size_t live_ = 0;

@@ -144,6 +144,16 @@ struct Filter {
 inline bool filtersPass(const Filter& a, const Filter& b) {
   return ((a.category & b.mask) != 0) & ((b.category & a.mask) != 0);
 }
+inline bool operator==(const Filter& a, const Filter& b) {
+  return a.category == b.category && a.mask == b.mask;
+}
+
+/// A filter group: the index of one distinct Filter value in the object table's interned list,
+/// the same for every object with those bits. Cubes carry the group of all their objects, so
+/// that a walk drops a pair of cubes whose groups cannot pair without looking at an object.
+using Group = std::uint8_t;
+/// A cube whose objects are of several groups, or an object whose bits found no free group.
+inline constexpr Group kMixedGroup = 0xff;
 
 /// The object records, each starting on a cache line for double.
 template <typename S>
@@ -157,6 +167,8 @@ struct View {
   const Item<S>* items = nullptr;
   std::uint32_t root = kNone;  ///< kNone: empty
   std::uint32_t slots = 0;     ///< length of `items`, dead slots (obj == nullptr) included
+  /// Per cube: the filter group of all its objects, or kMixedGroup; null: unknown (all mixed).
+  const Group* groups = nullptr;
 };
 
 /// What the build permutes: 32 bytes per object (the float bounds the cubes are made of), so that

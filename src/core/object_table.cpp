@@ -81,12 +81,19 @@ ObjectId ObjectTable<S>::take(Object* obj) {
     seq_.push_back(0);
     loc_.push_back(kNone);
     filter_.emplace_back();
+    group_.push_back(0);
     margin_.push_back(S(-1));
   }
   obj_[id] = obj;
   seq_[id] = seq;
   loc_[id] = kNone;
   filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
+  if (group_filter_.empty()) {
+    group_filter_.emplace_back();
+    group_users_.push_back(0);
+  }
+  group_[id] = 0;
+  ++group_users_[0];
   margin_[id] = S(-1);
   ++live_;
   return id;
@@ -116,6 +123,7 @@ std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n,
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
   filter_.reserve(filter_.size() + fresh);
+  group_.reserve(group_.size() + fresh);
   margin_.reserve(margin_.size() + fresh);
   const std::size_t mask = index_.size() - 1;
   for (std::size_t i = 0; i < n; ++i) {
@@ -146,6 +154,7 @@ void ObjectTable<S>::remove(ObjectId id) {
     }
   }
   index_[hole] = 0;
+  leaveGroup(id);
   obj_[id] = nullptr;
   loc_[id] = kNone;
   free_.push_back(id);
@@ -154,9 +163,62 @@ void ObjectTable<S>::remove(ObjectId id) {
 }
 
 template <typename S>
-void ObjectTable<S>::setFilter(ObjectId id, const Filter& f) {
+void ObjectTable<S>::leaveGroup(ObjectId id) {
+  if (group_[id] == kMixedGroup)
+    --mixed_users_;
+  else
+    --group_users_[group_[id]];
+}
+
+template <typename S>
+Group ObjectTable<S>::joinGroup(const Filter& f) {
+  Group free = kMixedGroup;
+  for (std::size_t g = 0; g < group_filter_.size(); ++g) {
+    if ((group_users_[g] > 0 || g == 0) && group_filter_[g] == f) {
+      ++group_users_[g];
+      return Group(g);
+    }
+    if (group_users_[g] == 0 && g != 0 && free == kMixedGroup) free = Group(g);
+  }
+  if (free == kMixedGroup && group_filter_.size() < kMixedGroup) {
+    free = Group(group_filter_.size());
+    group_filter_.emplace_back();
+    group_users_.push_back(0);
+  }
+  if (free == kMixedGroup) {
+    ++mixed_users_;
+    return kMixedGroup;
+  }
+  group_filter_[free] = f;
+  ++group_users_[free];
+  return free;
+}
+
+template <typename S>
+bool ObjectTable<S>::setFilter(ObjectId id, const Filter& f) {
+  if (filter_[id] == f) return false;
   filter_[id] = f;
   any_filter_ = any_filter_ || !f.isDefault();
+  const Group before = group_[id];
+  leaveGroup(id);
+  group_[id] = joinGroup(f);
+  return group_[id] != before;
+}
+
+template <typename S>
+bool ObjectTable<S>::separable(int limit) const {
+  if (!any_filter_ || mixed_users_ > 0 || limit <= 0) return false;
+  Group used[kMixedGroup];
+  int n = 0;
+  for (std::size_t g = 0; g < group_filter_.size(); ++g) {
+    if (group_users_[g] == 0) continue;
+    if (n == limit) return false;
+    used[n++] = Group(g);
+  }
+  for (int i = 0; i < n; ++i)
+    for (int j = i; j < n; ++j)
+      if (!filtersPass(group_filter_[used[i]], group_filter_[used[j]])) return true;
+  return false;
 }
 
 template <typename S>
@@ -165,6 +227,10 @@ void ObjectTable<S>::clear() {
   seq_ = {};
   loc_ = {};
   filter_ = {};
+  group_ = {};
+  group_filter_ = {};
+  group_users_ = {};
+  mixed_users_ = 0;
   margin_ = {};
   any_filter_ = false;
   free_ = {};
@@ -189,7 +255,9 @@ std::size_t ObjectTable<S>::bytes() const {
   return obj_.capacity() * sizeof(Object*) +
          (seq_.capacity() + loc_.capacity() + free_.capacity() + index_.capacity()) *
              sizeof(std::uint32_t) +
-         filter_.capacity() * sizeof(Filter) + margin_.capacity() * sizeof(S);
+         (filter_.capacity() + group_filter_.capacity()) * sizeof(Filter) +
+         group_.capacity() * sizeof(Group) + group_users_.capacity() * sizeof(std::uint32_t) +
+         margin_.capacity() * sizeof(S);
 }
 
 template <typename S>
@@ -200,7 +268,8 @@ bool ObjectTable<S>::validate(std::string* why) const {
     return false;
   };
   if (seq_.size() != obj_.size() || loc_.size() != obj_.size() || filter_.size() != obj_.size() ||
-      margin_.size() != obj_.size())
+      group_.size() != obj_.size() || margin_.size() != obj_.size() ||
+      group_users_.size() != group_filter_.size() || group_filter_.size() > kMixedGroup)
     return msg << "object table: per-id arrays differ in length", fail();
   std::size_t live = 0;
   std::vector<char> is_free(obj_.size(), 0);
@@ -210,6 +279,8 @@ bool ObjectTable<S>::validate(std::string* why) const {
     is_free[id] = 1;
   }
   std::vector<std::uint32_t> seqs;
+  std::vector<std::uint32_t> users(group_filter_.size(), 0);
+  std::size_t mixed = 0;
   for (ObjectId id = 0; id < obj_.size(); ++id) {
     if (obj_[id] == nullptr) {
       if (!is_free[id]) return msg << "object table: id " << id << " lost", fail();
@@ -221,9 +292,25 @@ bool ObjectTable<S>::validate(std::string* why) const {
     seqs.push_back(seq_[id]);
     if (!any_filter_ && !filter_[id].isDefault())
       return msg << "object table: id " << id << " has filter bits the queries skip", fail();
+    const Group g = group_[id];
+    if (g == kMixedGroup) {
+      ++mixed;
+    } else if (g >= group_filter_.size() || !(group_filter_[g] == filter_[id])) {
+      return msg << "object table: id " << id << " in a group of other bits", fail();
+    } else {
+      ++users[g];
+    }
     if (!std::isfinite(margin_[id]))
       return msg << "object table: id " << id << " has a bad margin", fail();
   }
+  if (users != group_users_ || mixed != mixed_users_)
+    return msg << "object table: group user counts wrong", fail();
+  if (!group_filter_.empty() && !group_filter_[0].isDefault())
+    return msg << "object table: group 0 is not the default bits", fail();
+  for (std::size_t g = 0; g < group_filter_.size(); ++g)
+    for (std::size_t h = g + 1; h < group_filter_.size(); ++h)
+      if (users[g] > 0 && users[h] > 0 && group_filter_[g] == group_filter_[h])
+        return msg << "object table: groups " << g << " and " << h << " have equal bits", fail();
   std::sort(seqs.begin(), seqs.end());
   if (std::adjacent_find(seqs.begin(), seqs.end()) != seqs.end())
     return msg << "object table: two objects share a registration number", fail();

@@ -52,9 +52,18 @@ class ObjectTable {
 
   /// Filter bits of a live id (the default Filter from registration until set).
   const Filter& filter(ObjectId id) const { return filter_[id]; }
-  void setFilter(ObjectId id, const Filter& f);
+  /// Sets an id's bits; returns whether its filter group changed. O(groups), at most 254.
+  bool setFilter(ObjectId id, const Filter& f);
   /// Per id; null while every object has the default bits (queries then skip the test).
   const Filter* filters() const { return any_filter_ ? filter_.data() : nullptr; }
+  /// Per id: its filter group (objects with equal bits share one; group 0 is the default bits),
+  /// or kMixedGroup if all 254 groups were taken when it got its bits.
+  const Group* groups() const { return group_.data(); }
+  /// Per group: its bits.
+  const Filter* groupFilters() const { return group_filter_.data(); }
+  /// Whether the live objects' groups are worth separating in the cubes: at most `limit` groups
+  /// are in use, none is kMixedGroup, and some two of them (or one with itself) cannot pair.
+  bool separable(int limit) const;
   /// An object's own margin, or a negative value while it uses the manager-wide one.
   S ownMargin(ObjectId id) const { return margin_[id]; }
   void setOwnMargin(ObjectId id, S margin) { margin_[id] = margin; }
@@ -71,14 +80,20 @@ class ObjectTable {
   ObjectId take(Object* obj);  // a fresh or recycled id for obj, not yet in the map
   void put(ObjectId id);
   void grow(std::size_t objects);  // sizes the map for `objects` live ids and puts them all
+  void leaveGroup(ObjectId id);
+  Group joinGroup(const Filter& f);  // the group of bits f, made if new; counts one user
 
-  std::vector<Object*> obj_;          // per id; nullptr: free
-  std::vector<std::uint32_t> seq_;    // per id: registration number
-  std::vector<std::uint32_t> loc_;    // per id: location (see location())
-  std::vector<Filter> filter_;        // per id: filter bits
-  std::vector<S> margin_;             // per id: own margin, < 0 for the manager-wide one
-  std::vector<ObjectId> free_;        // ids to hand out again, last freed first
-  std::vector<std::uint32_t> index_;  // open addressing: 0 empty, else id + 1 (key: obj_[id])
+  std::vector<Object*> obj_;                // per id; nullptr: free
+  std::vector<std::uint32_t> seq_;          // per id: registration number
+  std::vector<std::uint32_t> loc_;          // per id: location (see location())
+  std::vector<Filter> filter_;              // per id: filter bits
+  std::vector<Group> group_;                // per id: filter group
+  std::vector<Filter> group_filter_;        // per group: its bits
+  std::vector<std::uint32_t> group_users_;  // per group: live ids in it (0: free, but group 0)
+  std::size_t mixed_users_ = 0;             // live ids without a group
+  std::vector<S> margin_;                   // per id: own margin, < 0 for the manager-wide one
+  std::vector<ObjectId> free_;              // ids to hand out again, last freed first
+  std::vector<std::uint32_t> index_;        // open addressing: 0 empty, else id + 1 (key: obj_[id])
   std::size_t live_ = 0;
   std::uint32_t next_seq_ = 0;
   bool any_filter_ = false;  // some live or past object had non-default bits (since clear())

@@ -122,12 +122,14 @@ struct CollidePolicy {
 
 // The callbacks for the set bits of `hits`, in order; apart, so that the test loop stays small.
 // Recheck: the bits come from float boxes, and each pair is tested again exactly first.
+// BitsPass: the two runs' filter groups are known to pair (no bit test needed).
 template <bool Recheck, typename S, class Policy>
 [[gnu::noinline]] bool reportHits(std::uint64_t hits, const Item<S>* xs, const Item<S>* ys,
-                                  const Policy& p) {
-  hits = p.passing(
-      hits, xs, [](unsigned b) { return b / kMaskLeaf; }, ys,
-      [](unsigned b) { return b % kMaskLeaf; });
+                                  const Policy& p, bool bits_pass) {
+  if (!bits_pass)
+    hits = p.passing(
+        hits, xs, [](unsigned b) { return b / kMaskLeaf; }, ys,
+        [](unsigned b) { return b % kMaskLeaf; });
   while (hits != 0) {
     const unsigned b = static_cast<unsigned>(__builtin_ctzll(hits));
     hits &= hits - 1;
@@ -159,25 +161,29 @@ void countLeafTests(const Policy& p, std::uint32_t nx, std::uint32_t ny) {
 // mispredicted branches.
 template <bool Self, typename S, class Policy>
 bool collideSmall(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys, std::uint32_t ny,
-                  const Policy& p) {
+                  const Policy& p, bool bits_pass = false) {
   countLeafTests<Self>(p, nx, ny);
   // Against a single object (a query) a batch kernel's set-up would cost more than the tests.
   const std::uint64_t hits =
       ny == 1 ? leafHitsPortable<Self>(xs, nx, ys, ny) : p.kernels->leafHits[Self](xs, nx, ys, ny);
-  return hits != 0 && reportHits<false>(hits, xs, ys, p);
+  if (hits == 0) return false;
+  return reportHits<false>(hits, xs, ys, p, bits_pass);
 }
 
 // The same for two leaves of one view (or a leaf with itself), [x0, x0 + nx) and [y0, y0 + ny),
 // tested on the policy's float columns where it has them.
 template <bool Self, typename S, class Policy>
-bool collideLeaves(const View<S>& v, std::uint32_t x0, std::uint32_t nx, std::uint32_t y0,
-                   std::uint32_t ny, const Policy& p) {
+[[gnu::always_inline]] inline bool collideLeaves(const View<S>& v, std::uint32_t x0,
+                                                 std::uint32_t nx, std::uint32_t y0,
+                                                 std::uint32_t ny, const Policy& p,
+                                                 bool bits_pass) {
   if (p.columns != nullptr) {
     countLeafTests<Self>(p, nx, ny);
     const std::uint64_t hits = p.kernels->columnHits[Self](*p.columns, x0, nx, y0, ny);
-    return hits != 0 && reportHits<true>(hits, v.items + x0, v.items + y0, p);
+    if (hits == 0) return false;
+    return reportHits<true>(hits, v.items + x0, v.items + y0, p, bits_pass);
   }
-  return collideSmall<Self>(v.items + x0, nx, v.items + y0, ny, p);
+  return collideSmall<Self>(v.items + x0, nx, v.items + y0, ny, p, bits_pass);
 }
 
 // The all-pairs test for small scenes: the live boxes in float columns, one row mask per object
@@ -298,9 +304,11 @@ bool leafNearestFirst(const View<S>& tree, const Node& n, const Item<S>& q, cons
 }
 
 template <typename S, class Policy>
-bool leafSelf(const View<S>& v, const Node& n, const Policy& p) {
+[[gnu::always_inline]] inline bool leafSelf(const View<S>& v, const Node& n, const Policy& p,
+                                            bool bits_pass) {
   if constexpr (!Policy::kOrdered) {
-    if (n.count <= kMaskLeaf) return collideLeaves<true>(v, n.first, n.count, n.first, n.count, p);
+    if (n.count <= kMaskLeaf)
+      return collideLeaves<true>(v, n.first, n.count, n.first, n.count, p, bits_pass);
   }
   const std::uint32_t end = n.first + n.count;
   for (std::uint32_t i = n.first; i < end; ++i)
@@ -310,14 +318,15 @@ bool leafSelf(const View<S>& v, const Node& n, const Policy& p) {
 }
 
 template <typename S, class Policy>
-bool leafPair(const View<S>& va, const Node& na, const View<S>& vb, const Node& nb,
-              const Policy& p) {
+[[gnu::always_inline]] inline bool leafPair(const View<S>& va, const Node& na, const View<S>& vb,
+                                            const Node& nb, const Policy& p, bool bits_pass) {
   if constexpr (!Policy::kOrdered) {
     if (na.count <= kMaskLeaf && nb.count <= kMaskLeaf) {
       // Columns only in a self walk, where va and vb are the same view.
       if (p.columns != nullptr)
-        return collideLeaves<false>(va, na.first, na.count, nb.first, nb.count, p);
-      return collideSmall<false>(va.items + na.first, na.count, vb.items + nb.first, nb.count, p);
+        return collideLeaves<false>(va, na.first, na.count, nb.first, nb.count, p, bits_pass);
+      return collideSmall<false>(va.items + na.first, na.count, vb.items + nb.first, nb.count, p,
+                                 bits_pass);
     }
   }
   // Large leaves (a depth cap) and distance: objects that cannot reach the other cube skip it.
@@ -348,9 +357,21 @@ inline void prefetchBelow(const View<S>& v, const Node& n) {
     __builtin_prefetch(v.nodes + n.first);
 }
 
+// What the filter groups of cube a of `va` and cube b of `vb` (kNone: the query object) say
+// about their pairs: 1 all pass their bits, 0 none does, -1 unknown (see PairGate::groupsPass).
+// Only the walks over cubes that carry groups (Groups below) ask.
+template <typename S, class Policy>
+inline int groupsPass(const Policy& p, const View<S>& va, std::uint32_t a, const View<S>& vb,
+                      std::uint32_t b) {
+  if (p.gate == nullptr || va.groups == nullptr) return -1;
+  const bool query = b == kNone;
+  return p.gate->groupsPass(va.groups[a],
+                            query || vb.groups == nullptr ? kMixedGroup : vb.groups[b], query);
+}
+
 // One object against a tree (walkTree): the common query, with a lighter stack than a walk of
 // cube pairs. Calls p.leaf(tree object, query object).
-template <typename S, class Policy>
+template <typename S, class Policy, bool Groups>
 struct ObjectVisitor {
   using State = typename Policy::Key;
   static constexpr bool kOrdered = Policy::kOrdered;
@@ -363,6 +384,9 @@ struct ObjectVisitor {
   bool keep(State key) const { return p.keep(key); }
   bool enter(std::uint32_t child, int, State, State& key) const {
     const Node& n = tree.nodes[child];
+    if constexpr (Groups) {
+      if (groupsPass(p, tree, child, tree, kNone) == 0) return false;
+    }
     prefetchBelow(tree, n);
     return p.enter(n, qn, key);
   }
@@ -373,9 +397,12 @@ struct ObjectVisitor {
     if constexpr (Policy::kOrdered) {
       if (n.count <= 16) return leafNearestFirst(tree, n, q, p) ? Step::stop : Step::skip;
     } else {
-      if (n.count <= kMaskLeaf)
-        return collideSmall<false>(tree.items + n.first, n.count, &q, 1, p) ? Step::stop
-                                                                            : Step::skip;
+      if (n.count <= kMaskLeaf) {
+        bool bits_pass = false;
+        if constexpr (Groups) bits_pass = groupsPass(p, tree, cube, tree, kNone) == 1;
+        return collideSmall<false>(tree.items + n.first, n.count, &q, 1, p, bits_pass) ? Step::stop
+                                                                                       : Step::skip;
+      }
     }
     for (std::uint32_t i = n.first; i < n.first + n.count; ++i)
       if (p.leaf(tree.items[i], q)) return Step::stop;
@@ -384,7 +411,7 @@ struct ObjectVisitor {
 };
 
 // Cube pairs of two views, or of one view with itself (walkPair).
-template <typename S, class Policy>
+template <typename S, class Policy, bool Groups>
 struct PairVisitor {
   using State = typename Policy::Key;
   static constexpr bool kOrdered = Policy::kOrdered;
@@ -396,7 +423,15 @@ struct PairVisitor {
   bool keep(State key) const { return p.keep(key); }
   void visit() const { p.count.visit(); }
   bool enter(std::uint32_t a, std::uint32_t b, State& key) const {
+    if constexpr (Groups) {
+      if (groupsPass(p, va, a, vb, b) == 0) return false;
+    }
     return p.enter(va.nodes[a], vb.nodes[b], key);
+  }
+  // Whether the pairs within cube a (self walks) may pass the filter bits.
+  bool enterSelf(std::uint32_t a) const {
+    if constexpr (Groups) return groupsPass(p, va, a, va, a) != 0;
+    return true;
   }
   void prefetch(bool in_a, std::uint32_t cube) const {
     if (in_a)
@@ -404,31 +439,47 @@ struct PairVisitor {
     else
       prefetchBelow(vb, vb.nodes[cube]);
   }
-  bool leafSelf(std::uint32_t a) const { return detail::leafSelf(va, va.nodes[a], p); }
+  bool leafSelf(std::uint32_t a) const {
+    bool bits_pass = false;
+    if constexpr (Groups) bits_pass = groupsPass(p, va, a, va, a) == 1;
+    return detail::leafSelf(va, va.nodes[a], p, bits_pass);
+  }
   bool leafPair(std::uint32_t a, std::uint32_t b) const {
-    return detail::leafPair(va, va.nodes[a], vb, vb.nodes[b], p);
+    bool bits_pass = false;
+    if constexpr (Groups) bits_pass = groupsPass(p, va, a, vb, b) == 1;
+    return detail::leafPair(va, va.nodes[a], vb, vb.nodes[b], p, bits_pass);
   }
 };
 
-// Every query's walk: a single object (one-leaf view) against a tree goes through walkTree,
-// anything else through walkPair.
-template <typename S, class Policy>
-bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
-  if (va.root == kNone || vb.root == kNone) return false;
+// The walk below the roots: a single object (one-leaf view) against a tree goes through
+// walkTree, anything else through walkPair. Groups: whether cubes' filter groups are tested.
+template <bool Groups, typename S, class Policy>
+inline bool walkFrom(const View<S>& va, const View<S>& vb, bool self, const Policy& p,
+                     typename Policy::Key key) {
   const Node& qb = vb.nodes[vb.root];
-  typename Policy::Key key{};
-  if (!self && !p.enter(va.nodes[va.root], qb, key)) return false;
   if (!self && qb.count == 1) {
-    ObjectVisitor<S, Policy> v{va, qb, vb.items[qb.first], p};
+    ObjectVisitor<S, Policy, Groups> v{va, qb, vb.items[qb.first], p};
     return walkTree(va.nodes, va.root, key, v);
   }
-  PairVisitor<S, Policy> v{va, vb, p};
+  PairVisitor<S, Policy, Groups> v{va, vb, p};
   return walkPair(va.nodes, vb.nodes, va.root, vb.root, key, self, v);
 }
 
-template <typename S, class Sink>
-bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink, QueryStats* stats,
-                 const PairGate<S>* gate) {
+// Every query's walk. Groups: whether the cubes' filter groups are tested (the caller knows:
+// a gate and cubes that carry groups); the walk without, which most queries take, tests nothing
+// for them.
+template <bool Groups, typename S, class Policy>
+bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
+  if (va.root == kNone || vb.root == kNone) return false;
+  typename Policy::Key key{};
+  if (!self && !p.enter(va.nodes[va.root], vb.nodes[vb.root], key)) return false;
+  return walkFrom<Groups>(va, vb, self, p, key);
+}
+
+template <bool Groups, typename S, class Sink>
+[[gnu::always_inline]] inline bool collideBody(const View<S>& a, const View<S>& b, bool self,
+                                               const Sink& sink, QueryStats* stats,
+                                               const PairGate<S>* gate) {
   // Against a single object (an object query) the walk tests one box at a time and needs no
   // kernel table: most calls are those, and small.
   const bool one = !self && b.root != kNone && b.nodes[b.root].count == 1;
@@ -440,7 +491,9 @@ bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink
   }
   const Columns* use = store ? &store->columns() : nullptr;
   std::vector<Filter> bits;
-  if (self && gate != nullptr && gate->filters_a != nullptr) {
+  // Not for cubes that carry filter groups: their one-group leaves need no bits, and the few
+  // mixed ones read them by id.
+  if (self && gate != nullptr && gate->filters_a != nullptr && a.groups == nullptr) {
     bits.resize(a.slots);  // dead slots keep the default bits; no pair reaches them
     for (std::uint32_t s = 0; s < a.slots; ++s)
       if (a.items[s].obj != nullptr) bits[s] = gate->filters_a[a.items[s].id];
@@ -451,9 +504,37 @@ bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink
       p.slot_bits = bits.data();
       p.slot_base = a.items;
     }
-    return descend(a, b, self, p);
+    return descend<Groups>(a, b, self, p);
   };
   return stats ? run(Count{stats}) : run(NoCount{});
+}
+
+// Out of line: the walks over cubes that carry filter groups are a separate instance, so that
+// the plain one is compiled as if they did not exist.
+template <typename S, class Sink>
+[[gnu::noinline]] bool collideGrouped(const View<S>& a, const View<S>& b, bool self,
+                                      const Sink& sink, QueryStats* stats,
+                                      const PairGate<S>* gate) {
+  return collideBody<true>(a, b, self, sink, stats, gate);
+}
+
+template <typename S, class Sink>
+bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink, QueryStats* stats,
+                 const PairGate<S>* gate) {
+  if (gate != nullptr && a.groups != nullptr) return collideGrouped(a, b, self, sink, stats, gate);
+  return collideBody<false>(a, b, self, sink, stats, gate);
+}
+
+template <typename S, class Policy>
+[[gnu::noinline]] bool distanceGrouped(const View<S>& a, const View<S>& b, bool self,
+                                       const Policy& p) {
+  return descend<true>(a, b, self, p);
+}
+
+template <typename S, class Policy>
+bool distanceWith(const View<S>& a, const View<S>& b, bool self, const Policy& p) {
+  if (p.gate != nullptr && a.groups != nullptr) return distanceGrouped(a, b, self, p);
+  return descend<false>(a, b, self, p);
 }
 
 }  // namespace
@@ -501,8 +582,8 @@ template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
                    S& best, QueryStats* stats, const PairGate<S>* gate) {
   if (stats)
-    return descend(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}, gate});
-  return descend(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}, gate});
+    return distanceWith(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}, gate});
+  return distanceWith(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}, gate});
 }
 
 template <typename S>

@@ -31,6 +31,8 @@ template <typename S>
 struct PairGate {
   const Filter* filters_a = nullptr;   ///< per id of side a's objects; null: all default
   const Filter* filters_b = nullptr;   ///< per id of side b's objects; null: all default
+  const Filter* groups_a = nullptr;    ///< per filter group of side a (View::groups index it)
+  const Filter* groups_b = nullptr;    ///< per filter group of side b
   Filter query;                        ///< side b's object when its id is kNone
   const KeepFn<S>* keep = nullptr;     ///< the user's predicate, if any
   const std::uint32_t* seq = nullptr;  ///< self queries: orient pairs by these numbers
@@ -49,6 +51,15 @@ struct PairGate {
   }
   /// Whether there are bits to test (else every pair passes them).
   bool hasBits() const { return filters_a != nullptr || filters_b != nullptr; }
+  /// Whether every object of a cube of group ga (side a) may pair with every object of a cube
+  /// of group gb (side b; kNone: the query object) by their bits: true (pass), false (none
+  /// can), or unknown (a mixed cube, or no groups). Returns 1, 0 or -1.
+  int groupsPass(Group ga, Group gb, bool query_b) const {
+    if (ga == kMixedGroup || groups_a == nullptr) return -1;
+    if (query_b) return filtersPass(groups_a[ga], query);
+    if (gb == kMixedGroup || groups_b == nullptr) return -1;
+    return filtersPass(groups_a[ga], groups_b[gb]);
+  }
   /// `bits` with the pairs whose filter bits do not pass cleared; bits_of(b) points at bit b's
   /// two Filters. No branch per pair: whether a pair passes is a coin toss for the branch predictor
   /// when groups are mixed, and a mispredicted branch costs more than the test.

@@ -188,6 +188,7 @@ bool walkPair(const Node* na_nodes, const Node* nb_nodes, std::uint32_t root_a,
       const Node& na = na_nodes[e.a];
       const Node& nb = nb_nodes[e.b];
       if (self && e.a == e.b) {
+        if (!v.enterSelf(e.a)) break;  // no pair within it can pass (filter groups)
         if (na.isLeaf()) {
           if (v.leafSelf(e.a)) return true;
           break;
