@@ -74,6 +74,27 @@ std::vector<Pair<S>> bruteFiltered(const std::vector<Obj<S>*>& objs,
   return out;
 }
 
+// collideAll runs FCL's narrow phase on exactly the pairs whose boxes overlap and bits pass, and
+// finds the contacts fcl::collide finds on them.
+void expectNarrowPhaseOnAllowedPairs(const CubeCollisionManager<double>& m,
+                                     const std::vector<Obj<double>*>& objs,
+                                     const std::map<Obj<double>*, Bits>& bits, int threads) {
+  fcl::CollisionRequest<double> req(1000000);
+  cube::NarrowPhaseStats stats;
+  cube::NarrowPhaseOptions<double> opt;
+  opt.stats = &stats;
+  opt.threads = threads;
+  const auto res = cube::collideAll(m, req, opt);
+  const auto allowed = bruteFiltered(objs, bits);
+  EXPECT_EQ(stats.candidate_pairs, allowed.size());
+  std::size_t contacts = 0;
+  for (const auto& p : allowed) {
+    fcl::CollisionResult<double> r;
+    contacts += fcl::collide(p.first, p.second, req, r) > 0 ? r.numContacts() : 0;
+  }
+  EXPECT_EQ(res.numContacts(), contacts);
+}
+
 template <typename S>
 cube::scenes::Scene<S> scene(std::size_t n, std::uint32_t seed, double overlaps = 3.0) {
   cube::scenes::SceneOptions o;
@@ -193,20 +214,7 @@ TEST(PairFilters, NarrowPhaseSeesNoFilteredPair) {
   CubeCollisionManager<double> m;
   m.registerObjects(objs);
   const auto bits = randomBits(m, objs, 17);
-  fcl::CollisionRequest<double> req(1000000);
-  cube::NarrowPhaseStats stats;
-  cube::NarrowPhaseOptions<double> opt;
-  opt.stats = &stats;
-  opt.threads = 2;
-  const auto res = cube::collideAll(m, req, opt);
-  const auto allowed = bruteFiltered(objs, bits);
-  EXPECT_EQ(stats.candidate_pairs, allowed.size());
-  std::size_t contacts = 0;
-  for (const auto& p : allowed) {
-    fcl::CollisionResult<double> r;
-    contacts += fcl::collide(p.first, p.second, req, r) > 0 ? r.numContacts() : 0;
-  }
-  EXPECT_EQ(res.numContacts(), contacts);
+  expectNarrowPhaseOnAllowedPairs(m, objs, bits, 2);
 }
 
 TEST(PairFilters, BadInputChangesNothing) {
@@ -730,19 +738,7 @@ TEST(FilterGroups, DistanceAndNarrowPhaseSkipNoAllowedPair) {
       brute = std::min(brute, tmp);
     }
   EXPECT_NEAR(best, brute, 1e-9 * (1 + std::fabs(brute)));
-  fcl::CollisionRequest<double> req(1000000);
-  cube::NarrowPhaseStats stats;
-  cube::NarrowPhaseOptions<double> opt;
-  opt.stats = &stats;
-  const auto res = cube::collideAll(m, req, opt);
-  const auto allowed = bruteFiltered(objs, bits);
-  EXPECT_EQ(stats.candidate_pairs, allowed.size());
-  std::size_t contacts = 0;
-  for (const auto& p : allowed) {
-    fcl::CollisionResult<double> r;
-    contacts += fcl::collide(p.first, p.second, req, r) > 0 ? r.numContacts() : 0;
-  }
-  EXPECT_EQ(res.numContacts(), contacts);
+  expectNarrowPhaseOnAllowedPairs(m, objs, bits, 1);
 }
 
 TEST(FilterGroups, ConfigOutOfRangeThrows) {
