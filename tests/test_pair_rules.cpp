@@ -633,10 +633,12 @@ void checkGroups(Arrangement arrangement, std::uint32_t seed) {
   // Groups are kept apart when some two of the distinct bits in use (or one with itself)
   // cannot pair: always in two worlds and the static scene, by chance with random bits.
   std::vector<Bits> used;
-  for (const auto& [o, b] : bits)
+  for (const auto& entry : bits) {
+    const Bits& b = entry.second;  // not a structured binding: C++17 lambdas cannot capture one
     if (std::none_of(used.begin(), used.end(),
                      [&](const Bits& u) { return u.category == b.category && u.mask == b.mask; }))
       used.push_back(b);
+  }
   bool apart = false;
   for (const Bits& x : used)
     for (const Bits& y : used) apart = apart || !pass(x, y);
