@@ -74,6 +74,22 @@ std::vector<Pair<S>> bruteFiltered(const std::vector<Obj<S>*>& objs,
   return out;
 }
 
+// The least narrow-phase distance over the pairs (i < j) that `allowed` keeps, by brute force
+// with the function the manager's distance query is given.
+template <class Allowed>
+double bruteSelfDistance(const std::vector<Obj<double>*>& objs, Allowed&& allowed) {
+  double brute = std::numeric_limits<double>::max();
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j) {
+      if (!allowed(i, j)) continue;
+      double d = std::numeric_limits<double>::max();
+      double tmp = d;
+      cube::oracle::narrowDistance<double>(objs[i], objs[j], &tmp, d);
+      brute = std::min(brute, tmp);
+    }
+  return brute;
+}
+
 // collideAll runs FCL's narrow phase on exactly the pairs whose boxes overlap and bits pass, and
 // finds the contacts fcl::collide finds on them.
 void expectNarrowPhaseOnAllowedPairs(const CubeCollisionManager<double>& m,
@@ -194,15 +210,9 @@ TEST(PairFilters, PredicateAndDistance) {
   // Self distance: the minimum over the pairs that pass, by brute force with the same function.
   double best = std::numeric_limits<double>::max();
   m.distance(&best, &cube::oracle::narrowDistance<double>);
-  double brute = std::numeric_limits<double>::max();
-  for (std::size_t i = 0; i < objs.size(); ++i)
-    for (std::size_t j = i + 1; j < objs.size(); ++j) {
-      if (!pass(bitsOf(bits, objs[i]), bitsOf(bits, objs[j])) || (i + j) % 2 == 0) continue;
-      double d = std::numeric_limits<double>::max();
-      double tmp = d;
-      cube::oracle::narrowDistance<double>(objs[i], objs[j], &tmp, d);
-      brute = std::min(brute, tmp);
-    }
+  const double brute = bruteSelfDistance(objs, [&](std::size_t i, std::size_t j) {
+    return pass(bitsOf(bits, objs[i]), bitsOf(bits, objs[j])) && (i + j) % 2 == 1;
+  });
   EXPECT_NEAR(best, brute, 1e-9 * (1 + std::fabs(brute)));
   m.setPairFilter({});
   EXPECT_EQ(cube::oracle::selfPairs(m), bruteFiltered(objs, bits));
@@ -730,15 +740,8 @@ TEST(FilterGroups, DistanceAndNarrowPhaseSkipNoAllowedPair) {
   ASSERT_GT(cube::HierarchyView<double>(m).stats().one_group_cubes, 0u);
   double best = std::numeric_limits<double>::max();
   m.distance(&best, &cube::oracle::narrowDistance<double>);
-  double brute = std::numeric_limits<double>::max();
-  for (std::size_t i = 0; i < objs.size(); ++i)
-    for (std::size_t j = i + 1; j < objs.size(); ++j) {
-      if (!pass(bits[objs[i]], bits[objs[j]])) continue;
-      double d = std::numeric_limits<double>::max();
-      double tmp = d;
-      cube::oracle::narrowDistance<double>(objs[i], objs[j], &tmp, d);
-      brute = std::min(brute, tmp);
-    }
+  const double brute = bruteSelfDistance(
+      objs, [&](std::size_t i, std::size_t j) { return pass(bits[objs[i]], bits[objs[j]]); });
   EXPECT_NEAR(best, brute, 1e-9 * (1 + std::fabs(brute)));
   expectNarrowPhaseOnAllowedPairs(m, objs, bits, 1);
 }

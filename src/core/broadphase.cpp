@@ -108,7 +108,6 @@ void Broadphase<S>::unplace(ObjectId id) {
 template <typename S>
 void Broadphase<S>::rebuild(const std::vector<Item<S>>& extra) {
   tree_.rebuild(ids(), extra);
-  regroup_due_ = false;
 }
 
 template <typename S>
@@ -220,7 +219,7 @@ void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::si
 
 template <typename S>
 void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
-  if (regroup_due_ || policy_.dueAfterUpdate(tree_))
+  if (regroupDue() || policy_.dueAfterUpdate(tree_))
     rebuild();
   else
     tree_.compactIfSparse(ids());
@@ -237,7 +236,7 @@ void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
 
 template <typename S>
 void Broadphase<S>::setup() {
-  if (regroup_due_ || policy_.dueAtSetup(tree_, !setup_done_)) rebuild();
+  if (regroupDue() || policy_.dueAtSetup(tree_, !setup_done_)) rebuild();
   setup_done_ = true;
 }
 
@@ -245,7 +244,6 @@ template <typename S>
 void Broadphase<S>::clear() {
   table_.clear();
   tree_.clear();
-  regroup_due_ = false;
   unbounded_ = {};
   unbounded_node_.count = 0;
   pairs_.release();
@@ -263,10 +261,7 @@ bool Broadphase<S>::setFilter(const Object* obj, const Filter& f) {
   // Read by every query; the pair list holds boxes only, untouched. The cubes' groups are no
   // longer true: forgotten now (O(1)), laid out again by the next update() or setup(), not
   // here, so that a loop setting many objects' bits rebuilds once.
-  if (table_.setFilter(id, f)) {
-    tree_.forgetGroups();
-    regroup_due_ = table_.separable(config_.filter_groups);
-  }
+  if (table_.setFilter(id, f)) tree_.forgetGroups();  // then regroupDue()
   return true;
 }
 

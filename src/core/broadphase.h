@@ -126,6 +126,11 @@ class Broadphase {
   }
   /// Builds the tree afresh over everything in it plus `extra`.
   void rebuild(const std::vector<Item<S>>& extra = {});
+  /// Whether the objects' filter groups should be kept apart and the cubes do not record them
+  /// (bits changed since the last build): update() and setup() then rebuild.
+  bool regroupDue() const {
+    return !tree_.empty() && !tree_.grouped() && table_.separable(config_.filter_groups);
+  }
   /// Puts a registered id with a valid box where its kind says: the cubes or the unbounded list.
   void place(ObjectId id, Object* obj, const Box<S>& box);
   /// Takes an id out of wherever it is.
@@ -175,7 +180,6 @@ class Broadphase {
   S default_margin_ = 0;         // manager-wide margin
   bool any_margin_ = false;      // a margin was ever set: query objects need a lookup
   bool setup_done_ = false;
-  bool regroup_due_ = false;  // filter groups changed: the next update() or setup() rebuilds
 };
 
 template <typename S>
