@@ -326,9 +326,8 @@ bool Broadphase<S>::collide(Object* obj, const Box<S>& box, void* data, CollideF
                             QueryStats* stats) const {
   const SingleView<S> query(obj, queryBox(obj, box));
   if (!gated())
-    return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
-      return collidePairs(a, b, false, data, fn, stats);
-    });
+    return collideObject(tree_.view(), query, data, fn, stats) ||
+           collideObject(unboundedView(), query, data, fn, stats);
   const PairGate<S> gate = crossGate(nullptr, obj);
   if (!config_.canonical_pairs)
     return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {

@@ -563,6 +563,21 @@ bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, Col
 }
 
 template <typename S>
+[[gnu::flatten]] bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data,
+                                    CollideFn<S> fn, QueryStats* stats) {
+  if (tree.root == kNone) return false;
+  const auto run = [&](auto count) {
+    using Policy = CollidePolicy<S, decltype(count), CallFn<S>>;
+    const Policy p{CallFn<S>{data, fn}, count, nullptr};
+    NoKey key{};
+    if (!p.enter(tree.nodes[tree.root], query.node, key)) return false;
+    ObjectVisitor<S, Policy, false> v{tree, query.node, query.item, p};
+    return walkTree(tree.nodes, tree.root, key, v);
+  };
+  return stats ? run(Count{stats}) : run(NoCount{});
+}
+
+template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
                   std::vector<std::uint64_t>& out, const PairGate<S>* gate) {
   const RecordIds<S> sink{&out};
@@ -615,6 +630,10 @@ template bool collidePairs<float>(const View<float>&, const View<float>&, bool, 
                                   CollideFn<float>, QueryStats*, const PairGate<float>*);
 template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
                                    CollideFn<double>, QueryStats*, const PairGate<double>*);
+template bool collideObject<float>(const View<float>&, const SingleView<float>&, void*,
+                                   CollideFn<float>, QueryStats*);
+template bool collideObject<double>(const View<double>&, const SingleView<double>&, void*,
+                                    CollideFn<double>, QueryStats*);
 template void collectPairs<float>(const View<float>&, const View<float>&, bool, std::size_t,
                                   std::vector<std::uint64_t>&, const PairGate<float>*);
 template void collectPairs<double>(const View<double>&, const View<double>&, bool, std::size_t,
