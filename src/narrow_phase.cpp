@@ -127,55 +127,163 @@ struct NarrowPhaseCache<S>::Impl {
              std::memcmp(local.max_.data(), g->aabb_local.max_.data(), sizeof(S) * 3) == 0;
     }
   };
-  struct Key {
-    const Object* a;
-    const Object* b;
-    bool operator==(const Key& o) const { return a == o.a && b == o.b; }
+  // Per object: the pose of its cached answers, compared with the object once per query (not
+  // once per pair: an object of a clustered scene is in ten pairs or more), and a version that
+  // changes with it. Answers record the versions they were computed at. Nodes of an
+  // unordered_map keep their address, so entries point at them.
+  struct Seen {
+    Pose pose;
+    std::uint32_t version = 0;
+    std::uint64_t checked = 0;  // the query that last compared the pose
+    std::size_t users = 0;      // entries pointing here, in both tables
   };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const {
-      const auto x = reinterpret_cast<std::uintptr_t>(k.a);
-      const auto y = reinterpret_cast<std::uintptr_t>(k.b);
-      return std::hash<std::uintptr_t>()(x * 0x9E3779B97F4A7C15ull ^ (y + (x >> 7)));
+  std::unordered_map<const Object*, Seen> seen;
+  std::uint64_t stamp = 0;
+
+  // Brings `s` up to date with `o`, comparing at most once per query.
+  void check(Seen& s, const Object& o) {
+    if (s.checked == stamp) return;
+    s.checked = stamp;
+    if (s.pose.same(o)) return;
+    s.pose = Pose(o);
+    ++s.version;
+  }
+  Seen& seenOf(const Object& o) {
+    const auto [it, fresh] = seen.try_emplace(&o, Seen{Pose(o)});
+    if (fresh)
+      it->second.checked = stamp;
+    else
+      check(it->second, o);
+    return it->second;
+  }
+  void release(Seen* s, const Object* o) {
+    if (--s->users == 0) seen.erase(o);
+  }
+
+  struct Key {
+    const Object* a = nullptr;  // null: an empty cell
+    const Object* b = nullptr;
+    bool operator==(const Key& o) const { return a == o.a && b == o.b; }
+    std::size_t hash() const {  // splitmix64's finalizer: pointers' low bits are all zero
+      std::uint64_t h = reinterpret_cast<std::uintptr_t>(a) * 0x9E3779B97F4A7C15ull ^
+                        reinterpret_cast<std::uintptr_t>(b);
+      h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+      h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+      return static_cast<std::size_t>(h ^ (h >> 31));
     }
   };
   template <class Answer>
   struct Entry {
-    Pose a, b;
-    Answer answer;
-    std::uint64_t stamp;
+    Seen* a = nullptr;
+    Seen* b = nullptr;
+    std::uint32_t version_a = 0, version_b = 0;
+    Answer answer{};
+    std::uint64_t stamp = 0;
   };
+  // Answers by ordered pair, in one open-addressed array (linear probing, at most half full):
+  // a lookup of a pair not in cache costs one cache miss, where a node-based map costs three.
+  // Entries move when the array grows: the callers read what find() returned before they store.
   template <class Answer, class Request>
   struct Table {
-    std::unordered_map<Key, Entry<Answer>, KeyHash> entries;
+    struct Cell {
+      Key key;
+      Entry<Answer> entry;
+    };
+    std::vector<Cell> cells;  // empty, or a power of two
+    std::size_t count = 0;
     Request request;
     bool has_request = false;
+    std::size_t used = 0;  // entries this query found or stored
 
     // Starts a query: answers to another request are dropped.
-    void begin(const Request& r) {
+    void begin(Impl& c, const Request& r) {
+      used = 0;
       if (has_request && sameRequest(request, r)) return;
-      entries.clear();
+      dropIf(c, [](const Key&, const Entry<Answer>&) { return true; });
       request = r;
       has_request = true;
     }
-    // Reads only (the caller touches the entry later, on one thread): safe from several
-    // threads while nothing is stored.
-    Entry<Answer>* find(const Object* a, const Object* b) {
-      const auto it = entries.find(Key{a, b});
-      if (it == entries.end() || !it->second.a.same(*a) || !it->second.b.same(*b)) return nullptr;
-      return &it->second;
+    // On the calling thread only (it compares and updates the objects' poses).
+    Entry<Answer>* find(Impl& c, const Object* a, const Object* b) {
+      Cell* cell = lookup(Key{a, b});
+      if (cell == nullptr) return nullptr;
+      Entry<Answer>& e = cell->entry;
+      c.check(*e.a, *a);
+      c.check(*e.b, *b);
+      if (e.a->version != e.version_a || e.b->version != e.version_b) return nullptr;
+      if (e.stamp != c.stamp) ++used;
+      e.stamp = c.stamp;
+      return &e;
     }
-    void store(const Object* a, const Object* b, const Answer& answer, std::uint64_t stamp) {
-      entries.insert_or_assign(Key{a, b}, Entry<Answer>{Pose(*a), Pose(*b), answer, stamp});
+    void store(Impl& c, const Object* a, const Object* b, Answer answer) {
+      Seen& sa = c.seenOf(*a);
+      Seen& sb = c.seenOf(*b);
+      const Key k{a, b};
+      Cell* cell = lookup(k);
+      if (cell == nullptr) {
+        if (2 * (count + 1) > cells.size()) resize(std::max<std::size_t>(64, 2 * cells.size()));
+        cell = &place(k);
+        ++sa.users;
+        ++sb.users;
+      }
+      Entry<Answer>& e = cell->entry;
+      if (e.stamp != c.stamp) ++used;
+      e = Entry<Answer>{&sa, &sb, sa.version, sb.version, std::move(answer), c.stamp};
     }
-    // Ends a query: what it did not use goes.
-    void end(std::uint64_t stamp) {
-      for (auto it = entries.begin(); it != entries.end();)
-        it = it->second.stamp == stamp ? std::next(it) : entries.erase(it);
+    // Ends a query. Entries it did not use stay (a pair apart for a step is often back the next)
+    // until they outnumber those it used: the cache holds at most about twice one query's pairs.
+    void end(Impl& c) {
+      if (count <= 2 * used + 64) return;
+      const std::uint64_t now = c.stamp;
+      dropIf(c, [now](const Key&, const Entry<Answer>& e) { return e.stamp != now; });
     }
-    void forget(const Object* o) {
-      for (auto it = entries.begin(); it != entries.end();)
-        it = it->first.a == o || it->first.b == o ? entries.erase(it) : std::next(it);
+    template <class Drop>
+    void dropIf(Impl& c, const Drop& drop) {
+      std::size_t kept = 0;
+      for (Cell& cell : cells) {
+        if (cell.key.a == nullptr) continue;
+        if (!drop(cell.key, cell.entry)) {
+          ++kept;
+          continue;
+        }
+        c.release(cell.entry.a, cell.key.a);
+        c.release(cell.entry.b, cell.key.b);
+        cell.key = Key{};
+      }
+      std::size_t cap = 64;
+      while (cap < 2 * kept) cap *= 2;
+      resize(kept == 0 ? 0 : cap);
+    }
+    void clear() {
+      cells.clear();
+      count = 0;
+    }
+
+   private:
+    std::size_t mask() const { return cells.size() - 1; }
+    Cell* lookup(const Key& k) {
+      if (cells.empty()) return nullptr;
+      for (std::size_t i = k.hash() & mask();; i = (i + 1) & mask()) {
+        Cell& cell = cells[i];
+        if (cell.key == k) return &cell;
+        if (cell.key.a == nullptr) return nullptr;
+      }
+    }
+    // The empty cell for k (k is not in the table, which has room).
+    Cell& place(const Key& k) {
+      std::size_t i = k.hash() & mask();
+      while (cells[i].key.a != nullptr) i = (i + 1) & mask();
+      cells[i].key = k;
+      ++count;
+      return cells[i];
+    }
+    void resize(std::size_t cap) {
+      std::vector<Cell> old = std::move(cells);
+      cells.clear();
+      cells.resize(cap);
+      count = 0;
+      for (Cell& cell : old)
+        if (cell.key.a != nullptr) place(cell.key).entry = std::move(cell.entry);
     }
   };
 
@@ -183,7 +291,12 @@ struct NarrowPhaseCache<S>::Impl {
   // The pair that gave the first contact of the last collide with contacts (last_hit_first).
   ObjectPair<S> last_hit{nullptr, nullptr};
   Table<fcl::DistanceResult<S>, fcl::DistanceRequest<S>> distance;
-  std::uint64_t stamp = 0;
+
+  void forget(const Object* o) {
+    const auto involves = [o](const Key& k, const auto&) { return k.a == o || k.b == o; };
+    collide.dropIf(*this, involves);
+    distance.dropIf(*this, involves);
+  }
 };
 
 template <typename S>
@@ -197,22 +310,22 @@ NarrowPhaseCache<S>& NarrowPhaseCache<S>::operator=(NarrowPhaseCache&&) noexcept
 
 template <typename S>
 void NarrowPhaseCache<S>::clear() {
-  impl_->collide.entries.clear();
-  impl_->distance.entries.clear();
+  impl_->collide.clear();
+  impl_->distance.clear();
+  impl_->seen.clear();
   impl_->last_hit = {nullptr, nullptr};
 }
 
 template <typename S>
 void NarrowPhaseCache<S>::forget(const fcl::CollisionObject<S>* obj) {
-  impl_->collide.forget(obj);
-  impl_->distance.forget(obj);
+  impl_->forget(obj);
   if (impl_->last_hit.first == obj || impl_->last_hit.second == obj)
     impl_->last_hit = {nullptr, nullptr};
 }
 
 template <typename S>
 std::size_t NarrowPhaseCache<S>::size() const {
-  return impl_->collide.entries.size() + impl_->distance.entries.size();
+  return impl_->collide.count + impl_->distance.count;
 }
 
 namespace detail {
@@ -231,16 +344,22 @@ using CollideEntry = typename CollideCache<S>::template Entry<std::vector<fcl::C
 template <typename S>
 using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResult<S>>;
 
-// One pair's answer, safe to run on several threads at once: proved apart, found in the cache
-// (`cached` is its entry), or computed by fcl::collide into `fresh` (cleared first).
+// The pair's answer in the cache, or null. On the calling thread, before the pairs run: the
+// lookup compares and updates the objects' poses.
+template <typename S>
+CollideEntry<S>* findCached(CollideCache<S>* cache, const ObjectPair<S>& pair) {
+  return cache ? cache->collide.find(*cache, pair.first, pair.second) : nullptr;
+}
+
+// One pair's answer, safe to run on several threads at once: found in the cache (`cached`, from
+// findCached), proved apart, or computed by fcl::collide into `fresh` (cleared first).
 template <typename S>
 Answer answerPair(const ObjectPair<S>& pair, const fcl::CollisionRequest<S>& request,
-                  CollideCache<S>* cache, fcl::CollisionResult<S>& fresh,
-                  CollideEntry<S>*& cached) {
+                  const CollideEntry<S>* cached, fcl::CollisionResult<S>& fresh) {
   const auto [a, b] = pair;
   fresh.clear();
+  if (cached != nullptr) return Answer::kCached;
   if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance))) return Answer::kApart;
-  if ((cached = cache ? cache->collide.find(a, b) : nullptr) != nullptr) return Answer::kCached;
   fclCollide(a, b, request, fresh);
   return Answer::kComputed;
 }
@@ -257,25 +376,29 @@ struct Contacts {
   }
 };
 
-// After answerPair, on one thread, in pair order: counts the answer, keeps it in the cache and
-// returns the pair's contacts.
+// After answerPair, on one thread, in pair order: counts the answer and returns the pair's
+// contacts.
 template <typename S>
-Contacts<S> recordPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
-                       const fcl::CollisionResult<S>& fresh, CollideEntry<S>* cached,
-                       NarrowPhaseStats& stats) {
-  const auto [a, b] = pair;
+Contacts<S> countPair(Answer kind, const fcl::CollisionResult<S>& fresh,
+                      const CollideEntry<S>* cached, NarrowPhaseStats& stats) {
   if (kind == Answer::kCached) {
     ++stats.cached;
-    cached->stamp = cache->stamp;
     return {&cached->answer, nullptr};
   }
-  ++stats.narrow_calls;
-  if (cache != nullptr) {
-    std::vector<fcl::Contact<S>> contacts(fresh.numContacts());
-    for (std::size_t k = 0; k < contacts.size(); ++k) contacts[k] = fresh.getContact(k);
-    cache->collide.store(a, b, contacts, cache->stamp);
-  }
+  ++(kind == Answer::kApart ? stats.culled : stats.narrow_calls);
   return {nullptr, &fresh};
+}
+
+// Then, once every cached answer of the batch has been read (a store can move the entries):
+// keeps a new answer in the cache, a pair proved apart too, which next time costs a lookup
+// rather than the test.
+template <typename S>
+void keepPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
+              const fcl::CollisionResult<S>& fresh) {
+  if (cache == nullptr || kind == Answer::kCached) return;
+  std::vector<fcl::Contact<S>> contacts(fresh.numContacts());
+  for (std::size_t k = 0; k < contacts.size(); ++k) contacts[k] = fresh.getContact(k);
+  cache->collide.store(*cache, pair.first, pair.second, std::move(contacts));
 }
 
 }  // namespace
@@ -296,10 +419,12 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
       threads_(resolveThreads(options.threads)),
       // A one-contact request most often stops early: a small first chunk wastes little, and on
       // one thread (nothing to share out) a chunk of one wastes nothing.
-      chunk_limit_(request.num_max_contacts > 1 ? 64 : threads_ == 1 ? 1 : 8) {
+      chunk_limit_(request.num_max_contacts > 1 ? 64
+                   : threads_ == 1              ? 1
+                                                : 8) {
   if (cache_ != nullptr) {
-    cache_->collide.begin(request);
     ++cache_->stamp;
+    cache_->collide.begin(*cache_, request);
   }
 }
 
@@ -346,33 +471,31 @@ void CollideStream<S>::flush() {
   }
   stats_.candidate_pairs += n;
   if (slots_.size() < n) slots_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) slots_[i].cached = findCached(cache_, chunk_[i]);
   parallelFor(n, threads_, [&](std::size_t i) {
-    slots_[i].kind = answerPair(chunk_[i], request_, cache_, slots_[i].fresh, slots_[i].cached);
+    slots_[i].kind = answerPair(chunk_[i], request_, slots_[i].cached, slots_[i].fresh);
   });
   // Merge in pair order. A pair's contacts come in FCL's order and FCL stops adding once the
   // result is full, so a pair that meets a partly full result gives the head of its own list.
   const std::size_t max_contacts = request_.num_max_contacts;
   for (std::size_t i = 0; i < n; ++i) {
     Slot& s = slots_[i];
-    if (s.kind == Answer::kApart) {
-      ++stats_.culled;
-      continue;
-    }
-    const Contacts<S> contacts = recordPair(s.kind, chunk_[i], cache_, s.fresh, s.cached, stats_);
-    if (done_) continue;  // computed in the same chunk: kept for the cache, not merged
+    const Contacts<S> contacts = countPair(s.kind, s.fresh, s.cached, stats_);
+    if (done_ || s.kind == Answer::kApart) continue;  // after the result is full: cached only
     const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
     const std::size_t take = std::min(room, contacts.size());
     if (cache_ != nullptr && take > 0 && result_.numContacts() == 0) cache_->last_hit = chunk_[i];
     for (std::size_t k = 0; k < take; ++k) result_.addContact(contacts[k]);
     if (result_.isCollision() && result_.numContacts() >= max_contacts) done_ = true;
   }
+  for (std::size_t i = 0; i < n; ++i) keepPair(slots_[i].kind, chunk_[i], cache_, slots_[i].fresh);
   chunk_.clear();
 }
 
 template <typename S>
 fcl::CollisionResult<S> CollideStream<S>::finish() {
   flush();
-  if (cache_ != nullptr) cache_->collide.end(cache_->stamp);
+  if (cache_ != nullptr) cache_->collide.end(*cache_);
   addStats(stats_out_, stats_);
   return std::move(result_);
 }
@@ -394,8 +517,8 @@ DistanceSearch<S>::DistanceSearch(const fcl::DistanceRequest<S>& request,
       cache_(options.cache != nullptr ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)) {
   if (cache_ != nullptr) {
-    cache_->distance.begin(request);
     ++cache_->stamp;
+    cache_->distance.begin(*cache_, request);
   }
 }
 
@@ -436,10 +559,12 @@ void DistanceSearch<S>::flush() {
   const std::size_t n = batch_.size();
   if (n == 0) return;
   if (slots_.size() < n) slots_.resize(n);
+  for (std::size_t i = 0; i < n; ++i)  // on this thread: it compares and updates poses
+    slots_[i].cached =
+        cache_ ? cache_->distance.find(*cache_, batch_[i].first, batch_[i].second) : nullptr;
   parallelFor(n, threads_, [&](std::size_t i) {
     Slot& s = slots_[i];
     const auto [a, b] = batch_[i];
-    s.cached = cache_ ? cache_->distance.find(a, b) : nullptr;
     if (s.cached == nullptr) {
       // A fresh result per pair: its answer does not depend on the other pairs, so it can be
       // kept and merged in any batch.
@@ -449,24 +574,26 @@ void DistanceSearch<S>::flush() {
   });
   for (std::size_t i = 0; i < n; ++i) {
     Slot& s = slots_[i];
-    const auto [a, b] = batch_[i];
     if (s.cached != nullptr) {
       ++stats_.cached;
-      s.cached->stamp = cache_->stamp;
       result_.update(s.cached->answer);
     } else {
       ++stats_.narrow_calls;
-      if (cache_ != nullptr) cache_->distance.store(a, b, s.fresh, cache_->stamp);
       result_.update(s.fresh);
     }
   }
+  // After every cached answer was read: a store can move the entries.
+  if (cache_ != nullptr)
+    for (std::size_t i = 0; i < n; ++i)
+      if (slots_[i].cached == nullptr)
+        cache_->distance.store(*cache_, batch_[i].first, batch_[i].second, slots_[i].fresh);
   batch_.clear();
 }
 
 template <typename S>
 fcl::DistanceResult<S> DistanceSearch<S>::finish() {
   flush();
-  if (cache_ != nullptr) cache_->distance.end(cache_->stamp);
+  if (cache_ != nullptr) cache_->distance.end(*cache_);
   addStats(stats_out_, stats_);
   return result_;
 }
@@ -491,25 +618,24 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
   auto* cache =
       options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr;
   if (cache != nullptr) {
-    cache->collide.begin(request);
     ++cache->stamp;
+    cache->collide.begin(*cache, request);
   }
   std::vector<fcl::CollisionResult<S>> results(pairs.size());
   std::vector<detail::Answer> kind(pairs.size());
   std::vector<detail::CollideEntry<S>*> cached(pairs.size());
+  for (std::size_t i = 0; i < pairs.size(); ++i) cached[i] = detail::findCached(cache, pairs[i]);
   parallelFor(pairs.size(), resolveThreads(options.threads), [&](std::size_t i) {
-    kind[i] = detail::answerPair(pairs[i], request, cache, results[i], cached[i]);
+    kind[i] = detail::answerPair(pairs[i], request, cached[i], results[i]);
   });
   for (std::size_t i = 0; i < pairs.size(); ++i) {
-    if (kind[i] == detail::Answer::kApart) {
-      ++stats.culled;
-      continue;
-    }
-    detail::recordPair(kind[i], pairs[i], cache, results[i], cached[i], stats);
+    detail::countPair(kind[i], results[i], cached[i], stats);
     if (kind[i] == detail::Answer::kCached)
       for (const fcl::Contact<S>& c : cached[i]->answer) results[i].addContact(c);
   }
-  if (cache != nullptr) cache->collide.end(cache->stamp);
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    detail::keepPair(kind[i], pairs[i], cache, results[i]);
+  if (cache != nullptr) cache->collide.end(*cache);
   addStats(options.stats, stats);
   return results;
 }
