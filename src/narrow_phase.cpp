@@ -180,24 +180,35 @@ struct NarrowPhaseCache<S>::Impl {
     Answer answer{};
     std::uint64_t stamp = 0;
   };
-  // Answers by ordered pair, in one open-addressed array (linear probing, at most half full):
-  // a lookup of a pair not in cache costs one cache miss, where a node-based map costs three.
-  // Entries move when the array grows: the callers read what find() returned before they store.
+  // Answers by ordered pair. The entries sit in one array in the order the last query that
+  // reordered them met them, and a lookup first tries the entry after the last one found: a
+  // world that barely changed meets its pairs in the same order, so the entries are read in
+  // sequence rather than at random (a large scene's entries are far beyond the caches). Other
+  // lookups go through an open-addressed index (linear probing, at most half full). Entries
+  // move when the array grows or is reordered: callers read what find() returned before they
+  // store.
   template <class Answer, class Request>
   struct Table {
-    struct Cell {
+    struct Item {
       Key key;
       Entry<Answer> entry;
+      std::uint32_t seq = 0;  // when this query met it (valid if entry.stamp is this query's)
     };
-    std::vector<Cell> cells;  // empty, or a power of two
-    std::size_t count = 0;
+    static constexpr std::uint32_t kFree = ~std::uint32_t(0);
+    std::vector<Item> items;
+    std::vector<std::uint32_t> index;  // item numbers; empty, or a power of two long
+    std::size_t cursor = 0;            // the item the next lookup tries first
+    Key last_key;                      // the last pair looked up through the index, and where
+    std::size_t last = kFree;          // it was (kFree: absent)
+    std::size_t used = 0;              // entries this query found or stored
+    std::size_t jumps = 0;             // lookups this query that did not find the pair at cursor
     Request request;
     bool has_request = false;
-    std::size_t used = 0;  // entries this query found or stored
 
+    std::size_t size() const { return items.size(); }
     // Starts a query: answers to another request are dropped.
     void begin(Impl& c, const Request& r) {
-      used = 0;
+      used = jumps = cursor = 0;
       if (has_request && sameRequest(request, r)) return;
       dropIf(c, [](const Key&, const Entry<Answer>&) { return true; });
       request = r;
@@ -205,85 +216,117 @@ struct NarrowPhaseCache<S>::Impl {
     }
     // On the calling thread only (it compares and updates the objects' poses).
     Entry<Answer>* find(Impl& c, const Object* a, const Object* b) {
-      Cell* cell = lookup(Key{a, b});
-      if (cell == nullptr) return nullptr;
-      Entry<Answer>& e = cell->entry;
+      const std::size_t i = lookup(Key{a, b});
+      if (i == kFree) return nullptr;
+      Item& item = items[i];
+      Entry<Answer>& e = item.entry;
       c.check(*e.a, *a);
       c.check(*e.b, *b);
       if (e.a->version != e.version_a || e.b->version != e.version_b) return nullptr;
-      if (e.stamp != c.stamp) ++used;
-      e.stamp = c.stamp;
+      meet(c, item);
       return &e;
     }
     void store(Impl& c, const Object* a, const Object* b, Answer answer) {
       Seen& sa = c.seenOf(*a);
       Seen& sb = c.seenOf(*b);
       const Key k{a, b};
-      Cell* cell = lookup(k);
-      if (cell == nullptr) {
-        if (2 * (count + 1) > cells.size()) resize(std::max<std::size_t>(64, 2 * cells.size()));
-        cell = &place(k);
+      std::size_t i = lookup(k);
+      last_key = Key{};
+      if (i == kFree) {
+        i = items.size();
+        items.push_back(Item{k, {}, 0});
+        if (2 * items.size() > index.size())
+          reindex(std::max<std::size_t>(64, 2 * index.size()));
+        else
+          place(i);
         ++sa.users;
         ++sb.users;
       }
-      Entry<Answer>& e = cell->entry;
-      if (e.stamp != c.stamp) ++used;
-      e = Entry<Answer>{&sa, &sb, sa.version, sb.version, std::move(answer), c.stamp};
+      Item& item = items[i];
+      const bool met = item.entry.stamp == c.stamp;
+      item.entry = Entry<Answer>{&sa, &sb, sa.version, sb.version, std::move(answer), 0};
+      if (!met) meet(c, item);
+      item.entry.stamp = c.stamp;
     }
     // Ends a query. Entries it did not use stay (a pair apart for a step is often back the next)
     // until they outnumber those it used: the cache holds at most about twice one query's pairs.
+    // When many lookups missed the cursor, the entries are put in this query's order.
     void end(Impl& c) {
-      if (count <= 2 * used + 64) return;
       const std::uint64_t now = c.stamp;
-      dropIf(c, [now](const Key&, const Entry<Answer>& e) { return e.stamp != now; });
+      if (items.size() > 2 * used + 64)
+        dropIf(c, [now](const Key&, const Entry<Answer>& e) { return e.stamp != now; });
+      if (jumps <= used / 8 + 16) return;
+      std::vector<Item> ordered(items.size());
+      std::size_t rest = used;  // entries this query did not meet go after those it did
+      for (Item& item : items)
+        ordered[item.entry.stamp == now ? item.seq : rest++] = std::move(item);
+      items = std::move(ordered);
+      reindex(index.size());
     }
     template <class Drop>
     void dropIf(Impl& c, const Drop& drop) {
       std::size_t kept = 0;
-      for (Cell& cell : cells) {
-        if (cell.key.a == nullptr) continue;
-        if (!drop(cell.key, cell.entry)) {
-          ++kept;
+      for (Item& item : items) {
+        if (drop(item.key, item.entry)) {
+          c.release(item.entry.a, item.key.a);
+          c.release(item.entry.b, item.key.b);
           continue;
         }
-        c.release(cell.entry.a, cell.key.a);
-        c.release(cell.entry.b, cell.key.b);
-        cell.key = Key{};
+        if (&items[kept] != &item) items[kept] = std::move(item);
+        ++kept;
       }
+      items.resize(kept);
       std::size_t cap = 64;
       while (cap < 2 * kept) cap *= 2;
-      resize(kept == 0 ? 0 : cap);
+      reindex(kept == 0 ? 0 : cap);
     }
     void clear() {
-      cells.clear();
-      count = 0;
+      items.clear();
+      index.clear();
+      cursor = 0;
+      last_key = Key{};
     }
 
    private:
-    std::size_t mask() const { return cells.size() - 1; }
-    Cell* lookup(const Key& k) {
-      if (cells.empty()) return nullptr;
+    std::size_t mask() const { return index.size() - 1; }
+    void meet(Impl& c, Item& item) {
+      if (item.entry.stamp == c.stamp) return;
+      item.entry.stamp = c.stamp;
+      item.seq = static_cast<std::uint32_t>(used++);
+    }
+    std::size_t lookup(const Key& k) {
+      // The pair at the cursor, or the one after it (the pair at the cursor left the query).
+      for (std::size_t at = cursor; at < items.size() && at < cursor + 2; ++at)
+        if (items[at].key == k) {
+          cursor = at + 1;
+          return at;
+        }
+      if (last_key == k) return last;  // store() after find() of a pair not in cache
+      last_key = k;
+      last = probe(k);
+      return last;
+    }
+    std::size_t probe(const Key& k) {
+      if (index.empty()) return kFree;
+      ++jumps;
       for (std::size_t i = k.hash() & mask();; i = (i + 1) & mask()) {
-        Cell& cell = cells[i];
-        if (cell.key == k) return &cell;
-        if (cell.key.a == nullptr) return nullptr;
+        const std::uint32_t at = index[i];
+        if (at == kFree) return kFree;
+        if (items[at].key == k) {
+          cursor = std::size_t(at) + 1;
+          return at;
+        }
       }
     }
-    // The empty cell for k (k is not in the table, which has room).
-    Cell& place(const Key& k) {
-      std::size_t i = k.hash() & mask();
-      while (cells[i].key.a != nullptr) i = (i + 1) & mask();
-      cells[i].key = k;
-      ++count;
-      return cells[i];
+    void place(std::size_t item) {
+      std::size_t i = items[item].key.hash() & mask();
+      while (index[i] != kFree) i = (i + 1) & mask();
+      index[i] = static_cast<std::uint32_t>(item);
     }
-    void resize(std::size_t cap) {
-      std::vector<Cell> old = std::move(cells);
-      cells.clear();
-      cells.resize(cap);
-      count = 0;
-      for (Cell& cell : old)
-        if (cell.key.a != nullptr) place(cell.key).entry = std::move(cell.entry);
+    void reindex(std::size_t cap) {
+      last_key = Key{};
+      index.assign(cap, kFree);
+      for (std::size_t i = 0; i < items.size(); ++i) place(i);
     }
   };
 
@@ -325,7 +368,7 @@ void NarrowPhaseCache<S>::forget(const fcl::CollisionObject<S>* obj) {
 
 template <typename S>
 std::size_t NarrowPhaseCache<S>::size() const {
-  return impl_->collide.count + impl_->distance.count;
+  return impl_->collide.size() + impl_->distance.size();
 }
 
 namespace detail {
@@ -344,11 +387,12 @@ using CollideEntry = typename CollideCache<S>::template Entry<std::vector<fcl::C
 template <typename S>
 using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResult<S>>;
 
-// The pair's answer in the cache, or null. On the calling thread, before the pairs run: the
-// lookup compares and updates the objects' poses.
-template <typename S>
-CollideEntry<S>* findCached(CollideCache<S>* cache, const ObjectPair<S>& pair) {
-  return cache ? cache->collide.find(*cache, pair.first, pair.second) : nullptr;
+// put(i, the answer of pairs[i] in the cache, or null). On the calling thread, before the pairs
+// run: the lookups compare and update the objects' poses.
+template <typename S, class Put>
+void findCached(CollideCache<S>* cache, const ObjectPair<S>* pairs, std::size_t n, const Put& put) {
+  for (std::size_t i = 0; i < n; ++i)
+    put(i, cache ? cache->collide.find(*cache, pairs[i].first, pairs[i].second) : nullptr);
 }
 
 // One pair's answer, safe to run on several threads at once: found in the cache (`cached`, from
@@ -356,9 +400,9 @@ CollideEntry<S>* findCached(CollideCache<S>* cache, const ObjectPair<S>& pair) {
 template <typename S>
 Answer answerPair(const ObjectPair<S>& pair, const fcl::CollisionRequest<S>& request,
                   const CollideEntry<S>* cached, fcl::CollisionResult<S>& fresh) {
+  if (cached != nullptr) return Answer::kCached;
   const auto [a, b] = pair;
   fresh.clear();
-  if (cached != nullptr) return Answer::kCached;
   if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance))) return Answer::kApart;
   fclCollide(a, b, request, fresh);
   return Answer::kComputed;
@@ -471,7 +515,8 @@ void CollideStream<S>::flush() {
   }
   stats_.candidate_pairs += n;
   if (slots_.size() < n) slots_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) slots_[i].cached = findCached(cache_, chunk_[i]);
+  findCached(cache_, chunk_.data(), n,
+             [&](std::size_t i, CollideEntry<S>* e) { slots_[i].cached = e; });
   parallelFor(n, threads_, [&](std::size_t i) {
     slots_[i].kind = answerPair(chunk_[i], request_, slots_[i].cached, slots_[i].fresh);
   });
@@ -624,7 +669,8 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
   std::vector<fcl::CollisionResult<S>> results(pairs.size());
   std::vector<detail::Answer> kind(pairs.size());
   std::vector<detail::CollideEntry<S>*> cached(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) cached[i] = detail::findCached(cache, pairs[i]);
+  detail::findCached(cache, pairs.data(), pairs.size(),
+                     [&](std::size_t i, detail::CollideEntry<S>* e) { cached[i] = e; });
   parallelFor(pairs.size(), resolveThreads(options.threads), [&](std::size_t i) {
     kind[i] = detail::answerPair(pairs[i], request, cached[i], results[i]);
   });
