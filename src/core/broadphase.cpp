@@ -327,7 +327,7 @@ bool Broadphase<S>::collide(Object* obj, const Box<S>& box, void* data, CollideF
   const SingleView<S> query(obj, queryBox(obj, box));
   if (!gated())
     return collideObject(tree_.view(), query, data, fn, stats) ||
-           collideObject(unboundedView(), query, data, fn, stats);
+           (!unbounded_.empty() && collideObject(unboundedView(), query, data, fn, stats));
   const PairGate<S> gate = crossGate(nullptr, obj);
   if (!config_.canonical_pairs)
     return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {

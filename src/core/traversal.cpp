@@ -618,14 +618,6 @@ bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, Di
   return distanceWith(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}, gate});
 }
 
-template <typename S>
-SingleView<S>::SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box, ObjectId id) {
-  item = Item<S>{box, obj, 0, id};
-  roundOut(box, node.lo, node.hi);
-  node.first = 0;
-  node.count = 1;
-}
-
 template bool collidePairs<float>(const View<float>&, const View<float>&, bool, void*,
                                   CollideFn<float>, QueryStats*, const PairGate<float>*);
 template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
@@ -652,8 +644,6 @@ template bool distancePairs<float>(const View<float>&, const View<float>&, bool,
 template bool distancePairs<double>(const View<double>&, const View<double>&, bool, void*,
                                     DistanceFn<double>, double&, QueryStats*,
                                     const PairGate<double>*);
-template struct SingleView<float>;
-template struct SingleView<double>;
 
 }  // namespace detail
 }  // namespace cube

@@ -98,7 +98,12 @@ template <typename S>
 struct SingleView {
   Node node;
   Item<S> item;
-  SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box, ObjectId id = kNone);
+  SingleView(fcl::CollisionObject<S>* obj, const Box<S>& box, ObjectId id = kNone)
+      : item{box, obj, 0, id} {
+    roundOut(box, node.lo, node.hi);
+    node.first = 0;
+    node.count = 1;
+  }
   View<S> view() const { return View<S>{&node, &item, 0, 1}; }
 };
 
