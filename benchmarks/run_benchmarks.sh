@@ -25,7 +25,11 @@ machine="$(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) CPUs ($(lsc
 python3 benchmarks/make_table.py "$json" --readme benchmarks/README.md \
   --plot-data benchmarks/results/time_vs_n.dat --command "$cmd" --machine "$machine" || status=1
 gzip -f "$json"  # kept compressed in the repository; make_table.py reads .json.gz
-gnuplot -e "data='benchmarks/results/time_vs_n.dat'; out='benchmarks/results/time_vs_n.png'" \
-  benchmarks/plot.gp
-echo "tables: benchmarks/README.md; plot: benchmarks/results/time_vs_n.png"
+if command -v gnuplot >/dev/null; then
+  gnuplot -e "data='benchmarks/results/time_vs_n.dat'; out='benchmarks/results/time_vs_n.png'" \
+    benchmarks/plot.gp
+  echo "tables: benchmarks/README.md; plot: benchmarks/results/time_vs_n.png"
+else
+  echo "tables: benchmarks/README.md; no plot: gnuplot is missing (apt-get install gnuplot-nox)"
+fi
 exit $status
