@@ -149,12 +149,14 @@ struct NarrowPhaseCache<S>::Impl {
     ++s.version;
   }
   Seen& seenOf(const Object& o) {
-    const auto [it, fresh] = seen.try_emplace(&o, Seen{Pose(o)});
-    if (fresh)
-      it->second.checked = stamp;
-    else
+    const auto it = seen.find(&o);
+    if (it != seen.end()) {
       check(it->second, o);
-    return it->second;
+      return it->second;
+    }
+    Seen& s = seen.emplace(&o, Seen{Pose(o)}).first->second;
+    s.checked = stamp;
+    return s;
   }
   void release(Seen* s, const Object* o) {
     if (--s->users == 0) seen.erase(o);
