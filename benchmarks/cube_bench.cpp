@@ -103,8 +103,9 @@ Extent extentOf(const std::vector<Object*>& objs, double typical) {
 }
 
 /// How a case uses its manager: motion loops (update + self-collide) turn on cube's pair list
-/// (Config::keep_pairs), as the README tells such callers to.
-enum class Use { queries, motion_loop };
+/// (Config::keep_pairs), as the README tells such callers to; a user's own narrow-phase callback
+/// may turn on the culling in front of it (Config::cull_pairs).
+enum class Use { queries, motion_loop, culled_callback };
 
 /// A new manager of kind m. For Mgr::cube, `*cube` (if given) is set to the same object with its
 /// own type, for what FCL's interface lacks (QueryStats, bytes()).
@@ -114,6 +115,7 @@ std::unique_ptr<Manager> makeManager(Mgr m, const Extent& e, CubeManager** cube 
     case Mgr::cube: {
       cube::Config config;
       config.keep_pairs = use == Use::motion_loop;
+      config.cull_pairs = use == Use::culled_callback;
       auto mgr = std::make_unique<CubeManager>(config);
       if (cube != nullptr) *cube = mgr.get();
       return mgr;
@@ -206,6 +208,24 @@ std::size_t narrowCollide(Mgr m, const Manager& mgr, int threads = 1,
   d.request = allContacts();
   mgr.collide(&d, fcl::DefaultCollisionFunction<S>);
   return d.result.numContacts();
+}
+
+/// Every contact of a self-collide through FCL's default callback, as a user's own callback
+/// would run it; `calls` (if given) counts the callback's calls.
+std::size_t defaultCallbackCollide(const Manager& mgr, std::size_t* calls = nullptr) {
+  struct Data {
+    fcl::DefaultCollisionData<S> d;
+    std::size_t calls = 0;
+    static bool fn(Object* a, Object* b, void* p) {
+      auto& x = *static_cast<Data*>(p);
+      ++x.calls;
+      return fcl::DefaultCollisionFunction<S>(a, b, &x.d);
+    }
+  } data;
+  data.d.request = allContacts();
+  mgr.collide(&data, &Data::fn);
+  if (calls != nullptr) *calls = data.calls;
+  return data.d.result.numContacts();
 }
 
 /// Every contact of manager.collide(q), as narrowCollide.
@@ -594,7 +614,10 @@ enum class Case {
   queries_narrow,         // 1,000 object queries, every contact
   motion_narrow,          // 1% of the objects move, update(moved), every contact; cube: cached
   robot_narrow,           // a 30-object robot manager moves; "does it collide?" per pose
-  last = robot_narrow
+  // cube only: the user's own callback (FCL's default) behind Config::cull_pairs; read against
+  // selfcollide_narrow
+  selfcollide_cullcb,
+  last = selfcollide_cullcb
 };
 
 const char* caseName(Case c) {
@@ -629,6 +652,8 @@ const char* caseName(Case c) {
       return "motion_narrow";
     case Case::robot_narrow:
       return "robot_narrow";
+    case Case::selfcollide_cullcb:
+      return "selfcollide_cullcb";
   }
   return "?";
 }
@@ -920,6 +945,18 @@ Check runCheck(const Spec& spec, SceneSet& s) {
               std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
       break;
     }
+    case Case::selfcollide_cullcb: {
+      if (!ref.counts.count("narrow")) ref.counts["narrow"] = narrowCollide(rm, *s.mainManager(rm));
+      const std::size_t want = ref.counts["narrow"];
+      const auto culled = built(Mgr::cube, s.objs, s.extent, nullptr, Use::culled_callback);
+      std::size_t calls = 0;
+      const std::size_t got = defaultCallbackCollide(*culled, &calls);
+      ck.counters["contacts"] = double(got);
+      ck.counters["callback_calls"] = double(calls);
+      compare(got == want,
+              std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
+      break;
+    }
     case Case::queries_narrow: {
       s.derive();
       if (!ref.counts.count("queries_narrow")) {
@@ -1070,6 +1107,11 @@ void run(benchmark::State& state, const Spec& spec) {
       }
       break;
     }
+    case Case::selfcollide_cullcb: {
+      const auto culled = built(Mgr::cube, s.objs, s.extent, nullptr, Use::culled_callback);
+      for (auto _ : state) benchmark::DoNotOptimize(defaultCallbackCollide(*culled));
+      break;
+    }
     case Case::queries_narrow: {
       auto mgr = s.mainManager(spec.m);
       for (auto _ : state) {
@@ -1182,7 +1224,7 @@ const std::size_t kSizes[] = {32, 1000, 10000, 100000};
 bool runs(Case c, const std::string& scene, std::size_t n, Mgr m) {
   if (m == Mgr::naive && n > 2000) return false;
   if (n >= 100000 && scene == "meshes") return false;
-  if (c == Case::selfcollide_narrow_mt)
+  if (c == Case::selfcollide_narrow_mt || c == Case::selfcollide_cullcb)
     return m == Mgr::cube && runs(Case::selfcollide_narrow, scene, n, m);
   // FCL 0.7's IntervalTree does not return from the motion loop (update(moved), then collide)
   // even at 32 objects.
