@@ -172,7 +172,7 @@ TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
 }
 
 // A motion loop with one cache: objects move (translated, rotated, some back to where they
-// were), leave the manager and come back, and the pair list and the walk alternate. At every
+// were), and some leave the manager and come back. At every
 // step collideAll with the cache equals collideAll without it, contacts and order, on 1 and 2
 // threads; the pairs answered from the cache are those whose two objects did not change since
 // they were last answered; and the cache never holds more than about twice one step's pairs.
