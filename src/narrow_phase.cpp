@@ -245,10 +245,9 @@ struct NarrowPhaseCache<S>::Impl {
         ++sb.users;
       }
       Item& item = items[i];
-      const bool met = item.entry.stamp == c.stamp;
-      item.entry = Entry<Answer>{&sa, &sb, sa.version, sb.version, std::move(answer), 0};
-      if (!met) meet(c, item);
-      item.entry.stamp = c.stamp;
+      item.entry =
+          Entry<Answer>{&sa, &sb, sa.version, sb.version, std::move(answer), item.entry.stamp};
+      meet(c, item);
     }
     // Ends a query. Entries it did not use stay (a pair apart for a step is often back the next)
     // until they outnumber those it used: the cache holds at most about twice one query's pairs.

@@ -565,16 +565,11 @@ bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, Col
 template <typename S>
 [[gnu::flatten]] bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data,
                                     CollideFn<S> fn, QueryStats* stats) {
-  if (tree.root == kNone) return false;
-  const auto run = [&](auto count) {
-    using Policy = CollidePolicy<S, decltype(count), CallFn<S>>;
-    const Policy p{CallFn<S>{data, fn}, count, nullptr};
-    NoKey key{};
-    if (!p.enter(tree.nodes[tree.root], query.node, key)) return false;
-    ObjectVisitor<S, Policy, false> v{tree, query.node, query.item, p};
-    return walkTree(tree.nodes, tree.root, key, v);
-  };
-  return stats ? run(Count{stats}) : run(NoCount{});
+  const View<S> q = query.view();
+  if (stats)
+    return descend<false>(tree, q, false,
+                          CollidePolicy<S, Count>{{data, fn}, Count{stats}, nullptr});
+  return descend<false>(tree, q, false, CollidePolicy<S, NoCount>{{data, fn}, NoCount{}, nullptr});
 }
 
 template <typename S>
