@@ -80,21 +80,21 @@ ObjectId ObjectTable<S>::take(Object* obj) {
     obj_.push_back(nullptr);
     seq_.push_back(0);
     loc_.push_back(kNone);
-    filter_.emplace_back();
-    group_.push_back(0);
-    margin_.push_back(S(-1));
+    if (!filter_.empty()) {
+      filter_.emplace_back();
+      group_.push_back(0);
+    }
+    if (!margin_.empty()) margin_.push_back(S(-1));
   }
   obj_[id] = obj;
   seq_[id] = seq;
   loc_[id] = kNone;
-  filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
-  if (group_filter_.empty()) {
-    group_filter_.emplace_back();
-    group_users_.push_back(0);
+  if (!filter_.empty()) {
+    filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
+    group_[id] = 0;
+    ++group_users_[0];
   }
-  group_[id] = 0;
-  ++group_users_[0];
-  margin_[id] = S(-1);
+  if (!margin_.empty()) margin_[id] = S(-1);
   ++live_;
   return id;
 }
@@ -122,9 +122,11 @@ std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n,
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
-  filter_.reserve(filter_.size() + fresh);
-  group_.reserve(group_.size() + fresh);
-  margin_.reserve(margin_.size() + fresh);
+  if (!filter_.empty()) {
+    filter_.reserve(filter_.size() + fresh);
+    group_.reserve(group_.size() + fresh);
+  }
+  if (!margin_.empty()) margin_.reserve(margin_.size() + fresh);
   const std::size_t mask = index_.size() - 1;
   for (std::size_t i = 0; i < n; ++i) {
     std::size_t h = hashPtr(objs[i]) & mask;
@@ -164,6 +166,7 @@ void ObjectTable<S>::remove(ObjectId id) {
 
 template <typename S>
 void ObjectTable<S>::leaveGroup(ObjectId id) {
+  if (group_.empty()) return;
   if (group_[id] == kMixedGroup)
     --mixed_users_;
   else
@@ -196,9 +199,14 @@ Group ObjectTable<S>::joinGroup(const Filter& f) {
 
 template <typename S>
 bool ObjectTable<S>::setFilter(ObjectId id, const Filter& f) {
-  if (filter_[id] == f) return false;
+  if (filter(id) == f) return false;
+  if (filter_.empty()) {  // the first bits other than the default: everyone else in group 0
+    filter_.assign(obj_.size(), Filter{});
+    group_.assign(obj_.size(), 0);
+    group_filter_.assign(1, Filter{});
+    group_users_.assign(1, std::uint32_t(live_));
+  }
   filter_[id] = f;
-  any_filter_ = any_filter_ || !f.isDefault();
   const Group before = group_[id];
   leaveGroup(id);
   group_[id] = joinGroup(f);
@@ -206,8 +214,17 @@ bool ObjectTable<S>::setFilter(ObjectId id, const Filter& f) {
 }
 
 template <typename S>
+void ObjectTable<S>::setOwnMargin(ObjectId id, S margin) {
+  if (margin_.empty()) {
+    if (margin < S(0)) return;  // what every id has already
+    margin_.assign(obj_.size(), S(-1));
+  }
+  margin_[id] = margin;
+}
+
+template <typename S>
 bool ObjectTable<S>::separable(int limit) const {
-  if (!any_filter_ || mixed_users_ > 0 || limit <= 0) return false;
+  if (filter_.empty() || mixed_users_ > 0 || limit <= 0) return false;
   Group used[kMixedGroup];
   int n = 0;
   for (std::size_t g = 0; g < group_filter_.size(); ++g) {
@@ -232,7 +249,6 @@ void ObjectTable<S>::clear() {
   group_users_ = {};
   mixed_users_ = 0;
   margin_ = {};
-  any_filter_ = false;
   free_ = {};
   index_ = {};
   live_ = 0;
@@ -267,9 +283,12 @@ bool ObjectTable<S>::validate(std::string* why) const {
     if (why) *why = msg.str();
     return false;
   };
-  if (seq_.size() != obj_.size() || loc_.size() != obj_.size() || filter_.size() != obj_.size() ||
-      group_.size() != obj_.size() || margin_.size() != obj_.size() ||
-      group_users_.size() != group_filter_.size() || group_filter_.size() > kMixedGroup)
+  const bool filters = !filter_.empty(), margins = !margin_.empty();
+  if (seq_.size() != obj_.size() || loc_.size() != obj_.size() ||
+      (filters && (filter_.size() != obj_.size() || group_.size() != obj_.size())) ||
+      (!filters && (!group_.empty() || !group_filter_.empty())) ||
+      (margins && margin_.size() != obj_.size()) || group_users_.size() != group_filter_.size() ||
+      group_filter_.size() > kMixedGroup || (filters && group_filter_.empty()))
     return msg << "object table: per-id arrays differ in length", fail();
   std::size_t live = 0;
   std::vector<char> is_free(obj_.size(), 0);
@@ -290,8 +309,9 @@ bool ObjectTable<S>::validate(std::string* why) const {
     if (find(obj_[id]) != id) return msg << "object table: map misses id " << id, fail();
     if (seq_[id] >= next_seq_) return msg << "object table: id " << id << " seq ahead", fail();
     seqs.push_back(seq_[id]);
-    if (!any_filter_ && !filter_[id].isDefault())
-      return msg << "object table: id " << id << " has filter bits the queries skip", fail();
+    if (margins && !std::isfinite(margin_[id]))
+      return msg << "object table: id " << id << " has a bad margin", fail();
+    if (!filters) continue;
     const Group g = group_[id];
     if (g == kMixedGroup) {
       ++mixed;
@@ -300,8 +320,6 @@ bool ObjectTable<S>::validate(std::string* why) const {
     } else {
       ++users[g];
     }
-    if (!std::isfinite(margin_[id]))
-      return msg << "object table: id " << id << " has a bad margin", fail();
   }
   if (users != group_users_ || mixed != mixed_users_)
     return msg << "object table: group user counts wrong", fail();

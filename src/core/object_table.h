@@ -51,22 +51,27 @@ class ObjectTable {
   const std::uint32_t* locations() const { return loc_.data(); }
 
   /// Filter bits of a live id (the default Filter from registration until set).
-  const Filter& filter(ObjectId id) const { return filter_[id]; }
-  /// Sets an id's bits; returns whether its filter group changed. O(groups), at most 254.
+  Filter filter(ObjectId id) const { return filter_.empty() ? Filter{} : filter_[id]; }
+  /// Sets an id's bits; returns whether its filter group changed. O(groups), at most 254. The
+  /// first non-default bits since clear() allocate the per-id filters and groups.
   bool setFilter(ObjectId id, const Filter& f);
-  /// Per id; null while every object has the default bits (queries then skip the test).
-  const Filter* filters() const { return any_filter_ ? filter_.data() : nullptr; }
+  /// Per id; null while every object has had the default bits since clear() (queries then skip
+  /// the test).
+  const Filter* filters() const { return filter_.empty() ? nullptr : filter_.data(); }
   /// Per id: its filter group (objects with equal bits share one; group 0 is the default bits),
-  /// or kMixedGroup if all 254 groups were taken when it got its bits.
-  const Group* groups() const { return group_.data(); }
-  /// Per group: its bits.
-  const Filter* groupFilters() const { return group_filter_.data(); }
+  /// or kMixedGroup if all 254 groups were taken when it got its bits. Null with filters().
+  const Group* groups() const { return group_.empty() ? nullptr : group_.data(); }
+  /// Per group: its bits. Null with filters().
+  const Filter* groupFilters() const {
+    return group_filter_.empty() ? nullptr : group_filter_.data();
+  }
   /// Whether the live objects' groups are worth separating in the cubes: at most `limit` groups
   /// are in use, none is kMixedGroup, and some two of them (or one with itself) cannot pair.
   bool separable(int limit) const;
   /// An object's own margin, or a negative value while it uses the manager-wide one.
-  S ownMargin(ObjectId id) const { return margin_[id]; }
-  void setOwnMargin(ObjectId id, S margin) { margin_[id] = margin; }
+  S ownMargin(ObjectId id) const { return margin_.empty() ? S(-1) : margin_[id]; }
+  /// Sets it; the first call since clear() allocates the per-id margins.
+  void setOwnMargin(ObjectId id, S margin);
 
   /// Registered objects in registration order.
   void objects(std::vector<Object*>& out) const;
@@ -83,20 +88,21 @@ class ObjectTable {
   void leaveGroup(ObjectId id);
   Group joinGroup(const Filter& f);  // the group of bits f, made if new; counts one user
 
-  std::vector<Object*> obj_;                // per id; nullptr: free
-  std::vector<std::uint32_t> seq_;          // per id: registration number
-  std::vector<std::uint32_t> loc_;          // per id: location (see location())
-  std::vector<Filter> filter_;              // per id: filter bits
-  std::vector<Group> group_;                // per id: filter group
-  std::vector<Filter> group_filter_;        // per group: its bits
+  std::vector<Object*> obj_;        // per id; nullptr: free
+  std::vector<std::uint32_t> seq_;  // per id: registration number
+  std::vector<std::uint32_t> loc_;  // per id: location (see location())
+  // The properties most managers never set are allocated by their first use (then kept until
+  // clear()): 25 bytes per id that registration and memory would otherwise pay for nothing.
+  std::vector<Filter> filter_;              // per id: filter bits; empty: all default
+  std::vector<Group> group_;                // per id: filter group; empty with filter_
+  std::vector<Filter> group_filter_;        // per group: its bits; empty with filter_
   std::vector<std::uint32_t> group_users_;  // per group: live ids in it (0: free, but group 0)
   std::size_t mixed_users_ = 0;             // live ids without a group
-  std::vector<S> margin_;                   // per id: own margin, < 0 for the manager-wide one
-  std::vector<ObjectId> free_;              // ids to hand out again, last freed first
-  std::vector<std::uint32_t> index_;        // open addressing: 0 empty, else id + 1 (key: obj_[id])
+  std::vector<S> margin_;       // per id: own margin, < 0 for the manager-wide one; empty: all < 0
+  std::vector<ObjectId> free_;  // ids to hand out again, last freed first
+  std::vector<std::uint32_t> index_;  // open addressing: 0 empty, else id + 1 (key: obj_[id])
   std::size_t live_ = 0;
   std::uint32_t next_seq_ = 0;
-  bool any_filter_ = false;  // some live or past object had non-default bits (since clear())
 };
 
 extern template class ObjectTable<float>;

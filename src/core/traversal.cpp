@@ -197,14 +197,17 @@ bool allPairs(const View<S>& v, const Policy& p) {
     slot[n] = s;
     n += v.items[s].obj != nullptr;
   }
-  const ColumnStore store(n);  // the padding up to the next multiple of 8 is zeroed
-  p.kernels->fill(v.items, slot, n, store.columns(), 0);
+  SmallColumns store;
+  const Columns cols = store.columns();
+  fillColumns(
+      v.items, [&](std::uint32_t i) { return slot[i]; }, n, cols, 0);
   // The kernels read whole blocks of 4 or 8 columns; the bits of the padding are dropped below
   // (no box value could be relied on to overlap nothing: an infinite box overlaps every one).
+  store.padFrom(n);
   const std::uint64_t live = n == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
   p.count.tests(std::size_t(n) * (n - (n > 0)) / 2);
   std::uint64_t rows[kAllPairsMax];
-  p.kernels->rowMasks(store.columns(), n, rows);
+  p.kernels->rowMasks(cols, n, rows);
   // The rows with hits, gathered without a branch: in a sparse scene whether a row has any is
   // a coin toss for the branch predictor.
   std::uint32_t hit_rows[kAllPairsMax];
@@ -501,15 +504,14 @@ template <bool Groups, typename S, class Sink>
   return stats ? run(Count{stats}) : run(NoCount{});
 }
 
-// Self walks of many slots, with their float columns. The store (about 1.8 KB, whose inline
-// buffer only all-pairs sizes use) lives in this frame only: in the common frame GCC zeroed it
-// on every collide, object queries included.
+// Self walks of many slots, with their float columns (on the heap, in this frame only).
 template <bool Groups, typename S, class Sink>
 [[gnu::noinline]] bool collideColumns(const View<S>& a, const View<S>& b, const Sink& sink,
                                       QueryStats* stats, const PairGate<S>* gate,
                                       const PairKernels<S>* kernels) {
   const ColumnStore store(a.slots);
-  kernels->fill(a.items, nullptr, a.slots, store.columns(), 0);
+  fillColumns(
+      a.items, [](std::uint32_t i) { return i; }, a.slots, store.columns(), 0);
   return collideRun<Groups>(a, b, true, sink, stats, gate, kernels, &store.columns());
 }
 

@@ -131,6 +131,17 @@ inline void unionOfRecords(const BuildRecord* first, const BuildRecord* last, No
     }
 }
 
+/// Four boxes rounded to nearest (as static_cast) into entries 0-3 of six float columns: lo[k]
+/// and hi[k] for bound k.
+template <typename S>
+inline void fourToColumns(const Box<S>* const b[4], float* const lo[3], float* const hi[3]) {
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) {
+      lo[k][i] = static_cast<float>(b[i]->lo[k]);
+      hi[k][i] = static_cast<float>(b[i]->hi[k]);
+    }
+}
+
 }  // namespace portable
 }  // namespace detail
 }  // namespace cube

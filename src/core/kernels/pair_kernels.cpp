@@ -10,32 +10,16 @@ namespace detail {
 
 ColumnStore::ColumnStore(std::uint32_t n) {
   const std::uint32_t stride = (n + kMaskLeaf + 7) & ~7u;
-  if (stride <= kLocal) {
-    cols_.c = local_;
-  } else {
-    // 32-byte alignment by hand: 7 floats of slack.
-    heap_.reset(new float[6 * std::size_t(stride) + 7]);
-    const auto addr = reinterpret_cast<std::uintptr_t>(heap_.get());
-    cols_.c = heap_.get() + ((32 - addr % 32) % 32) / sizeof(float);
-  }
+  // 32-byte alignment by hand: 7 floats of slack.
+  heap_.reset(new float[6 * std::size_t(stride) + 7]);
+  const auto addr = reinterpret_cast<std::uintptr_t>(heap_.get());
+  cols_.c = heap_.get() + ((32 - addr % 32) % 32) / sizeof(float);
   cols_.stride = stride;
   for (int k = 0; k < 6; ++k)
     std::fill(cols_.c + std::size_t(k) * stride + n, cols_.c + std::size_t(k + 1) * stride, 0.0f);
 }
 
 namespace {
-
-template <typename S>
-void fillPortable(const Item<S>* items, const std::uint32_t* slot, std::uint32_t count,
-                  const Columns& cols, std::uint32_t at) {
-  for (std::uint32_t i = 0; i < count; ++i) {
-    const Box<S>& b = items[slot ? slot[i] : i].box;
-    for (int k = 0; k < 3; ++k) {
-      cols.lo(k)[at + i] = static_cast<float>(b.lo[k]);
-      cols.hi(k)[at + i] = static_cast<float>(b.hi[k]);
-    }
-  }
-}
 
 void rowMasksPortable(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -53,7 +37,6 @@ void rowMasksPortable(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
 
 template <typename S>
 const PairKernels<S> kPortable = {PairKernel::portable,
-                                  &fillPortable<S>,
                                   &rowMasksPortable,
                                   {&leafHitsPortable<false, S>, &leafHitsPortable<true, S>},
                                   {nullptr, nullptr}};

@@ -36,8 +36,33 @@ struct Columns {
   float* hi(int k) const { return c + std::size_t(3 + k) * stride; }
 };
 
+/// Entries [at, at + count) of `cols` get the boxes of items[slot(i)], rounded to nearest.
+/// Inline, with the instruction set chosen at compile time (box_ops.h): in the all-pairs test of
+/// a small scene an out-of-line call cost a tenth of the time.
+template <typename S, class Slot>
+inline void fillColumns(const Item<S>* items, Slot&& slot, std::uint32_t count, const Columns& cols,
+                        std::uint32_t at) {
+  float* lo[3] = {cols.lo(0) + at, cols.lo(1) + at, cols.lo(2) + at};
+  float* hi[3] = {cols.hi(0) + at, cols.hi(1) + at, cols.hi(2) + at};
+  std::uint32_t i = 0;
+  for (; i + 4 <= count; i += 4) {
+    const Box<S>* const b[4] = {&items[slot(i)].box, &items[slot(i + 1)].box,
+                                &items[slot(i + 2)].box, &items[slot(i + 3)].box};
+    float* const l[3] = {lo[0] + i, lo[1] + i, lo[2] + i};
+    float* const h[3] = {hi[0] + i, hi[1] + i, hi[2] + i};
+    fourToColumns(b, l, h);
+  }
+  for (; i < count; ++i) {
+    const Box<S>& b = items[slot(i)].box;
+    for (int k = 0; k < 3; ++k) {
+      lo[k][i] = static_cast<float>(b.lo[k]);
+      hi[k][i] = static_cast<float>(b.hi[k]);
+    }
+  }
+}
+
 /// Owns the storage of a Columns for at least n entries plus kMaskLeaf of padding (read by the
-/// lanes of a leaf past its end), padding zeroed. Small sizes live in the object itself.
+/// lanes of a leaf past its end), padding zeroed: the float columns of a large self walk.
 class ColumnStore {
  public:
   explicit ColumnStore(std::uint32_t n);
@@ -46,21 +71,34 @@ class ColumnStore {
   const Columns& columns() const { return cols_; }
 
  private:
-  static constexpr std::uint32_t kLocal = kAllPairsMax + kMaskLeaf;
-  alignas(32) float local_[6 * kLocal];
   std::unique_ptr<float[]> heap_;
   Columns cols_;
 };
+
+/// The columns of an all-pairs test (at most kAllPairsMax boxes), in the object itself: no
+/// allocation, and only the padding that rowMasks reads (up to the next multiple of 8) zeroed.
+class SmallColumns {
+ public:
+  SmallColumns() = default;
+  SmallColumns(const SmallColumns&) = delete;
+  SmallColumns& operator=(const SmallColumns&) = delete;
+  /// Zeroes entries [n, next multiple of 8) of every column; n <= kAllPairsMax.
+  void padFrom(std::uint32_t n) {
+    for (int k = 0; k < 6; ++k)
+      for (std::uint32_t j = n; j < ((n + 7) & ~7u); ++j) c_[k * kAllPairsMax + j] = 0.0f;
+  }
+  Columns columns() { return {c_, kAllPairsMax}; }
+
+ private:
+  alignas(32) float c_[6 * kAllPairsMax];
+};
+static_assert(kAllPairsMax % 8 == 0, "SmallColumns' stride is a multiple of 8");
 
 /// One instruction set's kernels. Bit kMaskLeaf i + j of a leaf mask stands for the pair
 /// (xs[i], ys[j]); with Self, xs and ys are the same run and only j > i counts.
 template <typename S>
 struct PairKernels {
   PairKernel isa;
-  /// Entries [at, at + count) of `cols` get the boxes of items[slot[i]] (slot null:
-  /// items[i]), rounded to nearest.
-  void (*fill)(const Item<S>* items, const std::uint32_t* slot, std::uint32_t count,
-               const Columns& cols, std::uint32_t at);
   /// rows[i] for i < n <= kAllPairsMax: bit j set for every j > i whose column box overlaps
   /// box i's; bits from n to the next multiple of 8 may be set too (the caller masks them).
   void (*rowMasks)(const Columns& cols, std::uint32_t n, std::uint64_t* rows);
