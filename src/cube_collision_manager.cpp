@@ -14,6 +14,7 @@
 
 #include "core/broadphase.h"
 #include "cull.h"
+#include "self_collide_threads.h"
 
 namespace cube {
 
@@ -449,5 +450,26 @@ size_t CubeCollisionManager<S>::size() const {
 
 template class CubeCollisionManager<double>;
 template class CubeCollisionManager<float>;
+
+namespace detail {
+
+template <typename S>
+void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
+                          fcl::CollisionCallBack<S> callback, int threads) {
+  if (callback == nullptr) fail("collide", "null callback");
+  const Broadphase<S>& core = manager.core();
+  if (core.size() < 2) return;  // no pair
+  CulledCallback<S> culled{cdata, callback};
+  culled.install(core.config().cull_pairs, cdata, callback);
+  const QueryScope scope(&core);
+  core.collideSelfSplit(cdata, callback, threads);
+}
+
+template void collideSelfOnThreads<double>(const CubeCollisionManager<double>&, void*,
+                                           fcl::CollisionCallBack<double>, int);
+template void collideSelfOnThreads<float>(const CubeCollisionManager<float>&, void*,
+                                          fcl::CollisionCallBack<float>, int);
+
+}  // namespace detail
 
 }  // namespace cube

@@ -5,7 +5,9 @@
 #include <stdexcept>
 
 #include "cube_collision/callbacks.h"
+#include "cube_collision/cube_collision_manager.h"
 #include "narrow_phase_stream.h"
+#include "self_collide_threads.h"
 
 namespace cube {
 
@@ -43,6 +45,19 @@ std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManage
 }
 
 namespace {
+
+// manager.collide(data, fn); with `split`, our manager walks a large scene on `threads` threads,
+// calling fn on this thread with the same pairs in the same order. Any other manager walks as it
+// walks.
+template <typename S>
+void selfWalk(const fcl::BroadPhaseCollisionManager<S>& manager, void* data,
+              fcl::CollisionCallBack<S> fn, int threads, bool split) {
+  const auto* cube = split ? dynamic_cast<const CubeCollisionManager<S>*>(&manager) : nullptr;
+  if (cube != nullptr)
+    detail::collideSelfOnThreads(*cube, data, fn, threads > 0 ? threads : hardwareThreads());
+  else
+    manager.collide(data, fn);
+}
 
 // FCL's default callback with culling (callbacks.h), counting the pairs it is handed.
 template <typename S>
@@ -117,8 +132,9 @@ template <typename S>
 fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& manager,
                                    const fcl::CollisionRequest<S>& request,
                                    const NarrowPhaseOptions<S>& options) {
-  return collideWith(request, options,
-                     [&](void* data, fcl::CollisionCallBack<S> f) { manager.collide(data, f); });
+  return collideWith(request, options, [&](void* data, fcl::CollisionCallBack<S> f) {
+    selfWalk(manager, data, f, options.threads, options.split_walk);
+  });
 }
 
 template <typename S>
@@ -174,10 +190,10 @@ struct ConcurrentCalls {
 
 template <typename S>
 void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
-                         fcl::CollisionCallBack<S> callback, int threads) {
+                         fcl::CollisionCallBack<S> callback, int threads, bool split_walk) {
   if (callback == nullptr) throw std::invalid_argument("cube::collideConcurrently: null callback");
   ConcurrentCalls<S> calls{cdata, callback, threads, {}};
-  manager.collide(&calls, &ConcurrentCalls<S>::gather);
+  selfWalk(manager, &calls, &ConcurrentCalls<S>::gather, threads, split_walk);
   if (!calls.stop.load()) calls.flush();
 }
 
@@ -225,7 +241,7 @@ fcl::DistanceResult<S> minimumDistance(const fcl::BroadPhaseCollisionManager<S>&
       const fcl::BroadPhaseCollisionManager<S>&, fcl::BroadPhaseCollisionManager<S>&,              \
       const fcl::CollisionRequest<S>&, const NarrowPhaseOptions<S>&);                              \
   template void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>&, void*,              \
-                                    fcl::CollisionCallBack<S>, int);                               \
+                                    fcl::CollisionCallBack<S>, int, bool);                         \
   template fcl::DistanceResult<S> minimumDistance(const fcl::BroadPhaseCollisionManager<S>&,       \
                                                   const fcl::DistanceRequest<S>&,                  \
                                                   const NarrowPhaseOptions<S>&);                   \

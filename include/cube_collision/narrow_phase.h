@@ -90,6 +90,13 @@ struct NarrowPhaseOptions {
   /// it pays where narrow-phase calls dominate (meshes, a robot against a world), not for large
   /// scenes of simple shapes.
   bool last_hit_first = false;
+  /// collideAll (self-collide) only: a CubeCollisionManager with at least 4,096 objects in its
+  /// cubes splits its broadphase walk too, into at least 64 subwalks taken by the threads; the
+  /// candidate pairs are handed over on this thread in the serial walk's order, so the results
+  /// are the same. Off by default: the walk is about 1% of a collideAll with the narrow phase,
+  /// and on 2 cores handing every pair over costs about what the serial walk saves (see the
+  /// README's figures). For machines with many idle cores and walks of 100,000 objects or more.
+  bool split_walk = false;
 };
 
 /// fcl::collide on each pair (a fresh result per pair), culled and cached as the options say, on

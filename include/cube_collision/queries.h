@@ -67,12 +67,13 @@ fcl::CollisionResult<S> collideAll(
 /// manager.collide(cdata, callback) with the callback called on options.threads threads, for a
 /// callback that is safe to call concurrently (on cdata too). Pairs are gathered in chunks from
 /// the walk; once a call returns true no new call starts and the walk stops, but calls of the
-/// same chunk already running finish. The order of the calls is not specified. options.cache
-/// and options.stats are not used. An exception from the callback is rethrown here; a null
-/// callback throws std::invalid_argument.
+/// same chunk already running finish. The order of the calls is not specified. An exception
+/// from the callback is rethrown here; a null callback throws std::invalid_argument.
+/// `split_walk`: as NarrowPhaseOptions::split_walk.
 template <typename S>
 void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
-                         fcl::CollisionCallBack<S> callback, int threads = 0);
+                         fcl::CollisionCallBack<S> callback, int threads = 0,
+                         bool split_walk = false);
 
 /// The smallest distance between two managed objects, with the nearest points if `request` asks
 /// for them (fcl::distance on the pairs the branch and bound visits). min_distance is the largest

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <exception>
 #include <sstream>
 #include <stdexcept>
 
@@ -373,6 +374,60 @@ bool Broadphase<S>::collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) 
   const auto key = [&](ObjectId id) { return seq[id]; };
   const auto object = [&](ObjectId id) { return table_.object(id); };
   return callInOrder(found, key, key, object, object, data, fn, stats);
+}
+
+template <typename S>
+bool Broadphase<S>::collideSelfSplit(void* data, CollideFn<S> fn, int threads) const {
+  if (threads <= 1 || pairs_.valid() || tree_.size() < kSplitMin)
+    return collideSelf(data, fn, nullptr);
+  // The walks test the filter bits and orient the pairs; the predicate, user code, is asked here
+  // on this thread, in walk order, as the serial walk asks it.
+  PairGate<S> walk_gate = selfGate();
+  walk_gate.keep = nullptr;
+  const PairGate<S>* gate = gated() ? &walk_gate : nullptr;
+  const auto kept = [&](ObjectId a, ObjectId b) {
+    return !keep_ || keep_(table_.object(a), table_.object(b));
+  };
+  std::vector<std::uint64_t> in_order;  // canonical order: every pair, sorted after
+  const bool canonical = config_.canonical_pairs;
+  const bool stopped = forSelfViews(scene(), [&](const View<S>& a, const View<S>& b, bool self) {
+    const SplitWalk<S> walk(a, b, self, config_.all_pairs_limit, gate, kSplitTasks);
+    const std::size_t n = walk.tasks();
+    std::vector<std::vector<std::uint64_t>> found(n);
+    std::exception_ptr error;
+    for (std::size_t begin = 0, wave = std::size_t(threads); begin < n; begin += wave, wave *= 2) {
+      const std::size_t end = canonical ? n : std::min(n, begin + wave);
+      // Dynamic: the tasks of a clustered scene differ by orders of magnitude.
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+      for (std::ptrdiff_t i = std::ptrdiff_t(begin); i < std::ptrdiff_t(end); ++i) {
+        try {
+          walk.collect(std::size_t(i), found[std::size_t(i)]);
+        } catch (...) {  // std::bad_alloc: no exception may leave an OpenMP region
+#pragma omp critical(cube_split_walk_error)
+          if (!error) error = std::current_exception();
+        }
+      }
+      if (error) std::rethrow_exception(error);
+      for (std::size_t i = begin; i < end; ++i) {
+        for (const std::uint64_t p : found[i]) {
+          const auto x = static_cast<ObjectId>(p >> 32), y = static_cast<ObjectId>(p);
+          if (!kept(x, y)) continue;
+          if (canonical)
+            in_order.push_back(p);
+          else if (fn(table_.object(x), table_.object(y), data))
+            return true;
+        }
+        std::vector<std::uint64_t>().swap(found[i]);
+      }
+      if (canonical) break;
+    }
+    return false;
+  });
+  if (stopped || !canonical) return stopped;
+  const std::uint32_t* seq = table_.seqs();
+  const auto key = [&](ObjectId id) { return seq[id]; };
+  const auto object = [&](ObjectId id) { return table_.object(id); };
+  return callInOrder(in_order, key, key, object, object, data, fn, nullptr);
 }
 
 template <typename S>

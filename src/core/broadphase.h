@@ -88,6 +88,18 @@ class Broadphase {
                QueryStats* stats) const;
   /// Every overlapping pair of managed objects; from the pair list when it is valid.
   bool collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) const;
+  /// collideSelf with the walk of a large scene cut into tasks (SplitWalk) that `threads` OpenMP
+  /// threads walk: fn sees the same pairs in the same order, on this thread, and stops the query
+  /// the same way. The tasks run in waves (threads tasks, then twice as many, ...), so a query
+  /// that stops early walks little more than the serial one. The pair predicate too is asked on
+  /// this thread, in walk order. Serial (collideSelf) for threads <= 1, a valid pair list, or
+  /// fewer than kSplitMin objects in the cubes.
+  bool collideSelfSplit(void* data, CollideFn<S> fn, int threads) const;
+  /// Objects in the cubes from which collideSelfSplit splits the walk: below, the walk takes
+  /// less time than a wave's threads take to start.
+  static constexpr std::size_t kSplitMin = 4096;
+  /// The tasks a split self walk is cut into (at least; fewer in a tree of fewer leaves).
+  static constexpr std::size_t kSplitTasks = 64;
   /// Pairs (object of this, object of other) whose boxes overlap.
   bool collide(const Broadphase& other, void* data, CollideFn<S> fn, QueryStats* stats) const;
   /// Branch and bound from `best` (lowered by fn) over the objects near `box`.

@@ -478,6 +478,24 @@ bool descend(const View<S>& va, const View<S>& vb, bool self, const Policy& p) {
   return walkFrom<Groups>(va, vb, self, p, key);
 }
 
+// Whether a walk of `a` with itself tests its leaves on float columns (see kColumnsMin).
+template <typename S>
+bool wantsColumns(const View<S>& a, bool self, const PairKernels<S>* kernels) {
+  return self && a.slots >= kColumnsMin && kernels->columnHits[1] != nullptr;
+}
+
+// A self walk with filter bits reads them per slot (CollidePolicy::slot_bits): gathered here.
+// Not for cubes that carry filter groups: their one-group leaves need no bits, and the few mixed
+// ones read them by id.
+template <typename S>
+void gatherSlotBits(const View<S>& a, bool self, const PairGate<S>* gate,
+                    std::vector<Filter>& bits) {
+  if (!self || gate == nullptr || gate->filters_a == nullptr || a.groups != nullptr) return;
+  bits.resize(a.slots);  // dead slots keep the default bits; no pair reaches them
+  for (std::uint32_t s = 0; s < a.slots; ++s)
+    if (a.items[s].obj != nullptr) bits[s] = gate->filters_a[a.items[s].id];
+}
+
 // The walk proper, given the kernel table (null in object queries) and the float columns of a
 // self walk (null: leaves are tested on the exact boxes).
 template <bool Groups, typename S, class Sink>
@@ -486,13 +504,7 @@ template <bool Groups, typename S, class Sink>
                                               const PairGate<S>* gate,
                                               const PairKernels<S>* kernels, const Columns* use) {
   std::vector<Filter> bits;
-  // Not for cubes that carry filter groups: their one-group leaves need no bits, and the few
-  // mixed ones read them by id.
-  if (self && gate != nullptr && gate->filters_a != nullptr && a.groups == nullptr) {
-    bits.resize(a.slots);  // dead slots keep the default bits; no pair reaches them
-    for (std::uint32_t s = 0; s < a.slots; ++s)
-      if (a.items[s].obj != nullptr) bits[s] = gate->filters_a[a.items[s].id];
-  }
+  gatherSlotBits(a, self, gate, bits);
   const auto run = [&](auto count) {
     CollidePolicy<S, decltype(count), Sink> p{sink, count, kernels, use, gate};
     if (!bits.empty()) {
@@ -523,7 +535,7 @@ template <bool Groups, typename S, class Sink>
   // kernel table: most calls are those, and small.
   const bool one = !self && b.root != kNone && b.nodes[b.root].count == 1;
   const PairKernels<S>* kernels = one ? nullptr : &pairKernels<S>();
-  if (self && a.slots >= kColumnsMin && kernels->columnHits[1] != nullptr)
+  if (wantsColumns(a, self, kernels))
     return collideColumns<Groups>(a, b, sink, stats, gate, kernels);
   return collideRun<Groups>(a, b, self, sink, stats, gate, kernels, nullptr);
 }
@@ -586,6 +598,92 @@ void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all
 }
 
 template <typename S>
+SplitWalk<S>::SplitWalk(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
+                        const PairGate<S>* gate, std::size_t min_tasks)
+    : a_(a), b_(b), self_(self), gate_(gate) {
+  // As descend and collectPairs begin.
+  if (a.root == kNone || b.root == kNone) return;
+  if (self && a.slots <= all_pairs_limit) {
+    all_pairs_ = true;
+    tasks_.push_back(Task{a.root, a.root});
+    return;
+  }
+  if (!self && !overlap(a.nodes[a.root], b.nodes[b.root])) return;
+  tasks_.push_back(Task{a.root, b.root});
+  // One level of the walk per round: each task gives way to the child pairs walkPair would take
+  // from it, in the order it would visit them; a pair of leaves (or a leaf with itself) stays.
+  std::vector<Task> next;
+  while (tasks_.size() < min_tasks) {
+    next.clear();
+    bool opened = false;
+    for (const Task& t : tasks_) {
+      const Node& na = a.nodes[t.a];
+      const Node& nb = b.nodes[t.b];
+      const auto take = [&](std::uint32_t x, std::uint32_t y) {
+        if (overlap(a.nodes[x], b.nodes[y])) next.push_back(Task{x, y});
+      };
+      if (self && t.a == t.b) {
+        if (na.isLeaf()) {
+          next.push_back(t);
+          continue;
+        }
+        const std::uint32_t c = na.first;
+        next.push_back(Task{c, c});
+        next.push_back(Task{c + 1, c + 1});
+        take(c, c + 1);
+      } else if (na.isLeaf() && nb.isLeaf()) {
+        next.push_back(t);
+        continue;
+      } else if (!na.isLeaf() && !nb.isLeaf()) {
+        for (std::uint32_t i = 0; i < 2; ++i)
+          for (std::uint32_t j = 0; j < 2; ++j) take(na.first + i, nb.first + j);
+      } else if (nb.isLeaf()) {
+        for (std::uint32_t i = 0; i < 2; ++i) take(na.first + i, t.b);
+      } else {
+        for (std::uint32_t j = 0; j < 2; ++j) take(t.a, nb.first + j);
+      }
+      opened = true;
+    }
+    tasks_.swap(next);
+    if (!opened) break;
+  }
+  const PairKernels<S>* kernels = &pairKernels<S>();
+  if (wantsColumns(a, self, kernels)) {
+    store_ = std::make_unique<ColumnStore>(a.slots);
+    fillColumns(
+        a.items, [](std::uint32_t i) { return i; }, a.slots, store_->columns(), 0);
+  }
+  gatherSlotBits(a, self, gate, bits_);
+}
+
+template <typename S>
+SplitWalk<S>::~SplitWalk() = default;
+
+template <typename S>
+void SplitWalk<S>::collect(std::size_t i, std::vector<std::uint64_t>& out) const {
+  using Policy = CollidePolicy<S, NoCount, RecordIds<S>>;
+  const Task t = tasks_[i];
+  if (all_pairs_) {
+    allPairs(a_, Policy{RecordIds<S>{&out}, NoCount{}, &pairKernels<S>(), nullptr, gate_});
+    return;
+  }
+  Policy p{RecordIds<S>{&out}, NoCount{}, &pairKernels<S>(), store_ ? &store_->columns() : nullptr,
+           gate_};
+  if (!bits_.empty()) {
+    p.slot_bits = bits_.data();
+    p.slot_base = a_.items;
+  }
+  // As collideWith chooses: cubes that carry filter groups are tested for them.
+  if (gate_ != nullptr && a_.groups != nullptr) {
+    PairVisitor<S, Policy, true> v{a_, b_, p};
+    walkPair(a_.nodes, b_.nodes, t.a, t.b, NoKey{}, self_, v);
+  } else {
+    PairVisitor<S, Policy, false> v{a_, b_, p};
+    walkPair(a_.nodes, b_.nodes, t.a, t.b, NoKey{}, self_, v);
+  }
+}
+
+template <typename S>
 bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats,
                      PairKernel kernel, const PairGate<S>* gate) {
   if (v.slots > kAllPairsMax) throw std::logic_error("collideAllPairs: view too large");
@@ -641,6 +739,8 @@ template bool distancePairs<float>(const View<float>&, const View<float>&, bool,
 template bool distancePairs<double>(const View<double>&, const View<double>&, bool, void*,
                                     DistanceFn<double>, double&, QueryStats*,
                                     const PairGate<double>*);
+template class SplitWalk<float>;
+template class SplitWalk<double>;
 
 }  // namespace detail
 }  // namespace cube

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -129,6 +130,42 @@ bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data, 
 template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
                   std::vector<std::uint64_t>& out, const PairGate<S>* gate = nullptr);
+
+/// The walk of collectPairs(a, b, self, all_pairs_limit, out, gate) cut into independent
+/// subwalks (tasks), so that threads can take them: the pairs of task 0, then of task 1, and so
+/// on, are collectPairs' pairs in its order. Each task is a pair of cubes where a walkPair of its
+/// own starts. The top of the walk is opened one level at a time, each task replaced by the child
+/// pairs the walk would visit, in the order it would visit them (a walk without a distance bound
+/// is a preorder), until there are at least `min_tasks` tasks or only leaves are left: the cut
+/// depends on the views alone, never on a thread count. Holds what the walk reads besides the
+/// views (the float columns, the filter bits in slot order), shared read-only by the tasks. The
+/// views and the gate must outlive it.
+template <typename S>
+class SplitWalk {
+ public:
+  SplitWalk(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
+            const PairGate<S>* gate, std::size_t min_tasks);
+  ~SplitWalk();
+  SplitWalk(const SplitWalk&) = delete;
+  SplitWalk& operator=(const SplitWalk&) = delete;
+
+  std::size_t tasks() const { return tasks_.size(); }
+  /// Appends task i's pairs to `out` (as collectPairs writes them). Const and without shared
+  /// writes: any number of threads may run tasks at once.
+  void collect(std::size_t i, std::vector<std::uint64_t>& out) const;
+
+ private:
+  struct Task {
+    std::uint32_t a, b;
+  };
+  View<S> a_, b_;
+  bool self_;
+  bool all_pairs_ = false;  // a small self view: one task, the all-pairs kernel
+  const PairGate<S>* gate_;
+  std::vector<Task> tasks_;
+  std::unique_ptr<ColumnStore> store_;  // large self walks: the leaves' float columns
+  std::vector<Filter> bits_;            // self walks with filter bits: the bits per slot
+};
 
 /// Self-collide of one view without its cubes: every pair of objects is tested, several at a
 /// time in float, and pairs that pass are tested again exactly before fn is called. For small

@@ -1,0 +1,345 @@
+// The self walk of a large scene split over threads (issue 19, item 2): collideAll and
+// collideConcurrently with split_walk, on a CubeCollisionManager of thousands of objects, gather
+// their candidate pairs with the walk cut into tasks that OpenMP threads walk. The cut tasks,
+// concatenated, are the serial walk (the same pairs in the same order); the callback sees the
+// serial sequence on every thread count, with filter bits, a pair predicate, canonical order,
+// culling, unbounded objects, the pair list and early stops; collideAll's contacts are bit-equal on
+// 1, 2, 3 and 8 threads. Runs under ThreadSanitizer too (.ci/run).
+
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
+#include <fcl/narrowphase/collision.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "core/broadphase.h"
+#include "core/traversal.h"
+#include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
+#include "scenes.h"
+#include "self_collide_threads.h"
+#include "support/oracle.h"
+
+namespace {
+
+using S = double;
+using Object = fcl::CollisionObject<S>;
+using Pair = cube::oracle::Pair<S>;
+using cube::scenes::Layout;
+using Calls = cube::oracle::Calls<S>;
+
+constexpr std::size_t kObjects = 5000;  // above Broadphase::kSplitMin
+static_assert(kObjects >= cube::detail::Broadphase<S>::kSplitMin, "the split must run");
+
+// A scene of kObjects boxes, spheres and cylinders, and with `planes` two planes and a halfspace
+// (unbounded: the manager's unbounded list, which the split walks too).
+struct World {
+  cube::scenes::Scene<S> scene;
+  std::vector<std::unique_ptr<Object>> extra;
+  std::vector<Object*> all;
+};
+
+World world(Layout layout, bool planes, std::uint32_t seed, std::size_t n = kObjects) {
+  cube::scenes::SceneOptions o;
+  o.n = n;
+  o.layout = layout;
+  o.seed = seed;
+  o.overlaps_per_object = 2.0;
+  World w{cube::scenes::makeScene<S>(o), {}, {}};
+  w.all = w.scene.pointers();
+  if (planes) {
+    const auto add = [&](std::shared_ptr<fcl::CollisionGeometry<S>> g) {
+      w.extra.push_back(std::make_unique<Object>(g, fcl::Transform3<S>::Identity()));
+      w.extra.back()->computeAABB();
+      w.all.push_back(w.extra.back().get());
+    };
+    add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), 10));
+    add(std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(1, 1, 0).normalized(), -300));
+    add(std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(0, 1, 0), -1900));
+  }
+  return w;
+}
+
+// Filter bits on a third of the objects (four groups, some masks leaving groups out) and a
+// predicate dropping a fifth of the pairs by a rule on both objects.
+void addRules(cube::CubeCollisionManager<S>& m, const std::vector<Object*>& objs, bool predicate) {
+  std::mt19937 rng(11);
+  for (std::size_t i = 0; i < objs.size(); i += 3) {
+    const std::uint64_t group = std::uint64_t(1) << (rng() % 4);
+    m.setFilter(objs[i], group, ~(group << 1));
+  }
+  if (predicate)
+    m.setPairFilter([](Object* a, Object* b) {
+      return (reinterpret_cast<std::uintptr_t>(a) ^ reinterpret_cast<std::uintptr_t>(b)) % 5 != 0;
+    });
+}
+
+// The pairs the rules let through among all the objects: brute force over the AABBs.
+std::vector<Pair> bruteKept(const cube::CubeCollisionManager<S>& m,
+                            const std::vector<Object*>& objs, bool predicate) {
+  std::vector<Pair> out;
+  for (const Pair& p : cube::oracle::bruteSelfPairs(objs)) {
+    const auto fa = m.filter(p.first), fb = m.filter(p.second);
+    if ((fa.first & fb.second) == 0 || (fb.first & fa.second) == 0) continue;
+    // The predicate is symmetric: the orientation it is called with does not change its answer.
+    if (predicate &&
+        (reinterpret_cast<std::uintptr_t>(p.first) ^ reinterpret_cast<std::uintptr_t>(p.second)) %
+                5 ==
+            0)
+      continue;
+    out.push_back(p);
+  }
+  return out;
+}
+
+Calls serialCalls(const cube::CubeCollisionManager<S>& m) {
+  Calls c;
+  m.collide(&c, &Calls::record);
+  return c;
+}
+
+Calls splitCalls(const cube::CubeCollisionManager<S>& m, int threads) {
+  Calls c;
+  cube::detail::collideSelfOnThreads(m, &c, &Calls::record, threads);
+  return c;
+}
+
+// The tasks of a split, concatenated, are collectPairs' walk, pair for pair, whatever the number
+// of tasks asked for; with and without a gate, on the cubes and the unbounded list's view pairs.
+TEST(SplitWalk, TasksConcatenateToTheSerialWalk) {
+  for (Layout layout : {Layout::uniform, Layout::clustered}) {
+    const World w = world(layout, true, 3);
+    for (bool rules : {false, true}) {
+      cube::CubeCollisionManager<S> m;
+      m.registerObjects(w.all);
+      if (rules) addRules(m, w.all, false);
+      ASSERT_TRUE(m.validate());
+      const cube::detail::Scene<S> scene = m.core().scene();
+      ASSERT_NE(scene.unbounded.root, cube::detail::kNone);
+      cube::detail::PairGate<S> gate;
+      gate.filters_a = gate.filters_b = m.core().table().filters();
+      const cube::detail::PairGate<S>* g = rules ? &gate : nullptr;
+      std::vector<std::uint64_t> all_serial;
+      cube::detail::forSelfViews(scene, [&](const auto& a, const auto& b, bool self) {
+        std::vector<std::uint64_t> serial;
+        cube::detail::collectPairs(a, b, self, scene.all_pairs_limit, serial, g);
+        for (std::size_t min_tasks : {1, 7, 64, 1000, 100000}) {
+          const cube::detail::SplitWalk<S> split(a, b, self, scene.all_pairs_limit, g, min_tasks);
+          if (self && a.slots > 1000) {
+            EXPECT_GE(split.tasks(), std::min<std::size_t>(min_tasks, 64)) << "too few tasks";
+          }
+          std::vector<std::uint64_t> joined;
+          for (std::size_t i = 0; i < split.tasks(); ++i) split.collect(i, joined);
+          EXPECT_EQ(joined, serial) << "layout " << int(layout) << " rules " << rules << " self "
+                                    << self << " min_tasks " << min_tasks;
+        }
+        all_serial.insert(all_serial.end(), serial.begin(), serial.end());
+        return false;
+      });
+      // And the walk is right: brute force over every object.
+      std::vector<Pair> got;
+      for (const std::uint64_t p : all_serial)
+        got.push_back(
+            cube::oracle::unordered(m.core().table().object(cube::detail::ObjectId(p >> 32)),
+                                    m.core().table().object(cube::detail::ObjectId(p))));
+      std::sort(got.begin(), got.end());
+      EXPECT_EQ(got, bruteKept(m, w.all, false));
+    }
+  }
+}
+
+// The callback of a split self-collide sees the serial walk's calls, in order, on every thread
+// count: plain, with filter bits and a predicate, in canonical order, culled, from the pair list.
+TEST(SplitWalk, CallbackSeesTheSerialSequenceOnEveryThreadCount) {
+  for (Layout layout : {Layout::uniform, Layout::clustered}) {
+    const World w = world(layout, true, 5);
+    for (int variant = 0; variant < 5; ++variant) {
+      cube::Config config;
+      config.canonical_pairs = variant == 2;
+      config.cull_pairs = variant == 3;
+      config.keep_pairs = variant == 4;
+      cube::CubeCollisionManager<S> m(config);
+      m.registerObjects(w.all);
+      const bool rules = variant == 1 || variant == 2;
+      if (rules) addRules(m, w.all, true);
+      if (variant == 4) {
+        m.update();  // nothing moved: the pair list serves the next self-collide
+        ASSERT_TRUE(m.pairsListed());
+      }
+      ASSERT_TRUE(m.validate());
+      const Calls serial = serialCalls(m);
+      if (variant != 3) {
+        EXPECT_EQ(serial.unorderedSorted(), bruteKept(m, w.all, rules));
+      }
+      ASSERT_GT(serial.calls.size(), kObjects / 2);
+      for (int threads : {1, 2, 3, 8}) {
+        EXPECT_EQ(splitCalls(m, threads).calls, serial.calls)
+            << "layout " << int(layout) << " variant " << variant << " threads " << threads;
+      }
+    }
+  }
+}
+
+// A callback that stops the query sees exactly the first calls of the serial sequence.
+TEST(SplitWalk, EarlyStopSeesTheSerialPrefix) {
+  const World w = world(Layout::clustered, true, 9);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.all);
+  const Calls serial = serialCalls(m);
+  struct Stopper {
+    std::size_t after;
+    std::vector<Pair> calls;
+    static bool fn(Object* a, Object* b, void* d) {
+      auto& s = *static_cast<Stopper*>(d);
+      s.calls.emplace_back(a, b);
+      return s.calls.size() >= s.after;
+    }
+  };
+  for (std::size_t after : {std::size_t(1), std::size_t(100), serial.calls.size() / 2})
+    for (int threads : {2, 3, 8}) {
+      Stopper s{after, {}};
+      cube::detail::collideSelfOnThreads(m, &s, &Stopper::fn, threads);
+      const std::vector<Pair> want(serial.calls.begin(), serial.calls.begin() + after);
+      EXPECT_EQ(s.calls, want) << "after " << after << " threads " << threads;
+    }
+}
+
+// Bit-equal contact lists (objects, primitives, position, normal, depth).
+::testing::AssertionResult sameContacts(const fcl::CollisionResult<S>& a,
+                                        const fcl::CollisionResult<S>& b) {
+  if (a.numContacts() != b.numContacts())
+    return ::testing::AssertionFailure()
+           << a.numContacts() << " contacts against " << b.numContacts();
+  for (std::size_t k = 0; k < a.numContacts(); ++k) {
+    const fcl::Contact<S>&x = a.getContact(k), &y = b.getContact(k);
+    if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2 ||
+        std::memcmp(x.pos.data(), y.pos.data(), sizeof(S) * 3) != 0 ||
+        std::memcmp(x.normal.data(), y.normal.data(), sizeof(S) * 3) != 0 ||
+        std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0)
+      return ::testing::AssertionFailure() << "contact " << k << " differs";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// FCL's own accumulation over the manager's serial walk: the reference of collideAll.
+struct Accumulate {
+  fcl::CollisionRequest<S> request;
+  fcl::CollisionResult<S> result;
+  static bool fn(Object* a, Object* b, void* d) {
+    auto& x = *static_cast<Accumulate*>(d);
+    fcl::collide(a, b, x.request, x.result);
+    return x.result.isCollision() && x.result.numContacts() >= x.request.num_max_contacts;
+  }
+};
+
+// collideAll's contacts are the same, bit for bit and in order, on 1, 2, 3 and 8 threads, and
+// equal FCL's accumulation over the serial walk: uniform and clustered, with and without rules
+// and planes, for "every contact" and for the default "does anything collide?".
+TEST(SplitWalk, CollideAllIsBitEqualOnEveryThreadCount) {
+  for (Layout layout : {Layout::uniform, Layout::clustered})
+    for (bool extras : {false, true}) {
+      const World w = world(layout, extras, 21);
+      cube::CubeCollisionManager<S> m;
+      m.registerObjects(w.all);
+      if (extras) addRules(m, w.all, true);
+      ASSERT_TRUE(m.validate());
+      for (std::size_t max : {std::size_t(1), std::size_t(1) << 30}) {
+        Accumulate ref;
+        ref.request.num_max_contacts = max;
+        ref.request.enable_contact = true;
+        m.collide(&ref, &Accumulate::fn);
+        if (max > 1) {
+          ASSERT_GT(ref.result.numContacts(), kObjects / 4) << "must collide a lot";
+        }
+        for (int threads : {1, 2, 3, 8}) {
+          cube::NarrowPhaseStats stats;
+          cube::NarrowPhaseOptions<S> o;
+          o.threads = threads;
+          o.stats = &stats;
+          o.split_walk = true;
+          EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, ref.request, o), ref.result))
+              << "layout " << int(layout) << " extras " << extras << " max " << max << " threads "
+              << threads;
+          if (max > 1) {
+            EXPECT_EQ(stats.candidate_pairs, serialCalls(m).calls.size());
+          }
+        }
+      }
+    }
+}
+
+// collideConcurrently on a split walk: every candidate pair once, and a stop ends it soon.
+TEST(SplitWalk, CollideConcurrentlySeesEveryPairOnceAndStops) {
+  const World w = world(Layout::uniform, true, 31);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.all);
+  addRules(m, w.all, false);
+  const std::vector<Pair> want = bruteKept(m, w.all, false);
+  struct Seen {
+    std::mutex mutex;
+    std::vector<Pair> pairs;
+    std::atomic<std::size_t> calls{0};
+    std::size_t stop_after = 0;  // 0: never
+  };
+  const auto fn = [](Object* a, Object* b, void* d) {
+    auto& s = *static_cast<Seen*>(d);
+    const std::size_t k = ++s.calls;
+    std::lock_guard<std::mutex> lock(s.mutex);
+    s.pairs.push_back(cube::oracle::unordered(a, b));
+    return s.stop_after != 0 && k >= s.stop_after;
+  };
+  for (int threads : {2, 3, 8}) {
+    Seen seen;
+    cube::collideConcurrently<S>(m, &seen, fn, threads, true);
+    std::sort(seen.pairs.begin(), seen.pairs.end());
+    EXPECT_EQ(seen.pairs, want) << "threads " << threads;
+    Seen stopping;
+    stopping.stop_after = 10;
+    cube::collideConcurrently<S>(m, &stopping, fn, threads, true);
+    EXPECT_GE(stopping.calls.load(), 10u);
+    EXPECT_LE(stopping.calls.load(), 256u + 10u) << "at most the running chunk finishes";
+  }
+}
+
+// Mutations still work between split queries, and one from inside the callback is refused (on
+// the calling thread, where the callback runs); a null callback is refused before any work.
+TEST(SplitWalk, MutationsAndBadInput) {
+  World w = world(Layout::uniform, false, 41);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.all);
+  EXPECT_THROW(cube::detail::collideSelfOnThreads<S>(m, nullptr, nullptr, 2),
+               std::invalid_argument);
+  struct Mutator {
+    cube::CubeCollisionManager<S>* m;
+    Object* victim;
+    static bool fn(Object*, Object*, void* d) {
+      auto& x = *static_cast<Mutator*>(d);
+      x.m->unregisterObject(x.victim);
+      return true;
+    }
+  };
+  Mutator mut{&m, w.all[0]};
+  EXPECT_THROW(cube::detail::collideSelfOnThreads(m, &mut, &Mutator::fn, 2), std::logic_error);
+  EXPECT_EQ(m.size(), w.all.size());
+  ASSERT_TRUE(m.validate());
+  // Move a tenth of the scene, remove some objects: the split still equals the serial walk.
+  cube::scenes::jitter(w.scene, 0.1, 5.0, true, 42);
+  m.update();
+  for (std::size_t i = 0; i < w.all.size(); i += 97) m.unregisterObject(w.all[i]);
+  ASSERT_TRUE(m.validate());
+  std::vector<Object*> left;
+  m.getObjects(left);
+  const Calls serial = serialCalls(m);
+  EXPECT_EQ(serial.unorderedSorted(), cube::oracle::bruteSelfPairs(left));
+  for (int threads : {2, 3}) EXPECT_EQ(splitCalls(m, threads).calls, serial.calls);
+}
+
+}  // namespace
