@@ -13,10 +13,8 @@ ColumnStore::ColumnStore(std::uint32_t n) {
   // 32-byte alignment by hand: 7 floats of slack.
   heap_.reset(new float[6 * std::size_t(stride) + 7]);
   const auto addr = reinterpret_cast<std::uintptr_t>(heap_.get());
-  cols_.c = heap_.get() + ((32 - addr % 32) % 32) / sizeof(float);
-  cols_.stride = stride;
-  for (int k = 0; k < 6; ++k)
-    std::fill(cols_.c + std::size_t(k) * stride + n, cols_.c + std::size_t(k + 1) * stride, 0.0f);
+  cols_ = Columns::packed(heap_.get() + ((32 - addr % 32) % 32) / sizeof(float), stride);
+  for (int k = 0; k < 6; ++k) std::fill(cols_.col[k] + n, cols_.col[k] + stride, 0.0f);
 }
 
 namespace {

@@ -88,22 +88,19 @@ template <bool Self>
 }
 
 [[gnu::target("avx2")]] void rowMasksAvx2(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
-  // The six column starts in registers: indexing from f.c recomputes k * stride in the loop.
-  const float* const cl[3] = {f.lo(0), f.lo(1), f.lo(2)};
-  const float* const ch[3] = {f.hi(0), f.hi(1), f.hi(2)};
   for (std::uint32_t i = 0; i < n; ++i) {
     __m256 lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
-      lo[k] = _mm256_set1_ps(cl[k][i]);
-      hi[k] = _mm256_set1_ps(ch[k][i]);
+      lo[k] = _mm256_set1_ps(f.lo(k)[i]);
+      hi[k] = _mm256_set1_ps(f.hi(k)[i]);
     }
     std::uint64_t m = 0;
     for (std::uint32_t j = (i + 1) & ~7u; j < n; j += 8) {
       __m256 hit = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
       for (int k = 0; k < 3; ++k)
         hit = _mm256_and_ps(
-            hit, _mm256_and_ps(_mm256_cmp_ps(lo[k], _mm256_load_ps(ch[k] + j), _CMP_LE_OQ),
-                               _mm256_cmp_ps(_mm256_load_ps(cl[k] + j), hi[k], _CMP_LE_OQ)));
+            hit, _mm256_and_ps(_mm256_cmp_ps(lo[k], _mm256_load_ps(f.hi(k) + j), _CMP_LE_OQ),
+                               _mm256_cmp_ps(_mm256_load_ps(f.lo(k) + j), hi[k], _CMP_LE_OQ)));
       m |= std::uint64_t(_mm256_movemask_ps(hit)) << j;
     }
     rows[i] = m & ((~std::uint64_t(0) << i) << 1);

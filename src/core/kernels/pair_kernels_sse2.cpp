@@ -19,20 +19,18 @@ inline std::uint64_t above(std::uint32_t i) {
 }
 
 void rowMasksSse2(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
-  const float* const cl[3] = {f.lo(0), f.lo(1), f.lo(2)};  // as in rowMasksAvx2
-  const float* const ch[3] = {f.hi(0), f.hi(1), f.hi(2)};
   for (std::uint32_t i = 0; i < n; ++i) {
     __m128 lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
-      lo[k] = _mm_set1_ps(cl[k][i]);
-      hi[k] = _mm_set1_ps(ch[k][i]);
+      lo[k] = _mm_set1_ps(f.lo(k)[i]);
+      hi[k] = _mm_set1_ps(f.hi(k)[i]);
     }
     std::uint64_t m = 0;
     for (std::uint32_t j = (i + 1) & ~3u; j < n; j += 4) {
       __m128 hit = _mm_castsi128_ps(_mm_set1_epi32(-1));
       for (int k = 0; k < 3; ++k)
-        hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmple_ps(lo[k], _mm_load_ps(ch[k] + j)),
-                                         _mm_cmple_ps(_mm_load_ps(cl[k] + j), hi[k])));
+        hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmple_ps(lo[k], _mm_load_ps(f.hi(k) + j)),
+                                         _mm_cmple_ps(_mm_load_ps(f.lo(k) + j), hi[k])));
       m |= std::uint64_t(_mm_movemask_ps(hit)) << j;
     }
     rows[i] = m & above(i);
