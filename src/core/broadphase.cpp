@@ -115,7 +115,7 @@ template <typename S>
 void Broadphase<S>::maintain() {
   if (policy_.dueAfterChange(tree_))
     rebuild();
-  else
+  else if (tree_.sparse())
     tree_.compactIfSparse(ids());
 }
 
@@ -222,7 +222,7 @@ template <typename S>
 void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
   if (regroupDue() || policy_.dueAfterUpdate(tree_))
     rebuild();
-  else
+  else if (tree_.sparse())
     tree_.compactIfSparse(ids());
   if (!keep) return;
   // Past a quarter of the objects moved, keeping the list would cost more than it saves: a

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/cube_tree.h"
@@ -209,12 +210,13 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
   // refit every cube in one pass, which costs about as much as refitting 1/32 of the paths.
   const std::size_t path_limit = std::max<std::size_t>(8, tree_.size() / 32);
   std::size_t refits = 0;
-  const auto pass = [&](Item<S>* items, std::uint32_t n, BoxKind home) {
+  // Margins are rare: without them the loop reads no per-id margin.
+  const auto pass = [&](Item<S>* items, std::uint32_t n, BoxKind home, auto margins) {
     for (std::uint32_t p = 0; p < n; ++p) {
       Item<S>& it = items[p];
       if (it.obj == nullptr) continue;
       read(it.obj, b);
-      b = grown(b, it.id);
+      if constexpr (decltype(margins)::value) b = grown(b, it.id);
       if (sameBox(it.box, b)) continue;  // unmoved: same kind, nothing to refit
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {
@@ -229,8 +231,14 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
       }
     }
   };
-  pass(tree_.slots(), tree_.slotCount(), BoxKind::finite);
-  pass(unbounded_.data(), std::uint32_t(unbounded_.size()), BoxKind::unbounded);
+  const auto passes = [&](auto margins) {
+    pass(tree_.slots(), tree_.slotCount(), BoxKind::finite, margins);
+    pass(unbounded_.data(), std::uint32_t(unbounded_.size()), BoxKind::unbounded, margins);
+  };
+  if (any_margin_)
+    passes(std::true_type{});
+  else
+    passes(std::false_type{});
   if (refits > path_limit) tree_.refitAll();
   for (const auto& [id, box] : crossers) {
     Object* const obj = table_.object(id);

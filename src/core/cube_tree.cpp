@@ -714,9 +714,8 @@ void CubeTree<S>::splitCrowded(std::uint32_t top, IdArrays ids) {
 
 template <typename S>
 void CubeTree<S>::compactIfSparse(IdArrays ids) {
+  if (!sparse()) return;
   const std::size_t live_nodes = nodes_.size() - dead_nodes_;
-  if (!(dead_items_ > 64 && dead_items_ > live_) && !(dead_nodes_ > 64 && dead_nodes_ > live_nodes))
-    return;
   // Re-lay the same tree depth-first: same cubes, same leaves, no dead slots.
   NodeArray nodes;
   std::vector<std::uint32_t> parents;

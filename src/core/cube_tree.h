@@ -55,7 +55,13 @@ class CubeTree {
   bool grouped() const { return !group_.empty(); }
   /// Takes the object at `slot` out of its leaf; an emptied leaf merges its sibling upwards.
   void remove(std::uint32_t slot, IdArrays ids);
-  /// Re-lays the tree without its dead cubes and slots when they outnumber the live ones.
+  /// Whether dead cubes or slots outnumber the live ones (and are more than 64).
+  bool sparse() const {
+    const std::size_t live_nodes = nodes_.size() - dead_nodes_;
+    return (dead_items_ > 64 && dead_items_ > live_) ||
+           (dead_nodes_ > 64 && dead_nodes_ > live_nodes);
+  }
+  /// Re-lays the tree without its dead cubes and slots if sparse().
   void compactIfSparse(IdArrays ids);
   /// Forgets everything.
   void clear();
