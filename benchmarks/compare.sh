@@ -6,6 +6,9 @@
 # (default 5) and CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) set the work;
 # CUBE_COMPARE_REUSE=1 runs the binaries of the last run again without building.
 # Rounds alternate the two binaries, so that a change in the machine's load hits both alike.
+# Each case gets the ratio of the medians of its rounds and the ratio of their minimums: load
+# from elsewhere on the machine only ever adds time, so the fastest round is the one least
+# disturbed, and a case is called slower only if both ratios say so.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 base=${1:?usage: compare.sh BASE [HEAD]}
@@ -65,15 +68,24 @@ for side in times:
                 scale = {"ns": 1e-3, "us": 1.0, "ms": 1e3, "s": 1e6}[b["time_unit"]]
                 times[side].setdefault(b["name"], []).append(b["real_time"] * scale)
 names = [n for n in times["before"] if n in times["after"]]
-print(f"\n| case | before (us, median of {rounds}) | after | after / before |")
-print("|---|---|---|---|")
+print(f"\n| case | before (us): median / min of {rounds} | after: median / min | after / before: medians | minimums |")
+print("|---|---|---|---|---|")
 worst = 0.0
+slower = {"median": 0, "min": 0, "both": 0}
 for n in names:
-    a = statistics.median(times["before"][n])
-    b = statistics.median(times["after"][n])
-    worst = max(worst, b / a)
-    print(f"| {n.replace('/manual_time', '')} | {a:.2f} | {b:.2f} | {b / a:.3f} |")
-print(f"\nslowest change: after / before = {worst:.3f}")
+    b, a = times["before"][n], times["after"][n]
+    med = statistics.median(a) / statistics.median(b)
+    low = min(a) / min(b)
+    worst = max(worst, min(med, low))
+    slower["median"] += med > 1.05
+    slower["min"] += low > 1.05
+    slower["both"] += med > 1.05 and low > 1.05
+    name = n.replace("/manual_time", "")
+    print(f"| {name} | {statistics.median(b):.2f} / {min(b):.2f} | "
+          f"{statistics.median(a):.2f} / {min(a):.2f} | {med:.3f} | {low:.3f} |")
+print(f"\n{len(names)} cases; more than 5% slower by the medians: {slower['median']}, "
+      f"by the minimums: {slower['min']}, by both: {slower['both']}")
+print(f"slowest change (the smaller of the two ratios): {worst:.3f}")
 missing = sorted(set(times["before"]) ^ set(times["after"]))
 if missing:
     print("cases in one run only:", ", ".join(missing))
