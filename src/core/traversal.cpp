@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -232,19 +233,26 @@ bool allPairs(const View<S>& v, const Policy& p) {
     hit_rows[h] = i;
     h += rows[i] != 0;
   }
-  for (std::uint32_t r = 0; r < h; ++r) {
-    const std::uint32_t i = hit_rows[r];
-    const std::uint64_t row = p.passing(
-        rows[i], v.items, [&](unsigned) { return slot[i]; }, v.items,
-        [&](unsigned j) { return slot[j]; });
-    for (std::uint64_t m = row; m != 0; m &= m - 1) {
-      const std::uint32_t j = static_cast<std::uint32_t>(__builtin_ctzll(m));
-      const Item<S>& x = v.items[slot[i]];
-      const Item<S>& y = v.items[slot[j]];
-      if (p.touches(x, y) && p.reportPassed(x, y)) return true;
+  // As in reportLoop, scenes without a gate get a loop without its rules.
+  const auto calls = [&](auto gated) {
+    for (std::uint32_t r = 0; r < h; ++r) {
+      const std::uint32_t i = hit_rows[r];
+      std::uint64_t row = rows[i];
+      if constexpr (decltype(gated)::value)
+        row = p.passing(
+            row, v.items, [&](unsigned) { return slot[i]; }, v.items,
+            [&](unsigned j) { return slot[j]; });
+      for (std::uint64_t m = row; m != 0; m &= m - 1) {
+        const std::uint32_t j = static_cast<std::uint32_t>(__builtin_ctzll(m));
+        const Item<S>& x = v.items[slot[i]];
+        const Item<S>& y = v.items[slot[j]];
+        if (!p.touches(x, y)) continue;
+        if (decltype(gated)::value ? p.reportPassed(x, y) : p.reportUngated(x, y)) return true;
+      }
     }
-  }
-  return false;
+    return false;
+  };
+  return p.gate != nullptr ? calls(std::true_type{}) : calls(std::false_type{});
 }
 
 template <typename S, class Counter>
