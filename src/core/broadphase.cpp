@@ -133,35 +133,36 @@ void Broadphase<S>::add(Object* obj, const Box<S>& box) {
 
 template <typename S>
 void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_t n) {
-  // Entries registered already, or earlier in the batch, are skipped by the table.
-  std::vector<ObjectId> new_ids;
-  const std::size_t added = table_.addBatch(objs, n, new_ids);
+  // Entries registered already, or earlier in the batch, are skipped by the table. The new ones
+  // are sorted on the way: bounded ones for the build, unbounded ones (rare: no allocation
+  // unless there are some) for their list.
+  std::vector<Item<S>> bounded, loose;
+  bounded.reserve(n);
+  const std::size_t added = table_.addBatch(objs, n, [&](std::size_t i, ObjectId id) {
+    const Item<S> item{grown(boxes[i], id), objs[i], kNone, id};
+    if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded)
+      loose.push_back(item);
+    else
+      bounded.push_back(item);
+  });
   if (added == 0) return;
   pairs_.invalidate();
   if (added < size() - added) {
     // A small batch into a large manager: insertions beat a build.
-    for (std::size_t i = 0; i < n; ++i)
-      if (new_ids[i] != kNone) {
-        place(new_ids[i], objs[i], grown(boxes[i], new_ids[i]));
+    for (const std::vector<Item<S>>* items : {&bounded, &loose})
+      for (const Item<S>& it : *items) {
+        place(it.id, it.obj, it.box);
         maintain();
       }
     return;
   }
   // One build over everything.
-  std::vector<Item<S>> extra;
-  extra.reserve(added);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (new_ids[i] == kNone) continue;
-    const Item<S> item{grown(boxes[i], new_ids[i]), objs[i], kNone, new_ids[i]};
-    if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded) {
-      table_.setLocation(item.id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
-      unbounded_.push_back(item);
-    } else {
-      extra.push_back(item);
-    }
+  for (const Item<S>& it : loose) {
+    table_.setLocation(it.id, std::uint32_t(unbounded_.size()) | kUnboundedBit);
+    unbounded_.push_back(it);
   }
   unbounded_node_.count = std::uint32_t(unbounded_.size());
-  rebuild(extra);
+  rebuild(bounded);
 }
 
 template <typename S>

@@ -282,7 +282,10 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
   root_ = kNone;
   area_ = 0;
   if (n > 0) {
-    std::vector<BuildRecord> rec(n), scratch(n);
+    // The records and the selection's scratch space in one allocation.
+    std::vector<BuildRecord> records(2 * std::size_t(n));
+    BuildRecord* rec = records.data();
+    BuildRecord* scratch = rec + n;
     std::uint32_t r = 0;
     for (std::uint32_t p = 0; p < old_slots + extra.size(); ++p) {
       const Item<S>& it = itemAt(p);
@@ -297,15 +300,16 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
     std::vector<Group> rg;
     if (ids.group != nullptr) {
       std::uint32_t start[kMixedGroup + 2] = {};
-      for (const BuildRecord& x : rec) ++start[ids.group[itemAt(x.item).id] + 1];
+      for (const BuildRecord* x = rec; x != rec + n; ++x)
+        ++start[ids.group[itemAt(x->item).id] + 1];
       for (int g = 0; g <= kMixedGroup; ++g) start[g + 1] += start[g];
       rg.resize(n);
-      for (const BuildRecord& x : rec) {
-        const Group g = ids.group[itemAt(x.item).id];
+      for (const BuildRecord* x = rec; x != rec + n; ++x) {
+        const Group g = ids.group[itemAt(x->item).id];
         rg[start[g]] = g;
-        scratch[start[g]++] = x;
+        scratch[start[g]++] = *x;
       }
-      rec.swap(scratch);
+      std::swap(rec, scratch);
     }
     // Every lower child holds a multiple of leaf_size objects (splitCount), so the leaves are
     // full but one: at most 2 ceil(n / leaf_size) - 1 cubes, fewer under max_depth. Reserving
@@ -328,13 +332,13 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
           const std::uint32_t e = b + nodes_[cube].count;
           // The cube's sides: the union of its objects' rounded bounds, which is what refitting
           // makes of them (rounding out is monotonic), so no refit follows the build.
-          unionOfRecords(rec.data() + b, rec.data() + e, nodes_[cube]);
+          unionOfRecords(rec + b, rec + e, nodes_[cube]);
           // Groups apart first, even in a small cube: a leaf of one group is one whose pairs
           // need no filter test.
           const bool mixed = !rg.empty() && rg[b] != rg[e - 1];
           if ((e - b <= static_cast<std::uint32_t>(config_.leaf_size) && !mixed) ||
               !canSplit(depth)) {
-            sortLeaf(rec.data() + b, rec.data() + e);
+            sortLeaf(rec + b, rec + e);
             return Step::skip;
           }
           std::uint32_t m;
@@ -342,8 +346,7 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
             m = groupBoundary(rg.data(), b, e);
           } else {
             m = b + splitCount(e - b, config_.leaf_size);
-            splitRecords(rec.data() + b, rec.data() + m, rec.data() + e, nodes_[cube],
-                         scratch.data() + b);
+            splitRecords(rec + b, rec + m, rec + e, nodes_[cube], scratch + b);
           }
           addChildren(cube, b, m, e);
           return Step::open;

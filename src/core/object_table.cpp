@@ -12,23 +12,11 @@
 namespace cube {
 namespace detail {
 
-namespace {
-
-std::size_t hashPtr(const void* p) {
-  std::uint64_t x = reinterpret_cast<std::uintptr_t>(p);
-  x ^= x >> 33;
-  x *= 0xff51afd7ed558ccdULL;
-  x ^= x >> 33;
-  return static_cast<std::size_t>(x);
-}
-
-}  // namespace
-
 template <typename S>
 ObjectId ObjectTable<S>::find(const Object* obj) const {
   if (index_.empty()) return kNone;
   const std::size_t mask = index_.size() - 1;
-  for (std::size_t i = hashPtr(obj) & mask;; i = (i + 1) & mask) {
+  for (std::size_t i = hashPointer(obj) & mask;; i = (i + 1) & mask) {
     const std::uint32_t e = index_[i];
     if (e == 0) return kNone;
     if (obj_[e - 1] == obj) return e - 1;
@@ -38,7 +26,7 @@ ObjectId ObjectTable<S>::find(const Object* obj) const {
 template <typename S>
 void ObjectTable<S>::put(ObjectId id) {
   const std::size_t mask = index_.size() - 1;
-  std::size_t i = hashPtr(obj_[id]) & mask;
+  std::size_t i = hashPointer(obj_[id]) & mask;
   while (index_[i] != 0) i = (i + 1) & mask;
   index_[i] = id + 1;
 }
@@ -55,48 +43,14 @@ void ObjectTable<S>::grow(std::size_t objects) {
 }
 
 template <typename S>
-std::uint32_t ObjectTable<S>::nextSeq() {
-  if (next_seq_ == kNone) {
-    // Renumber in registration order; happens once every four billion registrations.
-    std::vector<ObjectId> live;
-    for (ObjectId id = 0; id < obj_.size(); ++id)
-      if (obj_[id] != nullptr) live.push_back(id);
-    std::sort(live.begin(), live.end(), [&](ObjectId a, ObjectId b) { return seq_[a] < seq_[b]; });
-    for (std::size_t i = 0; i < live.size(); ++i) seq_[live[i]] = static_cast<std::uint32_t>(i);
-    next_seq_ = static_cast<std::uint32_t>(live.size());
-  }
-  return next_seq_++;
-}
-
-template <typename S>
-ObjectId ObjectTable<S>::take(Object* obj) {
-  const std::uint32_t seq = nextSeq();  // before obj is in: a renumbering counts live ids only
-  ObjectId id;
-  if (!free_.empty()) {
-    id = free_.back();
-    free_.pop_back();
-  } else {
-    id = static_cast<ObjectId>(obj_.size());
-    obj_.push_back(nullptr);
-    seq_.push_back(0);
-    loc_.push_back(kNone);
-    if (!filter_.empty()) {
-      filter_.emplace_back();
-      group_.push_back(0);
-    }
-    if (!margin_.empty()) margin_.push_back(S(-1));
-  }
-  obj_[id] = obj;
-  seq_[id] = seq;
-  loc_[id] = kNone;
-  if (!filter_.empty()) {
-    filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
-    group_[id] = 0;
-    ++group_users_[0];
-  }
-  if (!margin_.empty()) margin_[id] = S(-1);
-  ++live_;
-  return id;
+void ObjectTable<S>::renumber() {
+  // Registration order kept, numbers from 0: happens once every four billion registrations.
+  std::vector<ObjectId> live;
+  for (ObjectId id = 0; id < obj_.size(); ++id)
+    if (obj_[id] != nullptr) live.push_back(id);
+  std::sort(live.begin(), live.end(), [&](ObjectId a, ObjectId b) { return seq_[a] < seq_[b]; });
+  for (std::size_t i = 0; i < live.size(); ++i) seq_[live[i]] = static_cast<std::uint32_t>(i);
+  next_seq_ = static_cast<std::uint32_t>(live.size());
 }
 
 template <typename S>
@@ -111,13 +65,8 @@ ObjectId ObjectTable<S>::add(Object* obj) {
 }
 
 template <typename S>
-std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n,
-                                     std::vector<ObjectId>& ids) {
-  ids.assign(n, kNone);
-  std::size_t added = 0;
-  // Sized once for the whole batch; each pointer is then looked up and put with one probe
-  // sequence, which also finds the batch's own repeats.
-  grow(live_ + n);
+void ObjectTable<S>::reserve(std::size_t n) {
+  grow(live_ + n);  // only ever grows
   const std::size_t fresh = n > free_.size() ? n - free_.size() : 0;
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
@@ -127,16 +76,6 @@ std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n,
     group_.reserve(group_.size() + fresh);
   }
   if (!margin_.empty()) margin_.reserve(margin_.size() + fresh);
-  const std::size_t mask = index_.size() - 1;
-  for (std::size_t i = 0; i < n; ++i) {
-    std::size_t h = hashPtr(objs[i]) & mask;
-    while (index_[h] != 0 && obj_[index_[h] - 1] != objs[i]) h = (h + 1) & mask;
-    if (index_[h] != 0) continue;  // registered already, or earlier in the batch
-    ids[i] = take(objs[i]);
-    index_[h] = ids[i] + 1;
-    ++added;
-  }
-  return added;
 }
 
 template <typename S>
@@ -144,10 +83,10 @@ void ObjectTable<S>::remove(ObjectId id) {
   assert(id < obj_.size() && obj_[id] != nullptr);
   // Backward-shift deletion keeps probe chains unbroken without tombstones.
   const std::size_t mask = index_.size() - 1;
-  std::size_t hole = hashPtr(obj_[id]) & mask;
+  std::size_t hole = hashPointer(obj_[id]) & mask;
   while (index_[hole] != id + 1) hole = (hole + 1) & mask;
   for (std::size_t j = (hole + 1) & mask; index_[j] != 0; j = (j + 1) & mask) {
-    const std::size_t home = hashPtr(obj_[index_[j] - 1]) & mask;
+    const std::size_t home = hashPointer(obj_[index_[j] - 1]) & mask;
     // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
     const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
     if (!stays) {

@@ -26,9 +26,12 @@ class ObjectTable {
   /// Registers `obj` (not registered yet): a fresh or recycled id, the next registration number.
   ObjectId add(Object* obj);
   /// Registers the entries of a batch (not null) that are neither registered nor repeated
-  /// earlier in it, in batch order, the map sized once. ids[i] becomes entry i's new id, or
-  /// kNone if it was skipped. Returns the number registered.
-  std::size_t addBatch(Object* const* objs, std::size_t n, std::vector<ObjectId>& ids);
+  /// earlier in it, in batch order, the map sized once, and calls `added(i, id)` for each with
+  /// its new id (nothing for the skipped ones). Returns the number registered. Inline, with the
+  /// caller's `added` inlined too: a build of a few dozen objects is a few microseconds, and a
+  /// call per entry or an array of ids handed back showed in it.
+  template <class Added>
+  std::size_t addBatch(Object* const* objs, std::size_t n, Added&& added);
   /// Forgets a registered id; it will be handed out again.
   void remove(ObjectId id);
   /// Forgets everything (keeps no memory).
@@ -81,8 +84,14 @@ class ObjectTable {
   bool validate(std::string* why) const;
 
  private:
-  std::uint32_t nextSeq();
-  ObjectId take(Object* obj);  // a fresh or recycled id for obj, not yet in the map
+  std::uint32_t nextSeq() {
+    if (__builtin_expect(next_seq_ == kNone, 0)) renumber();
+    return next_seq_++;
+  }
+  void renumber();
+  void reserve(std::size_t n);  // room for n more ids: the map and the per-id arrays
+  // A fresh or recycled id for obj, not yet in the map. Inline: addBatch calls it per entry.
+  ObjectId take(Object* obj);
   void put(ObjectId id);
   void grow(std::size_t objects);  // sizes the map for `objects` live ids and puts them all
   void leaveGroup(ObjectId id);
@@ -104,6 +113,66 @@ class ObjectTable {
   std::size_t live_ = 0;
   std::uint32_t next_seq_ = 0;
 };
+
+/// The map's hash of a pointer (a 64-bit finalizer: pointers differ mostly in middle bits).
+inline std::size_t hashPointer(const void* p) {
+  std::uint64_t x = reinterpret_cast<std::uintptr_t>(p);
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdULL;
+  x ^= x >> 33;
+  return static_cast<std::size_t>(x);
+}
+
+template <typename S>
+inline ObjectId ObjectTable<S>::take(Object* obj) {
+  const std::uint32_t seq = nextSeq();  // before obj is in: a renumbering counts live ids only
+  ObjectId id;
+  if (free_.empty()) {
+    id = static_cast<ObjectId>(obj_.size());
+    obj_.push_back(obj);
+    seq_.push_back(seq);
+    loc_.push_back(kNone);
+    if (!filter_.empty()) {
+      filter_.emplace_back();
+      group_.push_back(0);
+    }
+    if (!margin_.empty()) margin_.push_back(S(-1));
+  } else {
+    id = free_.back();
+    free_.pop_back();
+    obj_[id] = obj;
+    seq_[id] = seq;
+    loc_[id] = kNone;
+    if (!filter_.empty()) {
+      filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
+      group_[id] = 0;
+    }
+    if (!margin_.empty()) margin_[id] = S(-1);
+  }
+  if (!filter_.empty()) ++group_users_[0];
+  ++live_;
+  return id;
+}
+
+template <typename S>
+template <class Added>
+inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, Added&& added) {
+  // Sized once for the whole batch; each pointer is then looked up and put with one probe
+  // sequence, which also finds the batch's own repeats.
+  reserve(n);
+  std::size_t count = 0;
+  const std::size_t mask = index_.size() - 1;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t h = hashPointer(objs[i]) & mask;
+    while (index_[h] != 0 && obj_[index_[h] - 1] != objs[i]) h = (h + 1) & mask;
+    if (index_[h] != 0) continue;  // registered already, or earlier in the batch
+    const ObjectId id = take(objs[i]);
+    index_[h] = id + 1;
+    ++count;
+    added(i, id);
+  }
+  return count;
+}
 
 extern template class ObjectTable<float>;
 extern template class ObjectTable<double>;
