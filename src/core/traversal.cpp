@@ -400,10 +400,10 @@ template <typename S, class Policy, bool Groups>
 struct ObjectVisitor {
   using State = typename Policy::Key;
   static constexpr bool kOrdered = Policy::kOrdered;
-  const View<S>& tree;
+  const View<S> tree;  // by value, as in PairVisitor
   const Node& qn;
   const Item<S>& q;
-  const Policy& p;
+  const Policy p;
 
   static bool before(State x, State y) { return Policy::before(x, y); }
   bool keep(State key) const { return p.keep(key); }
@@ -440,9 +440,13 @@ template <typename S, class Policy, bool Groups>
 struct PairVisitor {
   using State = typename Policy::Key;
   static constexpr bool kOrdered = Policy::kOrdered;
-  const View<S>& va;
-  const View<S>& vb;
-  const Policy& p;
+  // The views and the policy by value: a walk reads their pointers at every step, and after
+  // each callback (an opaque call) it must read them again; a reference would add a load to
+  // each such chain. (Policies are immutable during a walk; what they change sits behind
+  // pointers, so the copy shares it.)
+  const View<S> va;
+  const View<S> vb;
+  const Policy p;
 
   static bool before(State x, State y) { return Policy::before(x, y); }
   bool keep(State key) const { return p.keep(key); }

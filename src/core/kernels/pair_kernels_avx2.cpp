@@ -75,8 +75,11 @@ template <bool Self>
   std::uint64_t hits = 0;
   for (std::uint32_t i = 0; i < nx; ++i) {
     const std::uint32_t x = x0 + i;
-    __m256 hit = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-    for (int k = 0; k < 3; ++k)
+    // Started from axis 0's test, not from all ones: GCC keeps an and with an all-ones register
+    // in the loop, one more instruction on its dependency chain.
+    __m256 hit = _mm256_and_ps(_mm256_cmp_ps(_mm256_broadcast_ss(c.lo(0) + x), hi[0], _CMP_LE_OQ),
+                               _mm256_cmp_ps(lo[0], _mm256_broadcast_ss(c.hi(0) + x), _CMP_LE_OQ));
+    for (int k = 1; k < 3; ++k)
       hit = _mm256_and_ps(
           hit, _mm256_and_ps(_mm256_cmp_ps(_mm256_broadcast_ss(c.lo(k) + x), hi[k], _CMP_LE_OQ),
                              _mm256_cmp_ps(lo[k], _mm256_broadcast_ss(c.hi(k) + x), _CMP_LE_OQ)));
@@ -96,8 +99,10 @@ template <bool Self>
     }
     std::uint64_t m = 0;
     for (std::uint32_t j = (i + 1) & ~7u; j < n; j += 8) {
-      __m256 hit = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-      for (int k = 0; k < 3; ++k)
+      __m256 hit =  // from axis 0's test, as in columnHitsAvx2
+          _mm256_and_ps(_mm256_cmp_ps(lo[0], _mm256_load_ps(f.hi(0) + j), _CMP_LE_OQ),
+                        _mm256_cmp_ps(_mm256_load_ps(f.lo(0) + j), hi[0], _CMP_LE_OQ));
+      for (int k = 1; k < 3; ++k)
         hit = _mm256_and_ps(
             hit, _mm256_and_ps(_mm256_cmp_ps(lo[k], _mm256_load_ps(f.hi(k) + j), _CMP_LE_OQ),
                                _mm256_cmp_ps(_mm256_load_ps(f.lo(k) + j), hi[k], _CMP_LE_OQ)));

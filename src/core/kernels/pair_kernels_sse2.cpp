@@ -27,8 +27,10 @@ void rowMasksSse2(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
     }
     std::uint64_t m = 0;
     for (std::uint32_t j = (i + 1) & ~3u; j < n; j += 4) {
-      __m128 hit = _mm_castsi128_ps(_mm_set1_epi32(-1));
-      for (int k = 0; k < 3; ++k)
+      // Started from axis 0's test, not from all ones (see columnHitsAvx2).
+      __m128 hit = _mm_and_ps(_mm_cmple_ps(lo[0], _mm_load_ps(f.hi(0) + j)),
+                              _mm_cmple_ps(_mm_load_ps(f.lo(0) + j), hi[0]));
+      for (int k = 1; k < 3; ++k)
         hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmple_ps(lo[k], _mm_load_ps(f.hi(k) + j)),
                                          _mm_cmple_ps(_mm_load_ps(f.lo(k) + j), hi[k])));
       m |= std::uint64_t(_mm_movemask_ps(hit)) << j;
