@@ -617,9 +617,13 @@ template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
                   std::vector<std::uint64_t>& out, const PairGate<S>* gate) {
   const RecordIds<S> sink{&out};
+  using Policy = CollidePolicy<S, NoCount, RecordIds<S>>;
   if (self && a.slots <= all_pairs_limit)
-    allPairs(a, CollidePolicy<S, NoCount, RecordIds<S>>{sink, NoCount{}, &pairKernels<S>(), nullptr,
-                                                        gate});
+    allPairs(a, Policy{sink, NoCount{}, &pairKernels<S>(), nullptr, gate});
+  else if (gate == nullptr && !self && b.root != kNone && b.nodes[b.root].count == 1)
+    // One object without a gate (the pair list's query per moved object): straight into the
+    // walk, as collideObject, without the set-up pairs of trees need.
+    descend<false>(a, b, false, Policy{sink, NoCount{}, nullptr});
   else
     collideWith(a, b, self, sink, nullptr, gate);
 }
