@@ -109,6 +109,13 @@ Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionO
   const S spheres = (ta.c - tb.c).norm() - ta.r - tb.r;
   if ((ta.sphere && tb.sphere) || spheres > enough + margin) return {spheres, margin};
   if (!ta.withBox() || !tb.withBox()) return {spheres, margin};
+  // Each box holds the ball of its smallest half extent about its centre, so no gap of the
+  // boxes exceeds the gap of those balls; when that cannot clear `enough`, the boxes' tests
+  // could not settle the pair and are skipped (most pairs a distance search offers).
+  const S inner = (ta.c - tb.c).norm() - (ta.sphere ? ta.r : ta.e.minCoeff()) -
+                  (tb.sphere ? tb.r : tb.e.minCoeff());
+  if (enough < std::numeric_limits<S>::infinity() && !(inner > enough + margin))
+    return {spheres, margin};
   if (ta.sphere) return {std::max(spheres, pointBoxDistance(ta.c, tb) - ta.r), margin};
   if (tb.sphere) return {std::max(spheres, pointBoxDistance(tb.c, ta) - tb.r), margin};
   return {std::max(spheres, boxGap(ta, tb)), margin};

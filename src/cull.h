@@ -22,8 +22,9 @@ namespace detail {
 /// the other's oriented box, and the separating-axis gaps of the two oriented boxes of the
 /// geometries' local AABBs (exact along the axes for boxes). The spheres come from what FCL keeps
 /// per geometry (aabb_center, aabb_radius, as computeLocalAABB() sets them) and the object's
-/// transform; when their gap alone exceeds enough + margin, the boxes are not looked at (the
-/// bound is then the spheres' gap).
+/// transform; when their gap alone exceeds enough + margin, the boxes are not looked at, nor
+/// when `enough` is finite and the boxes' bound could not exceed enough + margin (each box holds
+/// the ball of its smallest half extent); the bound is then the spheres' gap.
 template <typename S>
 struct Separation {
   S lower_bound;
