@@ -266,11 +266,16 @@ struct DistancePolicy {
   const PairGate<S>* gate = nullptr;  // null: every pair near enough is called
   // Boxes that overlap are always worth a visit: with a signed-distance callback the best may
   // already be <= 0 and a pair may still penetrate deeper.
-  // A square that overflows (gaps beyond 1.3e154) is infinite: pruned below a finite bound, kept
-  // while the bound's own square overflows too (the search has not found anything yet).
+  // Keys are finite (cubeGap2's always are; exact boxes' go through gapKey), so one comparison
+  // with the bound's square decides, and a bound whose square overflows keeps every key.
   bool keep(Key sq) const {
-    const double b2 = double(best) * double(best);
-    return sq == 0 || (best > 0 && (sq < b2 || b2 == std::numeric_limits<double>::infinity()));
+    const double b = double(best);
+    return sq == 0 || (b > 0 && sq < b * b);
+  }
+  // The squared gap of two exact boxes as a key: a square that overflows (gaps beyond 1.3e154)
+  // becomes the largest double, pruned by any bound below 1.3e154 and kept by any above.
+  static Key gapKey(const Box<S>& x, const Box<S>& y) {
+    return std::min(boxGap2(x, y), std::numeric_limits<double>::max());
   }
   bool enter(const Node& a, const Node& b, Key& key) const {
     count.test();
@@ -283,11 +288,11 @@ struct DistancePolicy {
   // objects, and skipping it changes no call.
   bool reaches(const Item<S>& x, const Box<S>& cube) const {
     count.test();
-    return keep(boxGap2(x.box, cube));
+    return keep(gapKey(x.box, cube));
   }
   bool leaf(const Item<S>& x, const Item<S>& y) const {
     count.test();
-    return keep(boxGap2(x.box, y.box)) && x.obj != y.obj && call(x, y);
+    return keep(gapKey(x.box, y.box)) && x.obj != y.obj && call(x, y);
   }
   bool call(const Item<S>& x, const Item<S>& y) const {
     if (gate != nullptr)
@@ -304,7 +309,8 @@ struct DistancePolicy {
 // as much as they can, and fewer narrow-phase calls follow. Small leaves only (a depth-capped
 // leaf may be large; it is scanned in order).
 template <typename S, class Policy>
-bool leafNearestFirst(const View<S>& tree, const Node& n, const Item<S>& q, const Policy& p) {
+[[gnu::always_inline]] inline bool leafNearestFirst(const View<S>& tree, const Node& n,
+                                                    const Item<S>& q, const Policy& p) {
   constexpr std::uint32_t kMax = 16;
   typename Policy::Key key[kMax];
   std::uint32_t order[kMax];
@@ -312,7 +318,7 @@ bool leafNearestFirst(const View<S>& tree, const Node& n, const Item<S>& q, cons
   for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
     if (tree.items[i].obj == q.obj) continue;
     p.count.test();
-    const auto k = boxGap2(tree.items[i].box, q.box);
+    const auto k = Policy::gapKey(tree.items[i].box, q.box);
     std::uint32_t j = m++;
     for (; j > 0 && key[j - 1] > k; --j) {
       key[j] = key[j - 1];
