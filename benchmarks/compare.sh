@@ -16,6 +16,7 @@
 # disturbed). A case counts as slower if the ratio of medians and the median paired ratio
 # both exceed 1.05.
 set -euo pipefail
+shopt -s inherit_errexit  # a failed build inside $(build ...) stops the script
 cd "$(dirname "$0")/.."
 base=${1:?usage: compare.sh BASE [HEAD]}
 head=${2:-}
@@ -36,6 +37,9 @@ build() {
   else
     src=$(pwd)
   fi
+  # A fresh build directory: one configured from another source tree (the work tree, or a
+  # worktree since removed) would make CMake refuse the new one and build the old.
+  rm -rf "$work/build-$name"
   cmake -S "$src" -B "$work/build-$name" -DCMAKE_BUILD_TYPE=Release \
     -DCUBE_COLLISION_BUILD_TESTS=OFF -DCUBE_COLLISION_BUILD_EXAMPLES=OFF >/dev/null
   cmake --build "$work/build-$name" -j2 --target cube_bench >/dev/null
