@@ -84,11 +84,18 @@ struct Slots {
   std::vector<std::unique_ptr<Obj<S>>> owned;
   std::vector<Item<S>> items;
 
-  Slots(std::size_t n, std::uint32_t seed) {
+  cube::detail::Node
+      bounds{};  // the root cube over the live boxes (what the views' walks start at)
+
+  // With `near`, the awkward cases below are made against near's boxes as well as earlier ones.
+  Slots(std::size_t n, std::uint32_t seed, const Slots* near = nullptr) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(0, 1);
     auto geom = std::make_shared<fcl::Box<S>>(1, 1, 1);
     std::vector<Box<S>> live;
+    if (near != nullptr)
+      for (const Item<S>& it : near->items)
+        if (it.obj != nullptr) live.push_back(it.box);
     while (items.size() < n) {
       Item<S> it{};
       if (u(rng) < 0.15) {  // a dead slot
@@ -130,23 +137,41 @@ struct Slots {
       live.push_back(it.box);
       items.push_back(it);
     }
+    Box<S> all{};
+    for (int k = 0; k < 3; ++k) {
+      all.lo[k] = std::numeric_limits<S>::infinity();
+      all.hi[k] = -std::numeric_limits<S>::infinity();
+    }
+    for (const Item<S>& it : items)
+      if (it.obj != nullptr)
+        for (int k = 0; k < 3; ++k) {
+          all.lo[k] = std::min(all.lo[k], it.box.lo[k]);
+          all.hi[k] = std::max(all.hi[k], it.box.hi[k]);
+        }
+    cube::detail::roundOut(all, bounds.lo, bounds.hi);
+    bounds.count = 1;
   }
 
   View<S> view() const {
-    return View<S>{nullptr, items.data(), 0, static_cast<std::uint32_t>(items.size())};
+    const bool any =
+        std::any_of(items.begin(), items.end(), [](const Item<S>& it) { return it.obj; });
+    return View<S>{&bounds, items.data(), any ? 0 : cube::detail::kNone,
+                   static_cast<std::uint32_t>(items.size())};
   }
 
-  // Every overlapping pair of live slots, in slot order.
-  Pairs<S> bruteForce() const {
+  // Every overlapping pair of live slots, in slot order; with `other`, every pair of a live slot
+  // here and one there, row by row in this one's slot order.
+  Pairs<S> bruteForce(const Slots* other = nullptr) const {
+    const std::vector<Item<S>>& ys = other ? other->items : items;
     Pairs<S> out;
     for (std::size_t i = 0; i < items.size(); ++i)
-      for (std::size_t j = i + 1; j < items.size(); ++j) {
-        if (items[i].obj == nullptr || items[j].obj == nullptr) continue;
+      for (std::size_t j = other ? 0 : i + 1; j < ys.size(); ++j) {
+        if (items[i].obj == nullptr || ys[j].obj == nullptr) continue;
         bool hit = true;
         for (int k = 0; k < 3; ++k)
-          hit = hit && items[i].box.lo[k] <= items[j].box.hi[k] &&
-                items[j].box.lo[k] <= items[i].box.hi[k];
-        if (hit) out.emplace_back(items[i].obj, items[j].obj);
+          hit =
+              hit && items[i].box.lo[k] <= ys[j].box.hi[k] && ys[j].box.lo[k] <= items[i].box.hi[k];
+        if (hit) out.emplace_back(items[i].obj, ys[j].obj);
       }
     return out;
   }
@@ -168,7 +193,8 @@ TYPED_TEST(AllPairs, EveryKernelEverySizeEqualsBruteForce) {
         const Pairs<S> expected = s.bruteForce();
         Recorder<S> r;
         cube::QueryStats st;
-        EXPECT_FALSE(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn, &st, k));
+        EXPECT_FALSE(
+            cube::detail::collideAllPairs(s.view(), s.view(), true, &r, &Recorder<S>::fn, &st, k));
         // Same pairs, in slot order (row by row).
         ASSERT_EQ(r.calls, expected) << name(k) << " n " << n << " seed " << seed;
         std::size_t live = 0;
@@ -193,7 +219,8 @@ TYPED_TEST(AllPairs, StopsWhenTheCallbackSaysSo) {
     if (!cube::detail::pairKernelAvailable(k)) continue;
     Recorder<S> r;
     r.stop_after = 5;
-    EXPECT_TRUE(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn, nullptr, k));
+    EXPECT_TRUE(
+        cube::detail::collideAllPairs(s.view(), s.view(), true, &r, &Recorder<S>::fn, nullptr, k));
     EXPECT_EQ(r.calls, Pairs<S>(expected.begin(), expected.begin() + 5)) << name(k);
   }
 }
@@ -202,8 +229,72 @@ TYPED_TEST(AllPairs, RefusesViewsBeyondTheLimit) {
   using S = TypeParam;
   const Slots<S> s(cube::detail::kAllPairsMax + 1, 3);
   Recorder<S> r;
-  EXPECT_THROW(cube::detail::collideAllPairs(s.view(), &r, &Recorder<S>::fn), std::logic_error);
+  const Slots<S> small(8, 4);
+  EXPECT_THROW(cube::detail::collideAllPairs(s.view(), s.view(), true, &r, &Recorder<S>::fn),
+               std::logic_error);
+  EXPECT_THROW(cube::detail::collideAllPairs(small.view(), s.view(), false, &r, &Recorder<S>::fn),
+               std::logic_error);
+  EXPECT_THROW(cube::detail::collideAllPairs(s.view(), small.view(), false, &r, &Recorder<S>::fn),
+               std::logic_error);
   EXPECT_TRUE(r.calls.empty());
+}
+
+// Two small views against each other (a manager against another, both small): every kernel,
+// every pair of sizes in a spread up to the limit, against brute force, in its order. The second
+// view's awkward boxes are made against the first's: faces that touch exactly, gaps below float.
+TYPED_TEST(AllPairs, TwoViewsEveryKernelEqualsBruteForce) {
+  using S = TypeParam;
+  std::size_t kernels_run = 0, pairs_seen = 0, apart = 0;
+  for (PairKernel k : kKernels) {
+    if (!cube::detail::pairKernelAvailable(k)) continue;
+    ++kernels_run;
+    for (std::size_t na : {0, 1, 5, 8, 9, 31, 64})
+      for (std::size_t nb : {0, 1, 7, 16, 30, 33, 64})
+        for (std::uint32_t seed = 1; seed <= 3; ++seed) {
+          const Slots<S> a(na, seed * 7919 + std::uint32_t(na));
+          const Slots<S> b(nb, seed * 104729 + std::uint32_t(nb), &a);
+          const Pairs<S> expected = a.bruteForce(&b);
+          Recorder<S> r;
+          cube::QueryStats st;
+          EXPECT_FALSE(cube::detail::collideAllPairs(a.view(), b.view(), false, &r,
+                                                     &Recorder<S>::fn, &st, k));
+          ASSERT_EQ(r.calls, expected)
+              << name(k) << " na " << na << " nb " << nb << " seed " << seed;
+          EXPECT_EQ(st.callbacks, expected.size());
+          EXPECT_EQ(st.cubes_visited, 0u);
+          pairs_seen += expected.size();
+          // Stopping after the first pair.
+          if (!expected.empty()) {
+            Recorder<S> first;
+            first.stop_after = 1;
+            EXPECT_TRUE(cube::detail::collideAllPairs(a.view(), b.view(), false, &first,
+                                                      &Recorder<S>::fn, nullptr, k));
+            EXPECT_EQ(first.calls, Pairs<S>(expected.begin(), expected.begin() + 1)) << name(k);
+          }
+          // The same boxes moved far apart: nothing, and no box tested beyond the roots'.
+          Slots<S> far(nb, seed * 104729 + std::uint32_t(nb), &a);
+          for (Item<S>& it : far.items)
+            for (int d = 0; d < 3; ++d) {
+              it.box.lo[d] += S(1000);
+              it.box.hi[d] += S(1000);
+            }
+          for (int d = 0; d < 3; ++d) {
+            far.bounds.lo[d] += 1000.0f;
+            far.bounds.hi[d] += 1000.0f;
+          }
+          if (a.bruteForce(&far).empty() && a.view().root == 0 && far.view().root == 0) {
+            Recorder<S> none;
+            cube::QueryStats fst;
+            EXPECT_FALSE(cube::detail::collideAllPairs(a.view(), far.view(), false, &none,
+                                                       &Recorder<S>::fn, &fst, k));
+            EXPECT_TRUE(none.calls.empty());
+            apart += fst.box_tests == 1;
+          }
+        }
+  }
+  EXPECT_GE(kernels_run, 2u);
+  EXPECT_GT(pairs_seen, 1000u);
+  EXPECT_GT(apart, 0u);  // the roots' test ended some calls at once
 }
 
 // The leaf kernels (detail::leafOverlapMask): every pair of runs of 1 to kMaskLeaf objects, self

@@ -69,12 +69,13 @@ struct Config {
   double unbounded_limit = 1e15;
 
   /// Self-collide of a scene of at most this many objects (0 to kMaxAllPairsLimit; slots left
-  /// by unregistered objects count until they are reused or compacted away) skips the cubes and
-  /// tests every pair of objects, 8 (AVX2) or 4 (SSE2) pairs per instruction, then the pairs
-  /// that pass exactly. Trade-off: the pair tests grow with the square of the scene, the walk
-  /// down the cubes only a little faster than the scene, but at a few dozen objects the walk's
-  /// fixed cost per call is the larger. 0 always walks the cubes. Same pairs either way; the
-  /// order of the callbacks differs.
+  /// by unregistered objects count until they are reused or compacted away), and collide of two
+  /// managers that both hold at most this many, skip the cubes and test every pair of objects,
+  /// 8 (AVX2) or 4 (SSE2) pairs per instruction, then the pairs that pass exactly (between two
+  /// managers, only the objects that reach the other's root cube). Trade-off: the pair tests
+  /// grow with the square of the scene, the walk down the cubes only a little faster than the
+  /// scene, but at a few dozen objects the walk's fixed cost per call is the larger. 0 always
+  /// walks the cubes. Same pairs either way; the order of the callbacks differs.
   std::size_t all_pairs_limit = 64;
   /// Upper bound of all_pairs_limit.
   static constexpr std::size_t kMaxAllPairsLimit = 64;

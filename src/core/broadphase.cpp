@@ -28,13 +28,13 @@ namespace detail {
 
 namespace {
 
-// Collide of two views; a small view against itself takes the all-pairs kernel.
+// Collide of two views; small ones (allPairsFit) take the all-pairs kernel.
 template <typename S>
 bool collideViews(std::size_t all_pairs_limit, const View<S>& a, const View<S>& b, bool self,
                   void* data, CollideFn<S> fn, QueryStats* stats,
                   const PairGate<S>* gate = nullptr) {
-  if (self && a.slots <= all_pairs_limit)
-    return collideAllPairs(a, data, fn, stats, PairKernel::best, gate);
+  if (allPairsFit(a, b, self, all_pairs_limit))
+    return collideAllPairs(a, b, self, data, fn, stats, PairKernel::best, gate);
   return collidePairs(a, b, self, data, fn, stats, gate);
 }
 
@@ -442,10 +442,10 @@ bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn
   for (const View<S>& b : {other.tree_.view(), other.unboundedView()})
     if (forObjectViews(mine, b, [&](const View<S>& x, const View<S>& y, bool) {
           if (config_.canonical_pairs) {
-            collectPairs(x, y, false, 0, found, g);
+            collectPairs(x, y, false, config_.all_pairs_limit, found, g);
             return false;
           }
-          return collidePairs(x, y, false, data, fn, stats, g);
+          return collideViews(config_.all_pairs_limit, x, y, false, data, fn, stats, g);
         }))
       return true;
   if (!config_.canonical_pairs) return false;

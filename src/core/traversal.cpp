@@ -201,34 +201,74 @@ template <bool Self, typename S, class Policy>
   return collideSmall<Self>(v.items + x0, nx, v.items + y0, ny, p, bits_pass);
 }
 
-// The all-pairs test for small scenes: the live boxes in float columns, one row mask per object
-// from the kernels, then the exact test (p.leaf) on the pairs the float test let through, in
-// slot order.
-template <typename S, class Policy>
-bool allPairs(const View<S>& v, const Policy& p) {
-  // The live slots, without a branch per slot.
-  std::uint32_t slot[kAllPairsMax];
+// The live slots of `v` (at most kAllPairsMax) whose boxes reach the cube `reach` (null: all),
+// gathered without a branch per slot, and their boxes in float columns padded with zeros to the
+// next multiple of 8 (the kernels read whole blocks of 4 or 8; no box value could be relied on
+// to overlap nothing, as an infinite box overlaps every one, so the caller drops the padding's
+// bits). Returns the number of slots gathered; `tested` gets the number of reach tests.
+template <typename S>
+std::uint32_t gatherLive(const View<S>& v, const Node* reach, std::uint32_t (&slot)[kAllPairsMax],
+                         SmallColumns& store, std::uint32_t& tested) {
   std::uint32_t n = 0;
-  for (std::uint32_t s = 0; s < v.slots; ++s) {
-    slot[n] = s;
-    n += v.items[s].obj != nullptr;
+  tested = 0;
+  if (reach == nullptr) {
+    for (std::uint32_t s = 0; s < v.slots; ++s) {
+      slot[n] = s;
+      n += v.items[s].obj != nullptr;
+    }
+  } else {
+    Box<S> r;
+    for (int k = 0; k < 3; ++k) {
+      r.lo[k] = S(reach->lo[k]);
+      r.hi[k] = S(reach->hi[k]);
+    }
+    for (std::uint32_t s = 0; s < v.slots; ++s) {
+      const bool live = v.items[s].obj != nullptr;
+      slot[n] = s;
+      tested += live;
+      n += live & overlap(v.items[s].box, r);
+    }
   }
-  SmallColumns store;
-  const Columns cols = store.columns();
   fillColumns(
-      v.items, [&](std::uint32_t i) { return slot[i]; }, n, cols, 0);
-  // The kernels read whole blocks of 4 or 8 columns; the bits of the padding are dropped below
-  // (no box value could be relied on to overlap nothing: an infinite box overlaps every one).
+      v.items, [&](std::uint32_t i) { return slot[i]; }, n, store.columns(), 0);
   store.padFrom(n);
-  const std::uint64_t live = n == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
-  p.count.tests(std::size_t(n) * (n - (n > 0)) / 2);
+  return n;
+}
+
+// The all-pairs test for small scenes, and for two small ones: the live boxes in float columns,
+// one row mask per object of `a` from the kernels, then the exact test (p.touches) on the pairs
+// the float test let through, row by row in slot order. With `self`, b is a and each unordered
+// pair comes once. Two views' objects that miss the other's root cube cannot pair and are left
+// out first: a robot amid obstacles overlaps few of them.
+template <typename S, class Policy>
+bool allPairs(const View<S>& a, const View<S>& b, bool self, const Policy& p) {
+  // As descend: two trees whose roots are apart have no pair (the usual answer of a robot
+  // away from an obstacle), for one test.
+  if (!self) {
+    if (a.root == kNone || b.root == kNone) return false;
+    typename Policy::Key key{};
+    if (!p.enter(a.nodes[a.root], b.nodes[b.root], key)) return false;
+  }
+  std::uint32_t slot_a[kAllPairsMax], tested_a = 0, tested_b = 0;
+  SmallColumns store_a;
+  const std::uint32_t na =
+      gatherLive(a, self ? nullptr : &b.nodes[b.root], slot_a, store_a, tested_a);
+  std::uint32_t slot_b_store[kAllPairsMax];
+  SmallColumns store_b_store;
+  const std::uint32_t nb =
+      self ? na : gatherLive(b, &a.nodes[a.root], slot_b_store, store_b_store, tested_b);
+  const std::uint32_t* slot_b = self ? slot_a : slot_b_store;
+  SmallColumns& store_b = self ? store_a : store_b_store;
+  const std::uint64_t live = nb == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << nb) - 1;
+  p.count.tests(self ? std::size_t(na) * (na - (na > 0)) / 2
+                     : std::size_t(tested_a) + tested_b + std::size_t(na) * nb);
   std::uint64_t rows[kAllPairsMax];
-  p.kernels->rowMasks(cols, n, rows);
+  p.kernels->rowMasks[self](store_a.columns(), na, store_b.columns(), nb, rows);
   // The rows with hits, gathered without a branch: in a sparse scene whether a row has any is
   // a coin toss for the branch predictor.
   std::uint32_t hit_rows[kAllPairsMax];
   std::uint32_t h = 0;
-  for (std::uint32_t i = 0; i < n; ++i) {
+  for (std::uint32_t i = 0; i < na; ++i) {
     rows[i] &= live;
     hit_rows[h] = i;
     h += rows[i] != 0;
@@ -240,12 +280,12 @@ bool allPairs(const View<S>& v, const Policy& p) {
       std::uint64_t row = rows[i];
       if constexpr (decltype(gated)::value)
         row = p.passing(
-            row, v.items, [&](unsigned) { return slot[i]; }, v.items,
-            [&](unsigned j) { return slot[j]; });
+            row, a.items, [&](unsigned) { return slot_a[i]; }, b.items,
+            [&](unsigned j) { return slot_b[j]; });
       for (std::uint64_t m = row; m != 0; m &= m - 1) {
         const std::uint32_t j = static_cast<std::uint32_t>(__builtin_ctzll(m));
-        const Item<S>& x = v.items[slot[i]];
-        const Item<S>& y = v.items[slot[j]];
+        const Item<S>& x = a.items[slot_a[i]];
+        const Item<S>& y = b.items[slot_b[j]];
         if (!p.touches(x, y)) continue;
         if (decltype(gated)::value ? p.reportPassed(x, y) : p.reportUngated(x, y)) return true;
       }
@@ -631,10 +671,10 @@ void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all
                   std::vector<std::uint64_t>& out, const PairGate<S>* gate) {
   const RecordIds<S> sink{&out};
   using Policy = CollidePolicy<S, NoCount, RecordIds<S>>;
-  if (self && a.slots <= all_pairs_limit)
-    allPairs(a, Policy{sink, NoCount{}, &pairKernels<S>(), nullptr, gate});
-  else if (gate == nullptr && !self && b.root != kNone && b.nodes[b.root].count == 1)
+  if (gate == nullptr && !self && b.root != kNone && b.nodes[b.root].count == 1)
     objectWalk(a, b, sink, nullptr);  // one object (the pair list's query per moved object)
+  else if (allPairsFit(a, b, self, all_pairs_limit))
+    allPairs(a, b, self, Policy{sink, NoCount{}, &pairKernels<S>(), nullptr, gate});
   else
     collideWith(a, b, self, sink, nullptr, gate);
 }
@@ -645,7 +685,7 @@ SplitWalk<S>::SplitWalk(const View<S>& a, const View<S>& b, bool self, std::size
     : a_(a), b_(b), self_(self), gate_(gate) {
   // As descend and collectPairs begin.
   if (a.root == kNone || b.root == kNone) return;
-  if (self && a.slots <= all_pairs_limit) {
+  if (allPairsFit(a, b, self, all_pairs_limit)) {
     all_pairs_ = true;
     tasks_.push_back(Task{a.root, a.root});
     return;
@@ -706,7 +746,8 @@ void SplitWalk<S>::collect(std::size_t i, std::vector<std::uint64_t>& out) const
   using Policy = CollidePolicy<S, NoCount, RecordIds<S>>;
   const Task t = tasks_[i];
   if (all_pairs_) {
-    allPairs(a_, Policy{RecordIds<S>{&out}, NoCount{}, &pairKernels<S>(), nullptr, gate_});
+    allPairs(a_, b_, self_,
+             Policy{RecordIds<S>{&out}, NoCount{}, &pairKernels<S>(), nullptr, gate_});
     return;
   }
   Policy p{RecordIds<S>{&out}, NoCount{}, &pairKernels<S>(), store_ ? &store_->columns() : nullptr,
@@ -726,14 +767,16 @@ void SplitWalk<S>::collect(std::size_t i, std::vector<std::uint64_t>& out) const
 }
 
 template <typename S>
-bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats,
-                     PairKernel kernel, const PairGate<S>* gate) {
-  if (v.slots > kAllPairsMax) throw std::logic_error("collideAllPairs: view too large");
+bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+                     QueryStats* stats, PairKernel kernel, const PairGate<S>* gate) {
+  if (a.slots > kAllPairsMax || b.slots > kAllPairsMax)
+    throw std::logic_error("collideAllPairs: view too large");
   if (!pairKernelAvailable(kernel)) throw std::logic_error("collideAllPairs: kernel unavailable");
   const PairKernels<S>* k = &pairKernels<S>(kernel);
   if (stats)
-    return allPairs(v, CollidePolicy<S, Count>{{data, fn}, Count{stats}, k, nullptr, gate});
-  return allPairs(v, CollidePolicy<S, NoCount>{{data, fn}, NoCount{}, k, nullptr, gate});
+    return allPairs(a, b, self,
+                    CollidePolicy<S, Count>{{data, fn}, Count{stats}, k, nullptr, gate});
+  return allPairs(a, b, self, CollidePolicy<S, NoCount>{{data, fn}, NoCount{}, k, nullptr, gate});
 }
 
 template <typename S>
@@ -767,10 +810,12 @@ template void collectPairs<float>(const View<float>&, const View<float>&, bool, 
                                   std::vector<std::uint64_t>&, const PairGate<float>*);
 template void collectPairs<double>(const View<double>&, const View<double>&, bool, std::size_t,
                                    std::vector<std::uint64_t>&, const PairGate<double>*);
-template bool collideAllPairs<float>(const View<float>&, void*, CollideFn<float>, QueryStats*,
-                                     PairKernel, const PairGate<float>*);
-template bool collideAllPairs<double>(const View<double>&, void*, CollideFn<double>, QueryStats*,
-                                      PairKernel, const PairGate<double>*);
+template bool collideAllPairs<float>(const View<float>&, const View<float>&, bool, void*,
+                                     CollideFn<float>, QueryStats*, PairKernel,
+                                     const PairGate<float>*);
+template bool collideAllPairs<double>(const View<double>&, const View<double>&, bool, void*,
+                                      CollideFn<double>, QueryStats*, PairKernel,
+                                      const PairGate<double>*);
 template std::uint64_t leafOverlapMask<float>(const Item<float>*, std::uint32_t, const Item<float>*,
                                               std::uint32_t, bool, PairKernel);
 template std::uint64_t leafOverlapMask<double>(const Item<double>*, std::uint32_t,

@@ -125,7 +125,7 @@ bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data, 
 /// Appends to `out` every pair of distinct objects x of `a` and y of `b` whose boxes overlap
 /// (closed; with `self`, each unordered pair once) as id(x) << 32 | id(y). In the order and with
 /// the argument order in which a collide would call its callback: collidePairs, or
-/// collideAllPairs for a self view of at most `all_pairs_limit` slots. With a gate, only the
+/// collideAllPairs where allPairsFit(a, b, self, all_pairs_limit). With a gate, only the
 /// pairs that pass it, oriented by it (an id of kNone stays kNone).
 template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
@@ -160,20 +160,32 @@ class SplitWalk {
   };
   View<S> a_, b_;
   bool self_;
-  bool all_pairs_ = false;  // a small self view: one task, the all-pairs kernel
+  bool all_pairs_ = false;  // small views (allPairsFit): one task, the all-pairs kernel
   const PairGate<S>* gate_;
   std::vector<Task> tasks_;
   std::unique_ptr<ColumnStore> store_;  // large self walks: the leaves' float columns
   std::vector<Filter> bits_;            // self walks with filter bits: the bits per slot
 };
 
-/// Self-collide of one view without its cubes: every pair of objects is tested, several at a
-/// time in float, and pairs that pass are tested again exactly before fn is called. For small
-/// scenes, where the cubes' fixed cost per call outweighs their pruning. Same pairs as
-/// collidePairs(v, v, true, ...), in slot order. Requires v.slots <= kAllPairsMax.
+/// Whether a collide of `a` with `b` (with `self`, of `a` with itself) tests every pair of boxes
+/// at once (collideAllPairs) rather than walking the cubes: each side has at most `limit` slots
+/// (Config::all_pairs_limit). In such small scenes the cubes' fixed cost per call outweighs their
+/// pruning: a leaf of 8 objects against another is 64 box tests whatever the cubes said.
 template <typename S>
-bool collideAllPairs(const View<S>& v, void* data, CollideFn<S> fn, QueryStats* stats = nullptr,
-                     PairKernel kernel = PairKernel::best, const PairGate<S>* gate = nullptr);
+bool allPairsFit(const View<S>& a, const View<S>& b, bool self, std::size_t limit) {
+  return a.slots <= limit && (self || b.slots <= limit);
+}
+
+/// Collide of two views (with `self`, of `a` with itself) without their cubes: every pair of
+/// objects is tested, several at a time in float, and pairs that pass are tested again exactly
+/// before fn is called. Two views whose root cubes do not overlap give nothing at once. Same
+/// pairs as collidePairs(a, b, self, ...), row by row in slot order of `a`, each row in slot
+/// order of `b`. Requires a.slots and b.slots <= kAllPairsMax (std::logic_error otherwise, as
+/// for a kernel this CPU lacks).
+template <typename S>
+bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+                     QueryStats* stats = nullptr, PairKernel kernel = PairKernel::best,
+                     const PairGate<S>* gate = nullptr);
 
 /// The box tests the walks make between two leaves (each at most kMaskLeaf objects): bit
 /// kMaskLeaf i + j of the result is set where xs[i] and ys[j] overlap (closed). With `self`, xs

@@ -19,14 +19,16 @@ ColumnStore::ColumnStore(std::uint32_t n) {
 
 namespace {
 
-void rowMasksPortable(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
-  for (std::uint32_t i = 0; i < n; ++i) {
+template <bool Self>
+void rowMasksPortable(const Columns& xs, std::uint32_t nx, const Columns& ys, std::uint32_t ny,
+                      std::uint64_t* rows) {
+  for (std::uint32_t i = 0; i < nx; ++i) {
     std::uint64_t m = 0;
-    for (std::uint32_t j = i + 1; j < n; ++j) {
+    for (std::uint32_t j = Self ? i + 1 : 0; j < ny; ++j) {
       bool hit = true;
       // Branch-free on purpose: & of the comparisons, as the SIMD tables compute them.
       for (int k = 0; k < 3; ++k)
-        hit = hit & (f.lo(k)[i] <= f.hi(k)[j]) & (f.lo(k)[j] <= f.hi(k)[i]);
+        hit = hit & (xs.lo(k)[i] <= ys.hi(k)[j]) & (ys.lo(k)[j] <= xs.hi(k)[i]);
       m |= std::uint64_t(hit) << j;
     }
     rows[i] = m;
@@ -35,7 +37,7 @@ void rowMasksPortable(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
 
 template <typename S>
 const PairKernels<S> kPortable = {PairKernel::portable,
-                                  &rowMasksPortable,
+                                  {&rowMasksPortable<false>, &rowMasksPortable<true>},
                                   {&leafHitsPortable<false, S>, &leafHitsPortable<true, S>},
                                   {nullptr, nullptr}};
 

@@ -106,9 +106,12 @@ static_assert(kAllPairsMax % 8 == 0, "SmallColumns' stride is a multiple of 8");
 template <typename S>
 struct PairKernels {
   PairKernel isa;
-  /// rows[i] for i < n <= kAllPairsMax: bit j set for every j > i whose column box overlaps
-  /// box i's; bits from n to the next multiple of 8 may be set too (the caller masks them).
-  void (*rowMasks)(const Columns& cols, std::uint32_t n, std::uint64_t* rows);
+  /// rows[i] for i < nx <= kAllPairsMax: bit j set for every j < ny <= kAllPairsMax whose box
+  /// in `ys` overlaps box i of `xs`; bits from ny to the next multiple of 8 may be set too (the
+  /// caller masks them). [0] two sets of boxes; [1] Self: xs and ys the same (nx == ny), and
+  /// only j > i counts.
+  void (*rowMasks[2])(const Columns& xs, std::uint32_t nx, const Columns& ys, std::uint32_t ny,
+                      std::uint64_t* rows);
   /// Exact masks between two runs of at most kMaskLeaf objects: [0] pairs, [1] Self.
   std::uint64_t (*leafHits[2])(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys,
                                std::uint32_t ny);

@@ -90,25 +90,27 @@ template <bool Self>
   return hits;
 }
 
-[[gnu::target("avx2")]] void rowMasksAvx2(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
-  for (std::uint32_t i = 0; i < n; ++i) {
+template <bool Self>
+[[gnu::target("avx2")]] void rowMasksAvx2(const Columns& xs, std::uint32_t nx, const Columns& ys,
+                                          std::uint32_t ny, std::uint64_t* rows) {
+  for (std::uint32_t i = 0; i < nx; ++i) {
     __m256 lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
-      lo[k] = _mm256_set1_ps(f.lo(k)[i]);
-      hi[k] = _mm256_set1_ps(f.hi(k)[i]);
+      lo[k] = _mm256_set1_ps(xs.lo(k)[i]);
+      hi[k] = _mm256_set1_ps(xs.hi(k)[i]);
     }
     std::uint64_t m = 0;
-    for (std::uint32_t j = (i + 1) & ~7u; j < n; j += 8) {
+    for (std::uint32_t j = Self ? (i + 1) & ~7u : 0; j < ny; j += 8) {
       __m256 hit =  // from axis 0's test, as in columnHitsAvx2
-          _mm256_and_ps(_mm256_cmp_ps(lo[0], _mm256_load_ps(f.hi(0) + j), _CMP_LE_OQ),
-                        _mm256_cmp_ps(_mm256_load_ps(f.lo(0) + j), hi[0], _CMP_LE_OQ));
+          _mm256_and_ps(_mm256_cmp_ps(lo[0], _mm256_load_ps(ys.hi(0) + j), _CMP_LE_OQ),
+                        _mm256_cmp_ps(_mm256_load_ps(ys.lo(0) + j), hi[0], _CMP_LE_OQ));
       for (int k = 1; k < 3; ++k)
         hit = _mm256_and_ps(
-            hit, _mm256_and_ps(_mm256_cmp_ps(lo[k], _mm256_load_ps(f.hi(k) + j), _CMP_LE_OQ),
-                               _mm256_cmp_ps(_mm256_load_ps(f.lo(k) + j), hi[k], _CMP_LE_OQ)));
+            hit, _mm256_and_ps(_mm256_cmp_ps(lo[k], _mm256_load_ps(ys.hi(k) + j), _CMP_LE_OQ),
+                               _mm256_cmp_ps(_mm256_load_ps(ys.lo(k) + j), hi[k], _CMP_LE_OQ)));
       m |= std::uint64_t(_mm256_movemask_ps(hit)) << j;
     }
-    rows[i] = m & ((~std::uint64_t(0) << i) << 1);
+    rows[i] = Self ? m & ((~std::uint64_t(0) << i) << 1) : m;
   }
 }
 
@@ -116,7 +118,8 @@ template <typename S>
 PairKernels<S> makeAvx2() {
   PairKernels<S> k = *sse2Kernels<S>();  // what AVX2 does not replace
   k.isa = PairKernel::avx2;
-  k.rowMasks = &rowMasksAvx2;
+  k.rowMasks[0] = &rowMasksAvx2<false>;
+  k.rowMasks[1] = &rowMasksAvx2<true>;
   if constexpr (std::is_same_v<S, double>) {
     // Double only: float boxes are exact in float columns, but no float walk was measured to
     // gain from them.

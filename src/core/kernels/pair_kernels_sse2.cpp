@@ -18,24 +18,26 @@ inline std::uint64_t above(std::uint32_t i) {
   return (~std::uint64_t(0) << i) << 1;
 }
 
-void rowMasksSse2(const Columns& f, std::uint32_t n, std::uint64_t* rows) {
-  for (std::uint32_t i = 0; i < n; ++i) {
+template <bool Self>
+void rowMasksSse2(const Columns& xs, std::uint32_t nx, const Columns& ys, std::uint32_t ny,
+                  std::uint64_t* rows) {
+  for (std::uint32_t i = 0; i < nx; ++i) {
     __m128 lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
-      lo[k] = _mm_set1_ps(f.lo(k)[i]);
-      hi[k] = _mm_set1_ps(f.hi(k)[i]);
+      lo[k] = _mm_set1_ps(xs.lo(k)[i]);
+      hi[k] = _mm_set1_ps(xs.hi(k)[i]);
     }
     std::uint64_t m = 0;
-    for (std::uint32_t j = (i + 1) & ~3u; j < n; j += 4) {
+    for (std::uint32_t j = Self ? (i + 1) & ~3u : 0; j < ny; j += 4) {
       // Started from axis 0's test, not from all ones (see columnHitsAvx2).
-      __m128 hit = _mm_and_ps(_mm_cmple_ps(lo[0], _mm_load_ps(f.hi(0) + j)),
-                              _mm_cmple_ps(_mm_load_ps(f.lo(0) + j), hi[0]));
+      __m128 hit = _mm_and_ps(_mm_cmple_ps(lo[0], _mm_load_ps(ys.hi(0) + j)),
+                              _mm_cmple_ps(_mm_load_ps(ys.lo(0) + j), hi[0]));
       for (int k = 1; k < 3; ++k)
-        hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmple_ps(lo[k], _mm_load_ps(f.hi(k) + j)),
-                                         _mm_cmple_ps(_mm_load_ps(f.lo(k) + j), hi[k])));
+        hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmple_ps(lo[k], _mm_load_ps(ys.hi(k) + j)),
+                                         _mm_cmple_ps(_mm_load_ps(ys.lo(k) + j), hi[k])));
       m |= std::uint64_t(_mm_movemask_ps(hit)) << j;
     }
-    rows[i] = m & above(i);
+    rows[i] = Self ? m & above(i) : m;
   }
 }
 
@@ -43,7 +45,8 @@ template <typename S>
 PairKernels<S> makeSse2() {
   PairKernels<S> k = *portableKernels<S>();
   k.isa = PairKernel::sse2;
-  k.rowMasks = &rowMasksSse2;
+  k.rowMasks[0] = &rowMasksSse2<false>;
+  k.rowMasks[1] = &rowMasksSse2<true>;
   return k;
 }
 
