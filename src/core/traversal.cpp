@@ -684,10 +684,11 @@ void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all
                   std::vector<std::uint64_t>& out, const PairGate<S>* gate) {
   const RecordIds<S> sink{&out};
   using Policy = CollidePolicy<S, NoCount, RecordIds<S>>;
-  if (gate == nullptr && !self && b.root != kNone && b.nodes[b.root].count == 1)
-    objectWalk(a, b, sink, nullptr);  // one object (the pair list's query per moved object)
-  else if (allPairsFit(a, b, self, all_pairs_limit))
+  // The rule of a collide first (collideViews), so that the pairs come in its order.
+  if (allPairsFit(a, b, self, all_pairs_limit))
     allPairs(a, b, self, Policy{sink, NoCount{}, &pairKernels<S>(), nullptr, gate});
+  else if (gate == nullptr && !self && b.root != kNone && b.nodes[b.root].count == 1)
+    objectWalk(a, b, sink, nullptr);  // one object (the pair list's query per moved object)
   else
     collideWith(a, b, self, sink, nullptr, gate);
 }
