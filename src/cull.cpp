@@ -106,14 +106,15 @@ Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionO
   const S scale = std::max({ta.c.cwiseAbs().maxCoeff(), tb.c.cwiseAbs().maxCoeff(), ta.r, tb.r});
   const S margin = std::max(S(2) * tolerance, floor) * (S(1) + scale);
   // The spheres: the cheapest bound, and exact for spheres.
-  const S spheres = (ta.c - tb.c).norm() - ta.r - tb.r;
+  const S centres = (ta.c - tb.c).norm();
+  const S spheres = centres - ta.r - tb.r;
   if ((ta.sphere && tb.sphere) || spheres > enough + margin) return {spheres, margin};
   if (!ta.withBox() || !tb.withBox()) return {spheres, margin};
   // Each box holds the ball of its smallest half extent about its centre, so no gap of the
   // boxes exceeds the gap of those balls; when that cannot clear `enough`, the boxes' tests
   // could not settle the pair and are skipped (most pairs a distance search offers).
-  const S inner = (ta.c - tb.c).norm() - (ta.sphere ? ta.r : ta.e.minCoeff()) -
-                  (tb.sphere ? tb.r : tb.e.minCoeff());
+  const S inner =
+      centres - (ta.sphere ? ta.r : ta.e.minCoeff()) - (tb.sphere ? tb.r : tb.e.minCoeff());
   if (enough < std::numeric_limits<S>::infinity() && !(inner > enough + margin))
     return {spheres, margin};
   if (ta.sphere) return {std::max(spheres, pointBoxDistance(ta.c, tb) - ta.r), margin};
