@@ -316,7 +316,8 @@ struct DistancePolicy {
   DistanceFn<S> fn;
   S& best;
   Counter count;
-  const PairGate<S>* gate = nullptr;  // null: every pair near enough is called
+  const PairGate<S>* gate = nullptr;                  // null: every pair near enough is called
+  static constexpr const Columns* columns = nullptr;  // leaves are tested on the exact boxes
   // Boxes that overlap are always worth a visit: with a signed-distance callback the best may
   // already be <= 0 and a pair may still penetrate deeper.
   // Keys are finite (cubeGap2's always are; exact boxes' go through gapKey), so one comparison
@@ -430,15 +431,20 @@ template <typename S, class Policy>
   return false;
 }
 
-// Starts loading what a visit of cube `n` will read first (its children, or its objects), so
-// that the load overlaps the work on the entries above it on the stack: a descent is otherwise
-// one chain of dependent cache misses.
+// Starts loading what a visit of cube `n` will read first (its children, or its objects' boxes),
+// so that the load overlaps the work on the entries above it on the stack: a descent is
+// otherwise one chain of dependent cache misses. A leaf tested on float columns reads a run of
+// each column, not its records (those only for the pairs the floats let through): with the
+// records' line prefetched instead, self-collide of 10,000 thin boxes took 10% longer.
 template <typename S>
-inline void prefetchBelow(const View<S>& v, const Node& n) {
-  if (n.isLeaf())
-    __builtin_prefetch(v.items + n.first);
-  else
+inline void prefetchBelow(const View<S>& v, const Node& n, const Columns* columns = nullptr) {
+  if (!n.isLeaf()) {
     __builtin_prefetch(v.nodes + n.first);
+  } else if (columns != nullptr) {
+    for (float* col : columns->col) __builtin_prefetch(col + n.first);
+  } else {
+    __builtin_prefetch(v.items + n.first);
+  }
 }
 
 // What the filter groups of cube a of `va` and cube b of `vb` (kNone: the query object) say
@@ -522,10 +528,11 @@ struct PairVisitor {
     return true;
   }
   void prefetch(bool in_a, std::uint32_t cube) const {
+    // Columns only in a self walk, where va and vb are the same view.
     if (in_a)
-      prefetchBelow(va, va.nodes[cube]);
+      prefetchBelow(va, va.nodes[cube], p.columns);
     else
-      prefetchBelow(vb, vb.nodes[cube]);
+      prefetchBelow(vb, vb.nodes[cube], p.columns);
   }
   bool leafSelf(std::uint32_t a) const {
     bool bits_pass = false;
