@@ -6,6 +6,8 @@
 # CUBE_COMPARE_FILTER (default: every cube case but the drift study), CUBE_COMPARE_ROUNDS
 # (default 5) and CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) set the work;
 # CUBE_COMPARE_REUSE=1 runs the binaries of the last run again without building.
+# CUBE_COMPARE_LAYOUTS=K (default 1) links each side K times, with 0, 16, 32, ... bytes of
+# padding ahead of its code, and times every layout in every round: see "Why layouts".
 #
 # Why pairs: this machine shares its cores, and the load from elsewhere drifts over seconds to
 # minutes. Running all of one binary and then all of the other puts a minute between the two
@@ -15,6 +17,15 @@
 # and the ratio of the minimums (load only adds time, so the fastest round is the least
 # disturbed). A case counts as slower if the ratio of medians and the median paired ratio
 # both exceed 1.05.
+#
+# Why layouts: where a hot loop falls against 16-, 32- and 64-byte boundaries changes how the
+# front end and the branch predictor see it, and any edit anywhere in the binary moves it. Such a
+# shift can cost a case more than 5% with not one instruction changed: 47bc500's own binary,
+# relinked with 16 or 48 bytes ahead of its code, self-collides 10,000 thin boxes in 1.20x the
+# time of its default link (medians of 7 interleaved rounds). One link per side then times its
+# layout's luck as much as its code. With K layouts, each side's sample holds rounds x K times,
+# each round runs layout l of both sides back to back, and a paired ratio compares equal
+# paddings; the table adds each side's spread (slowest over fastest layout median).
 set -euo pipefail
 shopt -s inherit_errexit  # a failed build inside $(build ...) stops the script
 cd "$(dirname "$0")/.."
@@ -24,6 +35,7 @@ rounds=${CUBE_COMPARE_ROUNDS:-5}
 min_time=${CUBE_COMPARE_MIN_TIME:-0.05}
 filter=${CUBE_COMPARE_FILTER:-^[^d].*/cube(/manual_time)?$}
 work=${CUBE_COMPARE_DIR:-/tmp/cube-compare}
+layouts=${CUBE_COMPARE_LAYOUTS:-1}
 mkdir -p "$work"
 
 # build NAME REV: a Release cube_bench of REV (empty: the work tree) in $work/NAME.
@@ -46,6 +58,18 @@ build() {
   echo "$work/build-$name/benchmarks/cube_bench"
 }
 
+# relink NAME: cube_bench of $work/build-NAME linked again as cube_bench.L<l> for l = 1 ..
+# layouts - 1, with 16 l bytes of padding linked ahead of every other object (so that its .text
+# comes first and shifts all code after it), by CMake's own link command.
+relink() {
+  local dir="$work/build-$1/benchmarks" l
+  for ((l = 1; l < layouts; ++l)); do
+    printf '.text\n.skip %d, 0xcc\n' $((16 * l)) | as -o "$dir/pad$l.o" -
+    (cd "$dir" && eval "$(sed -e "s| CMakeFiles/| pad$l.o CMakeFiles/|" \
+      -e "s| -o cube_bench | -o cube_bench.L$l |" CMakeFiles/cube_bench.dir/link.txt)")
+  done
+}
+
 if [ "${CUBE_COMPARE_REUSE:-0}" = 1 ]; then  # the binaries of the last run, not rebuilt
   before="$work/build-before/benchmarks/cube_bench"
   after="$work/build-after/benchmarks/cube_bench"
@@ -53,27 +77,32 @@ else
   before=$(build before "$base")
   after=$(build after "$head")
 fi
+relink before
+relink after
 echo "before: $base ($before)"
 echo "after:  ${head:-work tree} ($after)"
+echo "layouts: $layouts"
 
-python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" <<'EOF'
+python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" "$layouts" <<'EOF'
 import json, re, statistics, subprocess, sys
-before, after, pattern, rounds, min_time, work = sys.argv[1:]
-rounds = int(rounds)
-bins = {"before": before, "after": after}
+before, after, pattern, rounds, min_time, work, layouts = sys.argv[1:]
+rounds, layouts = int(rounds), int(layouts)
+# bins[side][l]: the binary of layout l (0: CMake's own link).
+bins = {side: [path] + [f"{path}.L{l}" for l in range(1, layouts)]
+        for side, path in (("before", before), ("after", after))}
 
 def cases(binary):
     out = subprocess.run([binary, "--benchmark_list_tests", f"--benchmark_filter={pattern}"],
                          check=True, capture_output=True, text=True).stdout
     return [line.strip() for line in out.splitlines() if line.strip()]
 
-listed = {side: cases(b) for side, b in bins.items()}
+listed = {side: cases(b[0]) for side, b in bins.items()}
 names = [n for n in listed["after"] if n in set(listed["before"])]
 missing = sorted(set(listed["before"]) ^ set(listed["after"]))
 scale = {"ns": 1e-3, "us": 1.0, "ms": 1e3, "s": 1e6}
 
-def run(side, name):
-    out = subprocess.run([bins[side], f"--benchmark_filter=^{re.escape(name)}$",
+def run(side, layout, name):
+    out = subprocess.run([bins[side][layout], f"--benchmark_filter=^{re.escape(name)}$",
                           f"--benchmark_min_time={min_time}", "--benchmark_format=json"],
                          check=True, capture_output=True, text=True).stdout
     rows = [b for b in json.loads(out)["benchmarks"]
@@ -82,23 +111,32 @@ def run(side, name):
         sys.exit(f"{side}: {name}: expected one result, got {len(rows)}")
     return rows[0]["real_time"] * scale[rows[0]["time_unit"]]
 
-times = {side: {n: [] for n in names} for side in bins}
+# times[side][name][l]: that layout's times, one per round.
+times = {side: {n: [[] for _ in range(layouts)] for n in names} for side in bins}
 for r in range(rounds):
     for i, n in enumerate(names):
-        order = ("before", "after") if (r + i) % 2 == 0 else ("after", "before")
-        for side in order:
-            times[side][n].append(run(side, n))
+        for l in range(layouts):
+            order = ("before", "after") if (r + i + l) % 2 == 0 else ("after", "before")
+            for side in order:
+                times[side][n][l].append(run(side, l, n))
     print(f"round {r + 1} of {rounds} done", flush=True)
 with open(f"{work}/times.json", "w") as f:
-    json.dump(times, f)
+    json.dump({"layouts": layouts, "times": times}, f)
 
-print(f"\n| case | before (us): median / min of {rounds} | after: median / min "
-      "| after / before: medians | paired (median) | minimums |")
-print("|---|---|---|---|---|---|")
+def spread(per_layout):
+    meds = [statistics.median(t) for t in per_layout]
+    return max(meds) / min(meds)
+
+samples = rounds * layouts
+extra = " | spread before / after" if layouts > 1 else ""
+print(f"\n| case | before (us): median / min of {samples} | after: median / min "
+      f"| after / before: medians | paired (median) | minimums{extra} |")
+print("|---|---|---|---|---|---|" + ("---|" if layouts > 1 else ""))
 slower = {"median": 0, "paired": 0, "min": 0, "verdict": 0}
 worst = 0.0
 for n in names:
-    b, a = times["before"][n], times["after"][n]
+    b = [t for per in times["before"][n] for t in per]  # layout 0's rounds, then layout 1's, ...
+    a = [t for per in times["after"][n] for t in per]
     med = statistics.median(a) / statistics.median(b)
     paired = statistics.median(x / y for x, y in zip(a, b))
     low = min(a) / min(b)
@@ -108,8 +146,11 @@ for n in names:
     slower["verdict"] += med > 1.05 and paired > 1.05
     worst = max(worst, min(med, paired))
     flag = " **slower**" if med > 1.05 and paired > 1.05 else ""
+    more = (f" | {spread(times['before'][n]):.3f} / {spread(times['after'][n]):.3f}"
+            if layouts > 1 else "")
     print(f"| {n.replace('/manual_time', '')} | {statistics.median(b):.2f} / {min(b):.2f} | "
-          f"{statistics.median(a):.2f} / {min(a):.2f} | {med:.3f}{flag} | {paired:.3f} | {low:.3f} |")
+          f"{statistics.median(a):.2f} / {min(a):.2f} | {med:.3f}{flag} | {paired:.3f} | "
+          f"{low:.3f}{more} |")
 print(f"\n{len(names)} cases; more than 5% slower by the ratio of medians: {slower['median']}, "
       f"by the median paired ratio: {slower['paired']}, by the minimums: {slower['min']}; "
       f"by the first two (the verdict): {slower['verdict']}")
