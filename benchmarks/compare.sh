@@ -8,6 +8,9 @@
 # CUBE_COMPARE_REUSE=1 runs the binaries of the last run again without building.
 # CUBE_COMPARE_LAYOUTS=K (default 1) links each side K times, with 0, 16, 32, ... bytes of
 # padding ahead of its code, and times every layout in every round: see "Why layouts".
+# CUBE_COMPARE_CONFIRM=C (default: as many as CUBE_COMPARE_ROUNDS) gives every case that reads
+# more than 5% slower after the rounds (by the ratio of medians or the median paired ratio) C
+# more rounds, and judges it on all of them: see "Why a confirmation".
 #
 # Why pairs: this machine shares its cores, and the load from elsewhere drifts over seconds to
 # minutes. Running all of one binary and then all of the other puts a minute between the two
@@ -26,6 +29,13 @@
 # layout's luck as much as its code. With K layouts, each side's sample holds rounds x K times,
 # each round runs layout l of both sides back to back, and a paired ratio compares equal
 # paddings; the table adds each side's spread (slowest over fastest layout median).
+#
+# Why a confirmation: on this shared machine a case's two sides can drift apart for minutes, and
+# among 110 cases a few read more than 5% slower by chance in any run (a run of 47bc500 against
+# 47bc500 called one slower). A case that is really slower stays slower with more rounds; one
+# that read slow by chance moves back towards 1. The confirmation rounds run after the main
+# rounds, both sides still back to back, on the flagged cases only; the table marks them with
+# the number of rounds they got. Cases not flagged keep the main rounds' figures.
 set -euo pipefail
 shopt -s inherit_errexit  # a failed build inside $(build ...) stops the script
 cd "$(dirname "$0")/.."
@@ -36,6 +46,7 @@ min_time=${CUBE_COMPARE_MIN_TIME:-0.05}
 filter=${CUBE_COMPARE_FILTER:-^[^d].*/cube(/manual_time)?$}
 work=${CUBE_COMPARE_DIR:-/tmp/cube-compare}
 layouts=${CUBE_COMPARE_LAYOUTS:-1}
+confirm=${CUBE_COMPARE_CONFIRM:-$rounds}
 mkdir -p "$work"
 
 # build NAME REV: a Release cube_bench of REV (empty: the work tree) in $work/NAME.
@@ -64,7 +75,9 @@ build() {
 relink() {
   local dir="$work/build-$1/benchmarks" l
   for ((l = 1; l < layouts; ++l)); do
-    printf '.text\n.skip %d, 0xcc\n' $((16 * l)) | as -o "$dir/pad$l.o" -
+    # The note section marks the padding's stack as not executable, as the compiler's objects do.
+    printf '.section .note.GNU-stack,"",@progbits\n.text\n.skip %d, 0xcc\n' $((16 * l)) |
+      as -o "$dir/pad$l.o" -
     (cd "$dir" && eval "$(sed -e "s| CMakeFiles/| pad$l.o CMakeFiles/|" \
       -e "s| -o cube_bench | -o cube_bench.L$l |" CMakeFiles/cube_bench.dir/link.txt)")
   done
@@ -83,10 +96,12 @@ echo "before: $base ($before)"
 echo "after:  ${head:-work tree} ($after)"
 echo "layouts: $layouts"
 
-python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" "$layouts" <<'EOF'
+echo "confirmation rounds: $confirm"
+
+python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" "$layouts" "$confirm" <<'EOF'
 import json, re, statistics, subprocess, sys
-before, after, pattern, rounds, min_time, work, layouts = sys.argv[1:]
-rounds, layouts = int(rounds), int(layouts)
+before, after, pattern, rounds, min_time, work, layouts, confirm = sys.argv[1:]
+rounds, layouts, confirm = int(rounds), int(layouts), int(confirm)
 # bins[side][l]: the binary of layout l (0: CMake's own link).
 bins = {side: [path] + [f"{path}.L{l}" for l in range(1, layouts)]
         for side, path in (("before", before), ("after", after))}
@@ -113,15 +128,31 @@ def run(side, layout, name):
 
 # times[side][name][l]: that layout's times, one per round.
 times = {side: {n: [[] for _ in range(layouts)] for n in names} for side in bins}
-for r in range(rounds):
-    for i, n in enumerate(names):
+
+def play(r, todo, label):
+    for i, n in enumerate(todo):
         for l in range(layouts):
             order = ("before", "after") if (r + i + l) % 2 == 0 else ("after", "before")
             for side in order:
                 times[side][n][l].append(run(side, l, n))
-    print(f"round {r + 1} of {rounds} done", flush=True)
+    print(f"{label} done", flush=True)
+
+def flat(side, n):  # layout 0's rounds, then layout 1's, ...
+    return [t for per in times[side][n] for t in per]
+
+def ratios(n):
+    b, a = flat("before", n), flat("after", n)
+    return (statistics.median(a) / statistics.median(b),
+            statistics.median(x / y for x, y in zip(a, b)), min(a) / min(b))
+
+for r in range(rounds):
+    play(r, names, f"round {r + 1} of {rounds}")
+flagged = [n for n in names if max(ratios(n)[:2]) > 1.05] if confirm > 0 else []
+print(f"{len(flagged)} cases read more than 5% slower: {confirm} more rounds each", flush=True)
+for r in range(confirm):
+    play(rounds + r, flagged, f"confirmation round {r + 1} of {confirm}")
 with open(f"{work}/times.json", "w") as f:
-    json.dump({"layouts": layouts, "times": times}, f)
+    json.dump({"layouts": layouts, "times": times, "flagged": flagged}, f)
 
 def spread(per_layout):
     meds = [statistics.median(t) for t in per_layout]
@@ -129,17 +160,14 @@ def spread(per_layout):
 
 samples = rounds * layouts
 extra = " | spread before / after" if layouts > 1 else ""
-print(f"\n| case | before (us): median / min of {samples} | after: median / min "
+print(f"\n| case | before (us): median / min of {samples} (more where marked) | after: median / min "
       f"| after / before: medians | paired (median) | minimums{extra} |")
 print("|---|---|---|---|---|---|" + ("---|" if layouts > 1 else ""))
 slower = {"median": 0, "paired": 0, "min": 0, "verdict": 0}
 worst = 0.0
 for n in names:
-    b = [t for per in times["before"][n] for t in per]  # layout 0's rounds, then layout 1's, ...
-    a = [t for per in times["after"][n] for t in per]
-    med = statistics.median(a) / statistics.median(b)
-    paired = statistics.median(x / y for x, y in zip(a, b))
-    low = min(a) / min(b)
+    b, a = flat("before", n), flat("after", n)
+    med, paired, low = ratios(n)
     slower["median"] += med > 1.05
     slower["paired"] += paired > 1.05
     slower["min"] += low > 1.05
@@ -148,12 +176,14 @@ for n in names:
     flag = " **slower**" if med > 1.05 and paired > 1.05 else ""
     more = (f" | {spread(times['before'][n]):.3f} / {spread(times['after'][n]):.3f}"
             if layouts > 1 else "")
-    print(f"| {n.replace('/manual_time', '')} | {statistics.median(b):.2f} / {min(b):.2f} | "
+    mark = f" ({len(b) // layouts} rounds)" if n in flagged else ""
+    print(f"| {n.replace('/manual_time', '')}{mark} | {statistics.median(b):.2f} / {min(b):.2f} | "
           f"{statistics.median(a):.2f} / {min(a):.2f} | {med:.3f}{flag} | {paired:.3f} | "
           f"{low:.3f}{more} |")
 print(f"\n{len(names)} cases; more than 5% slower by the ratio of medians: {slower['median']}, "
       f"by the median paired ratio: {slower['paired']}, by the minimums: {slower['min']}; "
       f"by the first two (the verdict): {slower['verdict']}")
+print(f"cases given confirmation rounds: {len(flagged)} (marked with their rounds in the table)")
 print(f"slowest case (the smaller of the ratio of medians and the median paired ratio): {worst:.3f}")
 if missing:
     print("cases in one binary only:", ", ".join(missing))
