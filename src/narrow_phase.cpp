@@ -29,7 +29,18 @@ int resolveThreads(int threads) {
   return threads > 0 ? threads : hardwareThreads();
 }
 
-// Below this many pairs a parallel region costs more than it saves.
+// When threads pay. Work is counted in shape pairs' FCL calls (1-3 us each here; a pair with a
+// mesh or an octree counts kHeavyPairWork). Opening a two-thread region costs about 1 us while
+// the other core idles and tens of us while it is busy (benchmarks/README.md, "Threads"), so a
+// region is opened only for kParallelMinWork or more: about 50 us of calls.
+constexpr std::size_t kHeavyPairWork = 16;
+constexpr std::size_t kParallelMinWork = 32;
+// A collide stream answers its first kSerialCalls FCL calls at once, on the calling thread,
+// then gathers chunks of kFirstChunkWork, doubling up to kMaxChunkWork.
+constexpr std::size_t kSerialCalls = 8;
+constexpr std::size_t kFirstChunkWork = 64;
+constexpr std::size_t kMaxChunkWork = 1024;
+// forEachPair runs a caller's function of unknown cost: threads from this many pairs on.
 constexpr std::size_t kParallelMinPairs = 4;
 
 // Runs body(i) for every i in [0, n) on `threads` threads. An exception stops nothing: the
@@ -48,7 +59,7 @@ void parallelFor(std::size_t n, int threads, const Body& body) {
       }
     }
   };
-  if (threads <= 1 || n < kParallelMinPairs) {
+  if (threads <= 1 || n < 2) {
     for (std::size_t i = 0; i < n; ++i) guarded(i);
   } else {
     // Dynamic chunks of 2: narrow-phase costs differ by orders of magnitude between pairs.
@@ -379,8 +390,6 @@ namespace detail {
 
 namespace {
 
-enum class Answer : std::uint8_t { kApart, kCached, kComputed };
-
 template <typename S>
 using CollideCache = typename NarrowPhaseCache<S>::Impl;
 template <typename S>
@@ -388,24 +397,14 @@ using CollideEntry = typename CollideCache<S>::template Entry<std::vector<fcl::C
 template <typename S>
 using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResult<S>>;
 
-// put(i, the answer of pairs[i] in the cache, or null). On the calling thread, before the pairs
-// run: the lookups compare and update the objects' poses.
-template <typename S, class Put>
-void findCached(CollideCache<S>* cache, const ObjectPair<S>* pairs, std::size_t n, const Put& put) {
-  for (std::size_t i = 0; i < n; ++i)
-    put(i, cache ? cache->collide.find(*cache, pairs[i].first, pairs[i].second) : nullptr);
-}
-
-// One pair's answer, safe to run on several threads at once: found in the cache (`cached`, from
-// findCached), proved apart, or computed by fcl::collide into `fresh` (cleared first).
+// The cache and the cull, on the calling thread (a lookup compares and updates the objects'
+// poses): kCached with the entry, kApart, or kComputed for a pair FCL must answer.
 template <typename S>
-Answer answerPair(const ObjectPair<S>& pair, const fcl::CollisionRequest<S>& request,
-                  const CollideEntry<S>* cached, fcl::CollisionResult<S>& fresh) {
+Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
+                fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
+  cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
   if (cached != nullptr) return Answer::kCached;
-  const auto [a, b] = pair;
-  fresh.clear();
   if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance))) return Answer::kApart;
-  fclCollide(a, b, request, fresh);
   return Answer::kComputed;
 }
 
@@ -421,22 +420,9 @@ struct Contacts {
   }
 };
 
-// After answerPair, on one thread, in pair order: counts the answer and returns the pair's
-// contacts.
-template <typename S>
-Contacts<S> countPair(Answer kind, const fcl::CollisionResult<S>& fresh,
-                      const CollideEntry<S>* cached, NarrowPhaseStats& stats) {
-  if (kind == Answer::kCached) {
-    ++stats.cached;
-    return {&cached->answer, nullptr};
-  }
-  ++(kind == Answer::kApart ? stats.culled : stats.narrow_calls);
-  return {nullptr, &fresh};
-}
-
-// Then, once every cached answer of the batch has been read (a store can move the entries):
-// keeps a new answer in the cache, a pair proved apart too, which next time costs a lookup
-// rather than the test.
+// Keeps a new answer in the cache, a pair proved apart too, which next time costs a lookup
+// rather than the test. Only once every cached answer in hand has been read: a store can move
+// the entries.
 template <typename S>
 void keepPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
               const fcl::CollisionResult<S>& fresh) {
@@ -444,6 +430,17 @@ void keepPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
   std::vector<fcl::Contact<S>> contacts(fresh.numContacts());
   for (std::size_t k = 0; k < contacts.size(); ++k) contacts[k] = fresh.getContact(k);
   cache->collide.store(*cache, pair.first, pair.second, std::move(contacts));
+}
+
+// What FCL's narrow phase costs for a pair, in units of a shape pair's call (about 1-2 us
+// here): a pair with a mesh or an octree costs tens of them.
+template <typename S>
+std::size_t workOf(const ObjectPair<S>& pair) {
+  const auto heavy = [](const fcl::CollisionObject<S>* o) {
+    const fcl::OBJECT_TYPE t = o->getObjectType();
+    return t == fcl::OT_BVH || t == fcl::OT_OCTREE;
+  };
+  return heavy(pair.first) || heavy(pair.second) ? kHeavyPairWork : 1;
 }
 
 }  // namespace
@@ -462,11 +459,8 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
       stats_out_(options.stats),
       cache_(options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)),
-      // A one-contact request most often stops early: a small first chunk wastes little, and on
-      // one thread (nothing to share out) a chunk of one wastes nothing.
-      chunk_limit_(request.num_max_contacts > 1 ? 64
-                   : threads_ == 1              ? 1
-                                                : 8) {
+      chunk_work_(kFirstChunkWork),
+      scratch_(cache_ != nullptr ? std::make_unique<Slot>() : nullptr) {
   if (cache_ != nullptr) {
     ++cache_->stamp;
     cache_->collide.begin(*cache_, request);
@@ -479,12 +473,31 @@ CollideStream<S>::~CollideStream() = default;
 template <typename S>
 bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
   if (done_) return true;
-  chunk_.emplace_back(a, b);
-  if (chunk_.size() >= chunk_limit_) {
-    flush();
-    if (threads_ > 1 || request_.num_max_contacts > 1)
-      chunk_limit_ = std::min<std::size_t>(chunk_limit_ * 2, 1024);
+  ++stats_.candidate_pairs;
+  CollideEntry<S>* cached = nullptr;
+  const Answer kind = classify(cache_, request_, a, b, cached);
+  if (serial_) {
+    if (cache_ == nullptr) {
+      answerNow(a, b, kind);
+    } else {
+      scratch_->kind = kind;
+      scratch_->cached = cached;
+      answerNow(ObjectPair<S>(a, b), *scratch_);
+    }
+    return done_;
   }
+  const std::size_t i = chunk_.size();
+  chunk_.emplace_back(a, b);
+  if (slots_.size() <= i) slots_.resize(i + 1);
+  slots_[i].kind = kind;
+  slots_[i].cached = cached;
+  if (kind == Answer::kComputed) {
+    pending_.push_back(i);
+    pending_work_ += workOf(chunk_[i]);
+  }
+  // Pairs answered without FCL are merged at once while nothing waits for FCL before them, so
+  // that a full result stops the walk where it would on one thread.
+  if (pending_.empty() || pending_work_ >= chunk_work_) flush();
   return done_;
 }
 
@@ -496,8 +509,11 @@ ObjectPair<S> CollideStream<S>::lastHit(NarrowPhaseCache<S>& cache) {
 template <typename S>
 bool CollideStream<S>::pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
   if (done_) return true;
-  chunk_.emplace_back(a, b);
+  const bool was_serial = serial_;
   flush();
+  serial_ = true;
+  push(a, b);
+  serial_ = was_serial;
   return done_;
 }
 
@@ -508,34 +524,102 @@ bool CollideStream<S>::callback(fcl::CollisionObject<S>* a, fcl::CollisionObject
 }
 
 template <typename S>
-void CollideStream<S>::flush() {
-  const std::size_t n = chunk_.size();
-  if (n == 0 || done_) {
-    chunk_.clear();
+void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
+                                 Answer kind) {
+  if (kind == Answer::kApart) {
+    ++stats_.culled;
     return;
   }
-  stats_.candidate_pairs += n;
-  if (slots_.size() < n) slots_.resize(n);
-  findCached(cache_, chunk_.data(), n,
-             [&](std::size_t i, CollideEntry<S>* e) { slots_[i].cached = e; });
-  parallelFor(n, threads_, [&](std::size_t i) {
-    slots_[i].kind = answerPair(chunk_[i], request_, slots_[i].cached, slots_[i].fresh);
-  });
-  // Merge in pair order. A pair's contacts come in FCL's order and FCL stops adding once the
-  // result is full, so a pair that meets a partly full result gives the head of its own list.
-  const std::size_t max_contacts = request_.num_max_contacts;
-  for (std::size_t i = 0; i < n; ++i) {
-    Slot& s = slots_[i];
-    const Contacts<S> contacts = countPair(s.kind, s.fresh, s.cached, stats_);
-    if (done_ || s.kind == Answer::kApart) continue;  // after the result is full: cached only
-    const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
-    const std::size_t take = std::min(room, contacts.size());
-    if (cache_ != nullptr && take > 0 && result_.numContacts() == 0) cache_->last_hit = chunk_[i];
-    for (std::size_t k = 0; k < take; ++k) result_.addContact(contacts[k]);
-    if (result_.isCollision() && result_.numContacts() >= max_contacts) done_ = true;
+  // FCL's own way, one accumulating result: FCL decides which contacts fit.
+  ++stats_.narrow_calls;
+  fclCollide(a, b, request_, result_);
+  markDone();
+  countServed();
+}
+
+template <typename S>
+void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
+  switch (s.kind) {
+    case Answer::kCached:
+      ++stats_.cached;
+      merge(pair, s);
+      return;
+    case Answer::kApart:
+      ++stats_.culled;
+      keepPair(s.kind, pair, cache_, empty_);
+      return;
+    case Answer::kComputed:
+      ++stats_.narrow_calls;
+      s.fresh.clear();
+      fclCollide(pair.first, pair.second, request_, s.fresh);
+      merge(pair, s);
+      keepPair(s.kind, pair, cache_, s.fresh);
+      countServed();
+      return;
   }
-  for (std::size_t i = 0; i < n; ++i) keepPair(slots_[i].kind, chunk_[i], cache_, slots_[i].fresh);
+}
+
+template <typename S>
+void CollideStream<S>::countServed() {
+  // A request that may stop at its first contact stays on this thread: a chunk would call FCL
+  // for pairs after the stop. Others go to the threads after a few calls, by which time a small
+  // query (most object queries) has ended without opening a parallel region.
+  if (++served_ >= kSerialCalls && threads_ > 1 && request_.num_max_contacts > 1) serial_ = false;
+}
+
+template <typename S>
+void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
+  const Contacts<S> contacts = s.kind == Answer::kCached ? Contacts<S>{&s.cached->answer, nullptr}
+                                                         : Contacts<S>{nullptr, &s.fresh};
+  if (done_ || contacts.size() == 0) return;
+  const std::size_t max_contacts = request_.num_max_contacts;
+  const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
+  if (cache_ != nullptr && result_.numContacts() == 0) cache_->last_hit = pair;
+  if (contacts.size() > room) {
+    // The budget runs out inside this pair. FCL's shape pairs then keep their deepest contacts,
+    // not their first: its own call on the accumulating result decides, as on one thread.
+    ++stats_.narrow_calls;
+    fclCollide(pair.first, pair.second, request_, result_);
+  } else {
+    for (std::size_t k = 0; k < contacts.size(); ++k) result_.addContact(contacts[k]);
+  }
+  markDone();
+}
+
+template <typename S>
+void CollideStream<S>::markDone() {
+  if (result_.isCollision() && result_.numContacts() >= request_.num_max_contacts) done_ = true;
+}
+
+template <typename S>
+void CollideStream<S>::flush() {
+  const std::size_t n = chunk_.size();
+  if (n == 0) return;
+  if (!done_) {
+    const auto run = [&](std::size_t k) {
+      Slot& s = slots_[pending_[k]];
+      s.fresh.clear();
+      fclCollide(chunk_[pending_[k]].first, chunk_[pending_[k]].second, request_, s.fresh);
+    };
+    // Threads only for work that pays for waking them (a region costs about 1 us here when
+    // the other core is idle, tens of us when it is busy).
+    parallelFor(pending_.size(), pending_work_ >= kParallelMinWork ? threads_ : 1, run);
+    for (std::size_t i = 0; i < n; ++i) {
+      Slot& s = slots_[i];
+      ++(s.kind == Answer::kCached  ? stats_.cached
+         : s.kind == Answer::kApart ? stats_.culled
+                                    : stats_.narrow_calls);
+      if (s.kind != Answer::kApart) merge(chunk_[i], s);
+    }
+    if (cache_ != nullptr)
+      for (std::size_t i = 0; i < n; ++i)
+        keepPair(slots_[i].kind, chunk_[i], cache_,
+                 slots_[i].kind == Answer::kComputed ? slots_[i].fresh : empty_);
+    if (!pending_.empty()) chunk_work_ = std::min(chunk_work_ * 2, kMaxChunkWork);
+  }
   chunk_.clear();
+  pending_.clear();
+  pending_work_ = 0;
 }
 
 template <typename S>
@@ -581,8 +665,11 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>
         separation(*a, *b, S(request_.distance_tolerance), result_.min_distance);
     if (s.lower_bound - s.margin > result_.min_distance) {
       ++stats_.culled;
-    } else if (threads_ == 1 && cache_ == nullptr) {
-      // FCL's own way: one accumulating result, which a mesh pair's search is pruned by.
+    } else if (cache_ == nullptr && (threads_ == 1 || workOf(ObjectPair<S>(a, b)) == 1)) {
+      // FCL's own way: one accumulating result, which a mesh pair's search is pruned by. Shape
+      // pairs take a few us: a parallel region for two of them costs more than it saves. What
+      // waits in the batch goes first, so that the pairs meet the result in walk order.
+      flush();
       ++stats_.narrow_calls;
       fclDistance(a, b, request_, result_);
     } else {
@@ -605,10 +692,13 @@ void DistanceSearch<S>::flush() {
   const std::size_t n = batch_.size();
   if (n == 0) return;
   if (slots_.size() < n) slots_.resize(n);
-  for (std::size_t i = 0; i < n; ++i)  // on this thread: it compares and updates poses
+  std::size_t work = 0;
+  for (std::size_t i = 0; i < n; ++i) {  // on this thread: it compares and updates poses
     slots_[i].cached =
         cache_ ? cache_->distance.find(*cache_, batch_[i].first, batch_[i].second) : nullptr;
-  parallelFor(n, threads_, [&](std::size_t i) {
+    if (slots_[i].cached == nullptr) work += workOf(batch_[i]);
+  }
+  parallelFor(n, work >= kParallelMinWork ? threads_ : 1, [&](std::size_t i) {
     Slot& s = slots_[i];
     const auto [a, b] = batch_[i];
     if (s.cached == nullptr) {
@@ -670,13 +760,24 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
   std::vector<fcl::CollisionResult<S>> results(pairs.size());
   std::vector<detail::Answer> kind(pairs.size());
   std::vector<detail::CollideEntry<S>*> cached(pairs.size());
-  detail::findCached(cache, pairs.data(), pairs.size(),
-                     [&](std::size_t i, detail::CollideEntry<S>* e) { cached[i] = e; });
-  parallelFor(pairs.size(), resolveThreads(options.threads), [&](std::size_t i) {
-    kind[i] = detail::answerPair(pairs[i], request, cached[i], results[i]);
+  // The cache and the cull on this thread; FCL's calls on the threads if they pay.
+  std::vector<std::size_t> computed;
+  std::size_t work = 0;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    kind[i] = detail::classify(cache, request, pairs[i].first, pairs[i].second, cached[i]);
+    if (kind[i] != detail::Answer::kComputed) continue;
+    computed.push_back(i);
+    work += detail::workOf(pairs[i]);
+  }
+  const int threads = work >= kParallelMinWork ? resolveThreads(options.threads) : 1;
+  parallelFor(computed.size(), threads, [&](std::size_t k) {
+    const std::size_t i = computed[k];
+    detail::fclCollide(pairs[i].first, pairs[i].second, request, results[i]);
   });
   for (std::size_t i = 0; i < pairs.size(); ++i) {
-    detail::countPair(kind[i], results[i], cached[i], stats);
+    ++(kind[i] == detail::Answer::kCached  ? stats.cached
+       : kind[i] == detail::Answer::kApart ? stats.culled
+                                           : stats.narrow_calls);
     if (kind[i] == detail::Answer::kCached)
       for (const fcl::Contact<S>& c : cached[i]->answer) results[i].addContact(c);
   }
@@ -720,7 +821,7 @@ void forEachPair(
     int threads) {
   checkPairs(pairs, "forEachPair");
   if (!fn) throw std::invalid_argument("cube::forEachPair: empty function");
-  parallelFor(pairs.size(), resolveThreads(threads),
+  parallelFor(pairs.size(), pairs.size() >= kParallelMinPairs ? resolveThreads(threads) : 1,
               [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
 }
 

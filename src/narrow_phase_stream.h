@@ -5,6 +5,8 @@
 // stream tells the walk to stop as soon as the merged answer is complete, so a request for one
 // contact still stops near the first colliding pair.
 
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "cube_collision/narrow_phase.h"
@@ -12,8 +14,15 @@
 namespace cube {
 namespace detail {
 
+/// How a pair was answered: proved apart by the cull, found in the cache, or by FCL.
+enum class Answer : std::uint8_t { kApart, kCached, kComputed };
+
 /// Accumulates fcl::collide answers exactly as one result passed to fcl::collide for each pair
 /// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial).
+/// The cache and the cull run as each pair is pushed, on the calling thread. FCL's calls run at
+/// once on this thread at first (and always for a request of one contact, and on one thread);
+/// after a few, the pairs FCL must answer are gathered into chunks whose calls run on the
+/// threads when there are enough of them to pay for a parallel region.
 template <typename S>
 class CollideStream {
  public:
@@ -27,7 +36,7 @@ class CollideStream {
   /// The pair that gave the first contact of the last collide with contacts that used `cache`
   /// (nullptrs if none, or forgotten since).
   static ObjectPair<S> lastHit(NarrowPhaseCache<S>& cache);
-  /// push, answering this pair before any other is pushed (what is pending goes with it).
+  /// push, answering this pair before any other is pushed (what is pending goes first).
   bool pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
   /// Runs what is pending and returns the merged result. Call once, at the end.
   fcl::CollisionResult<S> finish();
@@ -37,6 +46,11 @@ class CollideStream {
 
  private:
   struct Slot;
+  void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
+  void answerNow(const ObjectPair<S>& pair, Slot& slot);
+  void countServed();
+  void merge(const ObjectPair<S>& pair, const Slot& slot);
+  void markDone();
   void flush();
 
   const fcl::CollisionRequest<S>& request_;
@@ -45,9 +59,15 @@ class CollideStream {
   typename NarrowPhaseCache<S>::Impl* cache_;
   int threads_;
   bool done_ = false;
-  std::size_t chunk_limit_;
+  bool serial_ = true;           // answer each pair as it comes
+  std::size_t served_ = 0;       // FCL calls answered at once
+  std::size_t chunk_work_ = 64;  // flush once the pending work reaches this
+  std::size_t pending_work_ = 0;
   std::vector<ObjectPair<S>> chunk_;
-  std::vector<Slot> slots_;
+  std::vector<std::size_t> pending_;  // the chunk's pairs FCL must answer
+  std::vector<Slot> slots_;           // one per pair of the chunk
+  std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
+  fcl::CollisionResult<S> empty_;
   fcl::CollisionResult<S> result_;
 };
 

@@ -71,15 +71,13 @@ struct CountedCollide {
   }
 };
 
-// On one thread without a cache, and for requests whose costs or cached GJK guess travel from
-// pair to pair through the one result, the default callback accumulates as FCL does. Otherwise
-// the pipeline runs, with the same answer.
+// Requests whose costs or cached GJK guess travel from pair to pair through the one result run
+// the default callback, which accumulates as FCL does. Others run the pipeline, with the same
+// answer.
 template <typename S, class Walk>
 fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
                                     const NarrowPhaseOptions<S>& options, const Walk& walk) {
-  const int threads = options.threads > 0 ? options.threads : hardwareThreads();
-  if (request.enable_cost || request.enable_cached_gjk_guess ||
-      (threads == 1 && options.cache == nullptr)) {
+  if (request.enable_cost || request.enable_cached_gjk_guess) {
     CountedCollide<S> c;
     c.data.request = request;
     walk(&c, &CountedCollide<S>::fn);

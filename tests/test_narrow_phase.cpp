@@ -3,7 +3,10 @@
 // manager's walk with one result); the cache answers only pairs whose objects did not move, and
 // every kind of change sends a pair back to FCL; distances equal the brute-force minimum.
 
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/geometric_shape_to_BVH_model.h>
 #include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/collision.h>
@@ -94,7 +97,8 @@ std::vector<fcl::CollisionRequest<S>> requests() {
   return out;
 }
 
-// collideAll on 1, 2 and 3 threads (3 > the cores: oversubscribed), with and without a cache,
+// collideAll on 0 (the default), 1, 2, 3 and 8 threads (more than the cores: oversubscribed),
+// with and without a cache,
 // equals FCL's accumulation bit for bit, for self, object and manager-against-manager queries,
 // on primitives and meshes, for budgets that stop early and budgets that take everything.
 TYPED_TEST(NarrowPhase, CollideAllEqualsFclOnEveryThreadCount) {
@@ -115,7 +119,7 @@ TYPED_TEST(NarrowPhase, CollideAllEqualsFclOnEveryThreadCount) {
         ASSERT_GT(self.result.numContacts(), 50u) << "the scene must collide a lot";
         ASSERT_GT(two.result.numContacts(), 5u);
       }
-      for (int threads : {1, 2, 3}) {
+      for (int threads : {0, 1, 2, 3, 8}) {
         cube::NarrowPhaseCache<S> cache;
         for (int round = 0; round < 2; ++round) {  // round 1: answered from the cache
           cube::NarrowPhaseOptions<S> o;
@@ -424,9 +428,9 @@ TYPED_TEST(NarrowPhase, EveryKindOfMotionInvalidatesTheCache) {
   EXPECT_EQ(cache.size(), 0u);
 }
 
-// minimumDistance on 1, 2 and 3 threads, with and without a cache, equals the brute-force
-// minimum of fcl::distance, self and for an object; 2 and 3 threads (fresh results per pair)
-// give the same bits, and their nearest points belong to a pair at that distance.
+// minimumDistance on 0, 1, 2, 3 and 8 threads, with and without a cache, equals the
+// brute-force minimum of fcl::distance, self and for an object; more than one thread gives the
+// same bits on every count, and the nearest points belong to a pair at that distance.
 TYPED_TEST(NarrowPhase, MinimumDistanceEqualsBruteForceOnEveryThreadCount) {
   using S = TypeParam;
   for (bool meshes : {false, true}) {
@@ -457,7 +461,7 @@ TYPED_TEST(NarrowPhase, MinimumDistanceEqualsBruteForceOnEveryThreadCount) {
     const S tol = S(req.distance_tolerance) * (S(1) + self_min) +
                   S(64) * std::numeric_limits<S>::epsilon() * S(so.half_extent);
     std::vector<S> self_got, probe_got;
-    for (int threads : {1, 2, 3}) {
+    for (int threads : {0, 1, 2, 3, 8}) {
       cube::NarrowPhaseCache<S> cache;
       for (int round = 0; round < 2; ++round) {
         cube::NarrowPhaseOptions<S> o;
@@ -472,7 +476,7 @@ TYPED_TEST(NarrowPhase, MinimumDistanceEqualsBruteForceOnEveryThreadCount) {
             << what;
         const auto b = cube::minimumDistance<S>(m, probe, req, o);
         EXPECT_NEAR(b.min_distance, probe_min, tol) << what;
-        if (threads > 1) {
+        if (threads > 1 || (threads == 0 && cube::hardwareThreads() > 1)) {
           self_got.push_back(a.min_distance);
           probe_got.push_back(b.min_distance);
         }
@@ -498,7 +502,7 @@ TYPED_TEST(NarrowPhase, CollidePairsEqualsFclPerPair) {
   req.enable_contact = true;
   std::size_t colliding = 0;
   cube::NarrowPhaseCache<S> cache;
-  for (int threads : {1, 2, 3})
+  for (int threads : {0, 1, 2, 3, 8})
     for (bool cached : {false, true, true}) {
       cube::NarrowPhaseOptions<S> o;
       o.threads = threads;
@@ -514,6 +518,197 @@ TYPED_TEST(NarrowPhase, CollidePairsEqualsFclPerPair) {
       }
     }
   EXPECT_GT(colliding, 20u);
+}
+
+// Objects for the contact-budget test: sphere pairs that touch (one contact each), a box pair
+// and a mesh pair that overlap face to face, tilted so that their contacts have different depths.
+template <typename S>
+struct BudgetScene {
+  std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objects;
+  std::vector<cube::ObjectPair<S>> pairs;  // in the order above, the two multi-contact pairs
+                                           // after `before` sphere pairs
+  fcl::CollisionObject<S>* add(std::shared_ptr<fcl::CollisionGeometry<S>> g,
+                               const fcl::Vector3<S>& at, S tilt = 0) {
+    fcl::Transform3<S> tf = fcl::Transform3<S>::Identity();
+    tf.linear() = (fcl::AngleAxis<S>(tilt, fcl::Vector3<S>::UnitX()) *
+                   fcl::AngleAxis<S>(tilt * S(0.6), fcl::Vector3<S>::UnitY()))
+                      .toRotationMatrix();
+    tf.translation() = at;
+    objects.push_back(std::make_unique<fcl::CollisionObject<S>>(g, tf));
+    objects.back()->computeAABB();
+    return objects.back().get();
+  }
+  void spheres(std::size_t count, S x0) {
+    auto ball = std::make_shared<fcl::Sphere<S>>(S(1));
+    for (std::size_t i = 0; i < count; ++i) {
+      const S x = x0 + S(10) * S(i);
+      pairs.emplace_back(add(ball, {x, 0, 0}), add(ball, {x + S(1.5), 0, 0}));
+    }
+  }
+  explicit BudgetScene(std::size_t before) {
+    spheres(before, 0);
+    auto box = std::make_shared<fcl::Box<S>>(S(2), S(2), S(2));
+    pairs.emplace_back(add(box, {S(-50), 0, 0}), add(box, {S(-50), 0, S(1.8)}, S(0.05)));
+    auto mesh = std::make_shared<fcl::BVHModel<fcl::OBBRSS<S>>>();
+    fcl::generateBVHModel(*mesh, fcl::Box<S>(S(2), S(2), S(2)), fcl::Transform3<S>::Identity());
+    pairs.emplace_back(add(mesh, {S(-80), 0, 0}), add(mesh, {S(-80), 0, S(1.8)}, S(0.05)));
+    spheres(5, S(500));
+  }
+  std::vector<fcl::CollisionObject<S>*> pointers() const {
+    std::vector<fcl::CollisionObject<S>*> out;
+    for (const auto& o : objects) out.push_back(o.get());
+    return out;
+  }
+};
+
+// When the contact budget runs out inside a pair with several contacts, FCL keeps that pair's
+// deepest contacts (shape pairs) or its first (meshes): the pipeline keeps the same ones, on
+// every thread count, with and without a cache, for a pair list, a self-collide, an object
+// query and a manager query. The budget leaves room for 1, 2 and 3 of the pair's contacts
+// after 3 and after 12 sphere pairs (12: past the calls answered at once, in a chunk).
+TYPED_TEST(NarrowPhase, ContactBudgetEndingInsideAPairKeepsFclsContacts) {
+  using S = TypeParam;
+  for (std::size_t before : {std::size_t(3), std::size_t(12)}) {
+    BudgetScene<S> scene(before);
+    fcl::CollisionRequest<S> probe;
+    probe.enable_contact = true;
+    probe.num_max_contacts = 100;
+    for (std::size_t which : {before, before + 1}) {  // the box pair, then the mesh pair
+      fcl::CollisionResult<S> alone;
+      fcl::collide(scene.pairs[which].first, scene.pairs[which].second, probe, alone);
+      ASSERT_GE(alone.numContacts(), 4u) << "the pair must give several contacts";
+      if (which == before) {
+        bool differ = false;
+        for (std::size_t k = 1; k < alone.numContacts(); ++k)
+          differ |= alone.getContact(k).penetration_depth != alone.getContact(0).penetration_depth;
+        ASSERT_TRUE(differ) << "the box pair's contacts must differ in depth";
+      }
+    }
+    cube::CubeCollisionManager<S> m, other;
+    m.registerObjects(scene.pointers());
+    other.registerObject(scene.pairs[before].second);
+    for (std::size_t extra : {1, 2, 3}) {
+      fcl::CollisionRequest<S> request;
+      request.enable_contact = true;
+      // Every sphere pair gives one contact; the budget ends inside the first multi-contact
+      // pair: the box pair in the list, whichever comes first in the self-collide's order.
+      Accumulate<S> all;
+      all.request = probe;
+      all.request.num_max_contacts = 1000;
+      m.collide(&all, &Accumulate<S>::fn);
+      std::size_t at_box = 0;  // the first contact of the box pair or the mesh pair
+      while (at_box < all.result.numContacts() &&
+             all.result.getContact(at_box).o1->getNodeType() == fcl::GEOM_SPHERE)
+        ++at_box;
+      ASSERT_LT(at_box, all.result.numContacts());
+      for (const bool self : {false, true}) {
+        request.num_max_contacts = (self ? at_box : before) + extra;
+        Accumulate<S> want;
+        want.request = request;
+        if (self) {
+          m.collide(&want, &Accumulate<S>::fn);
+        } else {
+          for (const auto& [a, b] : scene.pairs)
+            if (Accumulate<S>::fn(a, b, &want)) break;
+        }
+        ASSERT_EQ(want.result.numContacts(), request.num_max_contacts);
+        for (int threads : {0, 1, 2, 3, 8}) {
+          cube::NarrowPhaseCache<S> cache;
+          for (int round = 0; round < 3; ++round) {  // no cache, filling it, answered from it
+            cube::NarrowPhaseOptions<S> o;
+            o.threads = threads;
+            o.cache = round == 0 ? nullptr : &cache;
+            const auto what = ::testing::Message()
+                              << "before " << before << " extra " << extra << " self " << self
+                              << " threads " << threads << " round " << round;
+            const auto got = self ? cube::collideAll<S>(m, request, o)
+                                  : cube::collideMerged<S>(scene.pairs, request, o);
+            EXPECT_TRUE(sameContacts(got, want.result)) << what;
+          }
+        }
+      }
+      // The box pair's own contacts through an object query and a manager query.
+      request.num_max_contacts = extra;
+      Accumulate<S> one, two;
+      one.request = two.request = request;
+      m.collide(scene.pairs[before].second, &one, &Accumulate<S>::fn);
+      m.collide(&other, &two, &Accumulate<S>::fn);
+      for (int threads : {0, 1, 2, 3, 8}) {
+        cube::NarrowPhaseCache<S> cache;
+        for (int round = 0; round < 3; ++round) {
+          cube::NarrowPhaseOptions<S> o;
+          o.threads = threads;
+          o.cache = round == 0 ? nullptr : &cache;
+          EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, scene.pairs[before].second, request, o),
+                                   one.result))
+              << "object query, extra " << extra << " threads " << threads << " round " << round;
+          EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, other, request, o), two.result))
+              << "manager query, extra " << extra << " threads " << threads << " round " << round;
+        }
+      }
+    }
+  }
+}
+
+// A request for one contact calls FCL no more often on several threads than on one, with and
+// without a cache, for a pair list, a self-collide and a manager query: pairs are answered one
+// at a time and the walk stops at the first contact. The scene: 40 capsule pairs whose tight
+// volumes overlap but whose capsules do not (each costs an FCL call), a touching sphere pair
+// after the first 20 of them.
+TYPED_TEST(NarrowPhase, OneContactRequestCallsFclNoMoreOftenOnThreads) {
+  using S = TypeParam;
+  std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objects;
+  std::vector<cube::ObjectPair<S>> pairs;
+  cube::CubeCollisionManager<S> m, other;
+  const auto add = [&](std::shared_ptr<fcl::CollisionGeometry<S>> g, const fcl::Vector3<S>& at) {
+    fcl::Transform3<S> tf = fcl::Transform3<S>::Identity();
+    tf.translation() = at;
+    objects.push_back(std::make_unique<fcl::CollisionObject<S>>(g, tf));
+    objects.back()->computeAABB();
+    return objects.back().get();
+  };
+  auto capsule = std::make_shared<fcl::Capsule<S>>(S(1), S(2));
+  auto ball = std::make_shared<fcl::Sphere<S>>(S(1));
+  for (int i = 0; i < 41; ++i) {
+    const S x = S(20) * S(i);
+    if (i == 20)
+      pairs.emplace_back(add(ball, {x, 0, 0}), add(ball, {x + S(1.5), 0, 0}));
+    else  // corner to corner: boxes and bounding spheres overlap, the capsules are 1.3 apart
+      pairs.emplace_back(add(capsule, {x, 0, 0}), add(capsule, {x + S(1.9), S(1.9), S(3.9)}));
+    m.registerObject(pairs.back().first);
+    other.registerObject(pairs.back().second);
+  }
+  fcl::CollisionRequest<S> any;
+  cube::NarrowPhaseStats probe;
+  cube::NarrowPhaseOptions<S> po;
+  po.threads = 1;
+  po.stats = &probe;
+  ASSERT_TRUE(cube::collideMerged<S>(pairs, any, po).isCollision());
+  ASSERT_EQ(probe.narrow_calls, 21u) << "20 capsule pairs survive the cull, then the spheres";
+  const auto calls = [&](int threads, int query, cube::NarrowPhaseCache<S>* cache) {
+    cube::NarrowPhaseStats st;
+    cube::NarrowPhaseOptions<S> o;
+    o.threads = threads;
+    o.cache = cache;
+    o.stats = &st;
+    const auto res = query == 0   ? cube::collideMerged<S>(pairs, any, o)
+                     : query == 1 ? cube::collideAll<S>(m, other, any, o)
+                                  : cube::collideAll<S>(m, any, o);
+    return std::make_pair(st.narrow_calls, res.isCollision());
+  };
+  for (int query = 0; query < 3; ++query)
+    for (const bool cached : {false, true}) {
+      cube::NarrowPhaseCache<S> c1;
+      const auto one = calls(1, query, cached ? &c1 : nullptr);
+      EXPECT_EQ(one.second, query != 2) << "the self-collide of m holds no touching pair";
+      for (int threads : {0, 2, 3, 8}) {
+        cube::NarrowPhaseCache<S> c;
+        const auto many = calls(threads, query, cached ? &c : nullptr);
+        EXPECT_EQ(many.second, one.second) << "query " << query << " threads " << threads;
+        EXPECT_LE(many.first, one.first)
+            << "query " << query << " threads " << threads << " cache " << cached;
+      }
+    }
 }
 
 // forEachPair calls fn once per index on any thread count and rethrows the first exception
