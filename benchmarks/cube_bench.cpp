@@ -229,8 +229,9 @@ std::size_t defaultCallbackCollide(const Manager& mgr, std::size_t* calls = null
 }
 
 /// Every contact of manager.collide(q), as narrowCollide.
-std::size_t narrowQuery(Mgr m, const Manager& mgr, Object* q) {
-  if (m == Mgr::cube) return cube::collideAll<S>(mgr, q, allContacts(), pipeline(1)).numContacts();
+std::size_t narrowQuery(Mgr m, const Manager& mgr, Object* q, int threads = 1) {
+  if (m == Mgr::cube)
+    return cube::collideAll<S>(mgr, q, allContacts(), pipeline(threads)).numContacts();
   fcl::DefaultCollisionData<S> d;
   d.request = allContacts();
   mgr.collide(q, &d, fcl::DefaultCollisionFunction<S>);
@@ -238,9 +239,10 @@ std::size_t narrowQuery(Mgr m, const Manager& mgr, Object* q) {
 }
 
 /// "Does the robot collide?" (FCL's default request: stop at the first contact).
-bool robotCollides(Mgr m, const Manager& world, Manager& robot) {
+bool robotCollides(Mgr m, const Manager& world, Manager& robot, int threads = 1) {
   if (m == Mgr::cube)
-    return cube::collideAll<S>(world, robot, fcl::CollisionRequest<S>(), pipeline(1)).isCollision();
+    return cube::collideAll<S>(world, robot, fcl::CollisionRequest<S>(), pipeline(threads))
+        .isCollision();
   fcl::DefaultCollisionData<S> d;
   world.collide(&robot, &d, fcl::DefaultCollisionFunction<S>);
   return d.result.isCollision();
@@ -311,6 +313,12 @@ S selfDistance(Mgr m, const Manager& mgr) {
   fcl::DefaultDistanceData<S> d;
   mgr.distance(&d, fcl::DefaultDistanceFunction<S>);
   return d.result.min_distance;
+}
+
+/// cube::minimumDistance with the default request and options (the hardware's threads), what a
+/// user who follows the README runs.
+S pipelineDistance(const Manager& mgr, Object* q) {
+  return cube::minimumDistance<S>(mgr, q).min_distance;
 }
 
 S objectDistance(Mgr m, const Manager& mgr, Object* q) {
@@ -581,14 +589,14 @@ class RobotPath {
 };
 
 /// robotCollides at every pose of the path, with robot managers of kind m built for it.
-std::vector<bool> robotAnswers(Mgr m, const Manager& world, SceneSet& s) {
+std::vector<bool> robotAnswers(Mgr m, const Manager& world, SceneSet& s, int threads = 1) {
   RobotPath path(s);
   auto robot = built(m, s.robot, s.robot_extent);
   std::vector<bool> out;
   for (int k = 0; k < kRobotPoses; ++k) {
     path.pose(k);
     robot->update();
-    out.push_back(robotCollides(m, world, *robot));
+    out.push_back(robotCollides(m, world, *robot, threads));
   }
   return out;
 }
@@ -617,7 +625,12 @@ enum class Case {
   // cube only: the user's own callback (FCL's default) behind Config::cull_pairs; read against
   // selfcollide_narrow
   selfcollide_cullcb,
-  last = selfcollide_cullcb
+  // cube only, with the pipeline's default options (the hardware's threads): read against the
+  // FCL managers of queries_narrow, robot_narrow and objdistance (issue 40)
+  queries_narrow_mt,
+  robot_narrow_mt,
+  objdistance_mt,
+  last = objdistance_mt
 };
 
 const char* caseName(Case c) {
@@ -654,6 +667,12 @@ const char* caseName(Case c) {
       return "robot_narrow";
     case Case::selfcollide_cullcb:
       return "selfcollide_cullcb";
+    case Case::queries_narrow_mt:
+      return "queries_narrow_mt";
+    case Case::robot_narrow_mt:
+      return "robot_narrow_mt";
+    case Case::objdistance_mt:
+      return "objdistance_mt";
   }
   return "?";
 }
@@ -667,7 +686,8 @@ bool isMotion(Case c) {
 bool manualTime(Case c) {
   // Threads: the process's CPU time would add the workers' time, so wall time is measured.
   return c == Case::build || isMotion(c) || c == Case::selfcollide_narrow_mt ||
-         c == Case::motion_narrow || c == Case::robot_narrow;
+         c == Case::motion_narrow || c == Case::robot_narrow || c == Case::queries_narrow_mt ||
+         c == Case::robot_narrow_mt || c == Case::objdistance_mt;
 }
 
 struct Spec {
@@ -991,10 +1011,38 @@ Check runCheck(const Spec& spec, SceneSet& s) {
                                std::to_string(want) + " expected");
       break;
     }
-    case Case::robot_narrow: {
+    case Case::queries_narrow_mt: {
+      s.derive();
+      if (!ref.counts.count("queries_narrow")) {
+        std::size_t c = 0;
+        for (Object* q : s.queries) c += narrowQuery(rm, *s.mainManager(rm), q);
+        ref.counts["queries_narrow"] = c;
+      }
+      const std::size_t want = ref.counts["queries_narrow"];
+      std::size_t got = 0;
+      for (Object* q : s.queries) got += narrowQuery(spec.m, *s.mainManager(spec.m), q, 0);
+      ck.counters["contacts"] = double(got);
+      ck.counters["threads"] = double(cube::hardwareThreads());
+      compare(got == want,
+              std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
+      break;
+    }
+    case Case::objdistance_mt: {
+      const Manager& want_mgr = *s.distManager(rm);
+      const Manager& got_mgr = *s.distManager(spec.m);
+      std::size_t wrong = 0;
+      for (Object* q : s.dist_queries)
+        wrong += !sameDistance(pipelineDistance(got_mgr, q), objectDistance(rm, want_mgr, q));
+      ck.counters["threads"] = double(cube::hardwareThreads());
+      compare(wrong == 0, std::to_string(wrong) + " distances differ");
+      break;
+    }
+    case Case::robot_narrow:
+    case Case::robot_narrow_mt: {
       s.derive();
       const std::vector<bool> want = robotAnswers(rm, *s.mainManager(rm), s);
-      const std::vector<bool> got = robotAnswers(spec.m, *s.mainManager(spec.m), s);
+      const std::vector<bool> got =
+          robotAnswers(spec.m, *s.mainManager(spec.m), s, spec.c == Case::robot_narrow_mt ? 0 : 1);
       std::size_t colliding = 0;
       for (bool b : want) colliding += b;
       ck.counters["colliding_poses"] = double(colliding);
@@ -1155,18 +1203,42 @@ void run(benchmark::State& state, const Spec& spec) {
       s.restore();
       break;
     }
-    case Case::robot_narrow: {
+    case Case::queries_narrow_mt: {
+      auto mgr = s.mainManager(spec.m);
+      for (auto _ : state) {
+        const auto t0 = Clock::now();
+        std::size_t c = 0;
+        for (Object* q : s.queries) c += narrowQuery(spec.m, *mgr, q, 0);
+        state.SetIterationTime(seconds(Clock::now() - t0));
+        benchmark::DoNotOptimize(c);
+      }
+      break;
+    }
+    case Case::objdistance_mt: {
+      auto mgr = s.distManager(spec.m);
+      for (auto _ : state) {
+        const auto t0 = Clock::now();
+        S sum = 0;
+        for (Object* q : s.dist_queries) sum += pipelineDistance(*mgr, q);
+        state.SetIterationTime(seconds(Clock::now() - t0));
+        benchmark::DoNotOptimize(sum);
+      }
+      break;
+    }
+    case Case::robot_narrow:
+    case Case::robot_narrow_mt: {
       s.derive();
       auto& world = *s.mainManager(spec.m);
       RobotPath path(s);
       auto robot = built(spec.m, s.robot, s.robot_extent);
+      const int threads = spec.c == Case::robot_narrow_mt ? 0 : 1;
       int k = 0;
       for (auto _ : state) {
         path.pose(k);
         k = (k + 1) % kRobotPoses;
         const auto t0 = Clock::now();
         robot->update();
-        benchmark::DoNotOptimize(robotCollides(spec.m, world, *robot));
+        benchmark::DoNotOptimize(robotCollides(spec.m, world, *robot, threads));
         state.SetIterationTime(seconds(Clock::now() - t0));
       }
       break;
@@ -1226,6 +1298,10 @@ bool runs(Case c, const std::string& scene, std::size_t n, Mgr m) {
   if (n >= 100000 && scene == "meshes") return false;
   if (c == Case::selfcollide_narrow_mt || c == Case::selfcollide_cullcb)
     return m == Mgr::cube && runs(Case::selfcollide_narrow, scene, n, m);
+  if (c == Case::queries_narrow_mt)
+    return m == Mgr::cube && runs(Case::queries_narrow, scene, n, m);
+  if (c == Case::robot_narrow_mt) return m == Mgr::cube && runs(Case::robot_narrow, scene, n, m);
+  if (c == Case::objdistance_mt) return m == Mgr::cube && runs(Case::objdistance, scene, n, m);
   // FCL 0.7's IntervalTree does not return from the motion loop (update(moved), then collide)
   // even at 32 objects.
   if (c == Case::motion_narrow && m == Mgr::interval) return false;

@@ -665,11 +665,11 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>
         separation(*a, *b, S(request_.distance_tolerance), result_.min_distance);
     if (s.lower_bound - s.margin > result_.min_distance) {
       ++stats_.culled;
-    } else if (cache_ == nullptr && (threads_ == 1 || workOf(ObjectPair<S>(a, b)) == 1)) {
-      // FCL's own way: one accumulating result, which a mesh pair's search is pruned by. Shape
-      // pairs take a few us: a parallel region for two of them costs more than it saves. What
-      // waits in the batch goes first, so that the pairs meet the result in walk order.
-      flush();
+    } else if (cache_ == nullptr) {
+      // FCL's own way, on this thread whatever the thread count: one accumulating result,
+      // which a mesh pair's search is pruned by, and which lowers the walk's bound at once.
+      // Batches on two threads made 100 distance queries among 1,000 meshes take 1.5-2x as long
+      // (68% more FCL calls and 39% more candidate pairs, from the bounds a batch holds back).
       ++stats_.narrow_calls;
       fclDistance(a, b, request_, result_);
     } else {

@@ -71,11 +71,14 @@ class CollideStream {
   fcl::CollisionResult<S> result_;
 };
 
-/// The smallest fcl::distance over the pairs pushed, culled by tight-volume bounds, answered
-/// from the cache when it can, and computed `threads` pairs at a time: a pair is held back until
-/// a batch of that many is complete (or finish()), and the bound returned to the walk is the one
-/// before the batch. The minimum is the same for every thread count; its nearest points are
-/// those of the first pair, in walk order, that reached it.
+/// The smallest fcl::distance over the pairs pushed, culled by tight-volume bounds. Without a
+/// cache, FCL's own way on the calling thread: one accumulating result, whatever the thread
+/// count (a branch and bound is sequential: batches gave the walk weaker bounds and cost more
+/// than they saved). With a cache, each pair not in it gets a fresh result, `threads` pairs at a
+/// time (a pair is held back until a batch of that many is complete, or finish(); the bound
+/// returned to the walk is the one before the batch), on the threads only when the batch holds
+/// meshes or octrees enough to pay for a parallel region. The minimum is the same for every
+/// thread count; its nearest points are those of the first pair, in walk order, that reached it.
 template <typename S>
 class DistanceSearch {
  public:
