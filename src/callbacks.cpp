@@ -14,9 +14,23 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
   auto& d = *static_cast<CollisionData<S>*>(data);
   if (d.done) return true;
   // A pair proved apart adds nothing to the result, so the narrow phase is skipped. Not with
-  // costs: an octree's cost sources come from cells its box does not bound.
-  if (!d.request.enable_cost && detail::surelyApart(*o1, *o2, S(d.request.gjk_tolerance)))
-    return false;
+  // costs: an octree's cost sources come from cells its box does not bound. A pair proved
+  // touching, for a request without contact geometry, gets the one contact FCL would add.
+  if (!d.request.enable_cost) {
+    switch (detail::verdict(*o1, *o2, S(d.request.gjk_tolerance), detail::provable(d.request))) {
+      case detail::Verdict::kApart:
+        return false;
+      case detail::Verdict::kTouching:
+        if (d.result.numContacts() < d.request.num_max_contacts)
+          d.result.addContact(fcl::Contact<S>(o1->collisionGeometry().get(),
+                                              o2->collisionGeometry().get(), fcl::Contact<S>::NONE,
+                                              fcl::Contact<S>::NONE));
+        if (d.result.numContacts() >= d.request.num_max_contacts) d.done = true;
+        return d.done;
+      case detail::Verdict::kUnknown:
+        break;
+    }
+  }
   ++d.narrow_calls;
   fcl::collide(o1, o2, d.request, d.result);
   // With costs requested every pair matters, so only a contact budget without costs stops.

@@ -2,6 +2,11 @@
 
 #include "cull.h"
 
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
 #include <fcl/geometry/shape/sphere.h>
 
 #include <algorithm>
@@ -42,7 +47,8 @@ template <typename S>
 bool tightOf(const fcl::CollisionObject<S>& o, Tight<S>& t) {
   const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
   if (g == nullptr) return false;
-  switch (g->getNodeType()) {
+  const fcl::NODE_TYPE type = g->getNodeType();
+  switch (type) {
     case fcl::GEOM_PLANE:
     case fcl::GEOM_HALFSPACE:
     case fcl::GEOM_OCTREE:  // its cells, not its box, decide; and it may carry costs
@@ -52,7 +58,7 @@ bool tightOf(const fcl::CollisionObject<S>& o, Tight<S>& t) {
   }
   t.g = g;
   t.tf = &o.getTransform();
-  t.sphere = g->getNodeType() == fcl::GEOM_SPHERE;
+  t.sphere = type == fcl::GEOM_SPHERE;
   t.c = t.tf->linear() * g->aabb_center + t.tf->translation();
   t.r = t.sphere ? static_cast<const fcl::Sphere<S>*>(g)->radius : g->aabb_radius;
   return t.c.allFinite() && std::isfinite(t.r) && t.r >= S(0);
@@ -68,10 +74,12 @@ S pointBoxDistance(const fcl::Vector3<S>& p, const Tight<S>& b) {
 
 // A lower bound on the distance between two oriented boxes: the largest gap along the 15 axes
 // of the separating-axis test (three face normals of each, nine edge cross products, each
-// gap divided by its axis' length). |R| gets a small term so that rounding makes gaps smaller,
-// never larger; cross products of near-parallel edges (length below 1e-3) are left out.
+// gap divided by its axis' length; edge axes only where positive), or the first gap found above
+// `stop` (the caller needs no more). |R| gets a small term so that rounding makes gaps smaller,
+// never larger; cross products of near-parallel edges (length below 1e-3) are left out. The face
+// axes come first: they separate most pairs that are apart, and cost no square root.
 template <typename S>
-S boxGap(const Tight<S>& a, const Tight<S>& b) {
+S boxGap(const Tight<S>& a, const Tight<S>& b, S stop) {
   const fcl::Matrix3<S> R = a.R.transpose() * b.R;  // b's axes in a's frame
   const fcl::Vector3<S> t = a.R.transpose() * (b.c - a.c);
   const fcl::Matrix3<S> A = R.cwiseAbs().array() + S(16) * std::numeric_limits<S>::epsilon();
@@ -79,20 +87,66 @@ S boxGap(const Tight<S>& a, const Tight<S>& b) {
   for (int i = 0; i < 3; ++i) gap = std::max(gap, std::abs(t[i]) - a.e[i] - b.e.dot(A.row(i)));
   for (int j = 0; j < 3; ++j)
     gap = std::max(gap, std::abs(t.dot(R.col(j))) - a.e.dot(A.col(j)) - b.e[j]);
+  if (gap > stop) return gap;
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
-      const S len = std::sqrt(std::max(S(0), S(1) - R(i, j) * R(i, j)));
-      if (len < S(1e-3)) continue;
+      const S len2 = S(1) - R(i, j) * R(i, j);
+      if (!(len2 >= S(1e-6))) continue;  // length below 1e-3
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
       // Axis: a's axis i cross b's axis j.
       const S dist = std::abs(t[i2] * R(i1, j) - t[i1] * R(i2, j));
       const S ra = a.e[i1] * A(i2, j) + a.e[i2] * A(i1, j);
       const S rb = b.e[j1] * A(i, j2) + b.e[j2] * A(i, j1);
-      gap = std::max(gap, (dist - ra - rb) / len);
+      const S slack = dist - ra - rb;
+      // A gap of 0 or less bounds nothing the callers use: no square root for it.
+      if (slack <= S(0)) continue;
+      gap = std::max(gap, slack / std::sqrt(len2));
+      if (gap > stop) return gap;
     }
   }
   return gap;
+}
+
+// A ball inside the geometry (centre c in world coordinates, radius r), for the shapes that
+// have an obvious one; false for the others and for non-finite input. FCL's primitives are
+// centred on their frame's origin; a cone's base is at z = -lz/2 and its apex at +lz/2.
+template <typename S>
+bool inscribedBall(const fcl::CollisionObject<S>& o, fcl::Vector3<S>& c, S& r) {
+  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
+  if (g == nullptr || !g->isOccupied()) return false;
+  const fcl::Transform3<S>& tf = o.getTransform();
+  c = tf.translation();
+  switch (g->getNodeType()) {
+    case fcl::GEOM_SPHERE:
+      r = static_cast<const fcl::Sphere<S>*>(g)->radius;
+      break;
+    case fcl::GEOM_BOX:
+      r = S(0.5) * static_cast<const fcl::Box<S>*>(g)->side.minCoeff();
+      break;
+    case fcl::GEOM_CAPSULE:
+      r = static_cast<const fcl::Capsule<S>*>(g)->radius;
+      break;
+    case fcl::GEOM_CYLINDER: {
+      const auto* cyl = static_cast<const fcl::Cylinder<S>*>(g);
+      r = std::min(cyl->radius, S(0.5) * cyl->lz);
+      break;
+    }
+    case fcl::GEOM_ELLIPSOID:
+      r = static_cast<const fcl::Ellipsoid<S>*>(g)->radii.minCoeff();
+      break;
+    case fcl::GEOM_CONE: {
+      // The ball touching the base and the side: r = R h / (R + slant), centred r above the base.
+      const auto* cone = static_cast<const fcl::Cone<S>*>(g);
+      const S h = cone->lz, R = cone->radius;
+      r = R * h / (R + std::hypot(R, h));
+      c = tf * fcl::Vector3<S>(0, 0, r - S(0.5) * h);
+      break;
+    }
+    default:
+      return false;
+  }
+  return c.allFinite() && std::isfinite(r) && r > S(0) && tf.linear().allFinite();
 }
 
 }  // namespace
@@ -119,13 +173,37 @@ Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionO
     return {spheres, margin};
   if (ta.sphere) return {std::max(spheres, pointBoxDistance(ta.c, tb) - ta.r), margin};
   if (tb.sphere) return {std::max(spheres, pointBoxDistance(tb.c, ta) - tb.r), margin};
-  return {std::max(spheres, boxGap(ta, tb)), margin};
+  return {std::max(spheres, boxGap(ta, tb, enough + margin)), margin};
 }
 
 template <typename S>
 bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance) {
   const Separation<S> s = separation(a, b, tolerance, S(0));
   return s.lower_bound > s.margin;
+}
+
+template <typename S>
+bool surelyTouching(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                    S tolerance) {
+  fcl::Vector3<S> ca, cb;
+  S ra, rb;
+  if (!inscribedBall(a, ca, ra) || !inscribedBall(b, cb, rb)) return false;
+  // separation's margin, from the same scale: the balls' centres and radii bound it from below
+  // (each ball lies in its object's bounding sphere), so the margin here is at least as large.
+  const S floor = sizeof(S) >= 8 ? S(1e-6) : S(1e-4);
+  const S scale =
+      std::max({ca.cwiseAbs().maxCoeff(), cb.cwiseAbs().maxCoeff(),
+                S(a.collisionGeometry()->aabb_radius), S(b.collisionGeometry()->aabb_radius)});
+  const S margin = std::max(S(2) * tolerance, floor) * (S(1) + scale + ra + rb);
+  return (ca - cb).norm() < ra + rb - margin;
+}
+
+template <typename S>
+Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance,
+                bool prove) {
+  if (surelyApart(a, b, tolerance)) return Verdict::kApart;
+  if (prove && surelyTouching(a, b, tolerance)) return Verdict::kTouching;
+  return Verdict::kUnknown;
 }
 
 template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
@@ -136,6 +214,14 @@ template bool surelyApart<double>(const fcl::CollisionObject<double>&,
                                   const fcl::CollisionObject<double>&, double);
 template bool surelyApart<float>(const fcl::CollisionObject<float>&,
                                  const fcl::CollisionObject<float>&, float);
+template bool surelyTouching<double>(const fcl::CollisionObject<double>&,
+                                     const fcl::CollisionObject<double>&, double);
+template bool surelyTouching<float>(const fcl::CollisionObject<float>&,
+                                    const fcl::CollisionObject<float>&, float);
+template Verdict verdict<double>(const fcl::CollisionObject<double>&,
+                                 const fcl::CollisionObject<double>&, double, bool);
+template Verdict verdict<float>(const fcl::CollisionObject<float>&,
+                                const fcl::CollisionObject<float>&, float, bool);
 
 }  // namespace detail
 }  // namespace cube

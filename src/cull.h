@@ -7,6 +7,7 @@
 // flops instead of a narrow-phase call of microseconds.
 
 #include <fcl/narrowphase/collision_object.h>
+#include <fcl/narrowphase/collision_request.h>
 
 #include <limits>
 
@@ -39,6 +40,46 @@ Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionO
 template <typename S>
 bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance);
 
+/// What the tight volumes settle about a pair for a collision request.
+enum class Verdict : unsigned char {
+  kApart,     ///< surelyApart: FCL would report no contact
+  kTouching,  ///< surelyTouching: FCL would report a contact
+  kUnknown,   ///< FCL must decide
+};
+
+/// True only if objects a and b certainly overlap, by more than separation's margin (so by more
+/// than FCL's `tolerance` with room for rounding): balls inscribed in the two shapes overlap by
+/// that much. For spheres, boxes, capsules, cylinders, cones and ellipsoids whose geometries are
+/// occupied (cost_density >= threshold_occupied: FCL ignores the others); false for every other
+/// geometry (meshes, octrees, convex, triangles, planes, halfspaces) and for non-finite input.
+/// For a request without enable_contact and with num_max_contacts > 0, such a pair gets from
+/// FCL's shape collision exactly one contact, Contact(a's geometry, b's geometry, NONE, NONE),
+/// when the result has room.
+template <typename S>
+bool surelyTouching(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                    S tolerance);
+
+/// kApart if surelyApart, else kTouching if `prove` and surelyTouching, else kUnknown.
+template <typename S>
+Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance,
+                bool prove);
+
+/// Whether a collision request's answer for a pair that surelyTouching proves is known without
+/// FCL: no contact geometry, no costs, no GJK guess carried, and room for a contact.
+template <typename S>
+bool provable(const fcl::CollisionRequest<S>& request) {
+  return !request.enable_contact && !request.enable_cost && !request.enable_cached_gjk_guess &&
+         request.num_max_contacts > 0;
+}
+
+extern template bool surelyTouching<double>(const fcl::CollisionObject<double>&,
+                                            const fcl::CollisionObject<double>&, double);
+extern template bool surelyTouching<float>(const fcl::CollisionObject<float>&,
+                                           const fcl::CollisionObject<float>&, float);
+extern template Verdict verdict<double>(const fcl::CollisionObject<double>&,
+                                        const fcl::CollisionObject<double>&, double, bool);
+extern template Verdict verdict<float>(const fcl::CollisionObject<float>&,
+                                       const fcl::CollisionObject<float>&, float, bool);
 extern template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
                                                       const fcl::CollisionObject<double>&, double,
                                                       double);

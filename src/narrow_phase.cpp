@@ -84,6 +84,7 @@ void addStats(NarrowPhaseStats* out, const NarrowPhaseStats& s) {
   if (out == nullptr) return;
   out->candidate_pairs += s.candidate_pairs;
   out->culled += s.culled;
+  out->proved += s.proved;
   out->cached += s.cached;
   out->narrow_calls += s.narrow_calls;
 }
@@ -404,8 +405,43 @@ Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
                 fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
   cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
   if (cached != nullptr) return Answer::kCached;
-  if (plainRequest(request) && surelyApart(*a, *b, S(request.gjk_tolerance))) return Answer::kApart;
+  if (!plainRequest(request)) return Answer::kComputed;
+  switch (verdict(*a, *b, S(request.gjk_tolerance), provable(request))) {
+    case Verdict::kApart:
+      return Answer::kApart;
+    case Verdict::kTouching:
+      return Answer::kProved;
+    case Verdict::kUnknown:
+      break;
+  }
   return Answer::kComputed;
+}
+
+// The one contact FCL's shape collision gives a touching pair when the request asks for no
+// contact geometry (position, normal and depth left as FCL leaves them: unset).
+template <typename S>
+fcl::Contact<S> provedContact(const ObjectPair<S>& pair) {
+  return fcl::Contact<S>(pair.first->collisionGeometry().get(),
+                         pair.second->collisionGeometry().get(), fcl::Contact<S>::NONE,
+                         fcl::Contact<S>::NONE);
+}
+
+// Counts one answer of a kind.
+inline void count(NarrowPhaseStats& stats, Answer kind) {
+  switch (kind) {
+    case Answer::kApart:
+      ++stats.culled;
+      return;
+    case Answer::kProved:
+      ++stats.proved;
+      return;
+    case Answer::kCached:
+      ++stats.cached;
+      return;
+    case Answer::kComputed:
+      ++stats.narrow_calls;
+      return;
+  }
 }
 
 // A pair's contacts, in the cache or in a fresh result (FCL gives no const view of its list).
@@ -491,6 +527,10 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>*
   if (slots_.size() <= i) slots_.resize(i + 1);
   slots_[i].kind = kind;
   slots_[i].cached = cached;
+  if (kind == Answer::kProved) {
+    slots_[i].fresh.clear();
+    slots_[i].fresh.addContact(provedContact(chunk_[i]));
+  }
   if (kind == Answer::kComputed) {
     pending_.push_back(i);
     pending_work_ += workOf(chunk_[i]);
@@ -526,12 +566,16 @@ bool CollideStream<S>::callback(fcl::CollisionObject<S>* a, fcl::CollisionObject
 template <typename S>
 void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
                                  Answer kind) {
-  if (kind == Answer::kApart) {
-    ++stats_.culled;
+  count(stats_, kind);
+  if (kind == Answer::kApart) return;
+  if (kind == Answer::kProved) {
+    // What FCL's shape collision adds: one contact if the result has room.
+    if (result_.numContacts() < request_.num_max_contacts)
+      result_.addContact(provedContact(ObjectPair<S>(a, b)));
+    markDone();
     return;
   }
   // FCL's own way, one accumulating result: FCL decides which contacts fit.
-  ++stats_.narrow_calls;
   fclCollide(a, b, request_, result_);
   markDone();
   countServed();
@@ -539,17 +583,21 @@ void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObjec
 
 template <typename S>
 void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
+  count(stats_, s.kind);
   switch (s.kind) {
     case Answer::kCached:
-      ++stats_.cached;
       merge(pair, s);
       return;
     case Answer::kApart:
-      ++stats_.culled;
       keepPair(s.kind, pair, cache_, empty_);
       return;
+    case Answer::kProved:
+      s.fresh.clear();
+      s.fresh.addContact(provedContact(pair));
+      merge(pair, s);
+      keepPair(s.kind, pair, cache_, s.fresh);
+      return;
     case Answer::kComputed:
-      ++stats_.narrow_calls;
       s.fresh.clear();
       fclCollide(pair.first, pair.second, request_, s.fresh);
       merge(pair, s);
@@ -606,15 +654,13 @@ void CollideStream<S>::flush() {
     parallelFor(pending_.size(), pending_work_ >= kParallelMinWork ? threads_ : 1, run);
     for (std::size_t i = 0; i < n; ++i) {
       Slot& s = slots_[i];
-      ++(s.kind == Answer::kCached  ? stats_.cached
-         : s.kind == Answer::kApart ? stats_.culled
-                                    : stats_.narrow_calls);
+      count(stats_, s.kind);
       if (s.kind != Answer::kApart) merge(chunk_[i], s);
     }
     if (cache_ != nullptr)
       for (std::size_t i = 0; i < n; ++i)
         keepPair(slots_[i].kind, chunk_[i], cache_,
-                 slots_[i].kind == Answer::kComputed ? slots_[i].fresh : empty_);
+                 slots_[i].kind == Answer::kApart ? empty_ : slots_[i].fresh);
     if (!pending_.empty()) chunk_work_ = std::min(chunk_work_ * 2, kMaxChunkWork);
   }
   chunk_.clear();
@@ -775,11 +821,10 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
     detail::fclCollide(pairs[i].first, pairs[i].second, request, results[i]);
   });
   for (std::size_t i = 0; i < pairs.size(); ++i) {
-    ++(kind[i] == detail::Answer::kCached  ? stats.cached
-       : kind[i] == detail::Answer::kApart ? stats.culled
-                                           : stats.narrow_calls);
+    detail::count(stats, kind[i]);
     if (kind[i] == detail::Answer::kCached)
       for (const fcl::Contact<S>& c : cached[i]->answer) results[i].addContact(c);
+    if (kind[i] == detail::Answer::kProved) results[i].addContact(detail::provedContact(pairs[i]));
   }
   for (std::size_t i = 0; i < pairs.size(); ++i)
     detail::keepPair(kind[i], pairs[i], cache, results[i]);

@@ -14,8 +14,9 @@
 namespace cube {
 namespace detail {
 
-/// How a pair was answered: proved apart by the cull, found in the cache, or by FCL.
-enum class Answer : std::uint8_t { kApart, kCached, kComputed };
+/// How a pair was answered: proved apart or touching by the tight volumes (cull.h), found in
+/// the cache, or by FCL.
+enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
 
 /// Accumulates fcl::collide answers exactly as one result passed to fcl::collide for each pair
 /// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial).

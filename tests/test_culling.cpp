@@ -184,6 +184,81 @@ TYPED_TEST(Culling, KeepsPairsAtTheTouchingPosition) {
   EXPECT_GT(culled_outside, 0u);  // outside by 0.01, the tight volumes do separate some pairs
 }
 
+// Proofs of contact (surelyTouching, what lets the pipeline skip FCL for a touching pair of
+// primitives): wherever they prove a pair touching, FCL reports a contact, with either GJK
+// solver and either argument order. Pairs slide from the same centre to where FCL stops
+// reporting contact (bisection): at that first free position and beyond, no proof; along the
+// way, the proofs are checked against FCL. A geometry FCL treats as not occupied (cost_density
+// below threshold_occupied, which FCL's shape collision skips) is never proved touching.
+TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
+  using S = TypeParam;
+  const auto kinds = allKinds<S>();
+  std::mt19937 rng(23);
+  std::normal_distribution<double> n(0, 1);
+  std::size_t proved = 0, checked = 0;
+  const auto fclSays = [](fcl::CollisionObject<S>& x, fcl::CollisionObject<S>& y,
+                          fcl::GJKSolverType solver) {
+    fcl::CollisionRequest<S> req;
+    req.gjk_solver_type = solver;
+    fcl::CollisionResult<S> res;
+    return fcl::collide(&x, &y, req, res) > 0;
+  };
+  for (const auto& [na, ga] : kinds)
+    for (const auto& [nb, gb] : kinds) {
+      if (!fclCanCollide(na, nb)) continue;
+      fcl::CollisionObject<S> a(ga), b(gb);
+      for (int rep = 0; rep < 8; ++rep) {
+        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(S(n(rng)), S(n(rng)), S(n(rng))));
+        a.computeAABB();
+        const fcl::Matrix3<S> rb = randomRotation<S>(rng);
+        fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
+        dir.normalize();
+        auto place = [&](double t) {
+          b.setTransform(rb, a.getTranslation() + dir * S(t));
+          b.computeAABB();
+        };
+        place(0);
+        if (!collides(a, b)) continue;
+        place(10);
+        if (collides(a, b)) continue;  // a plane or halfspace
+        double in = 0, out = 10;
+        for (int k = 0; k < 50; ++k) {
+          const double mid = 0.5 * (in + out);
+          place(mid);
+          (collides(a, b) ? in : out) = mid;
+        }
+        for (double t : {out, out + 1e-9, out + 0.01, out + 1.0}) {
+          place(t);
+          EXPECT_FALSE(cube::detail::surelyTouching(a, b, defaultTolerance<S>()))
+              << na << " vs " << nb << " proved touching where FCL reports none, at " << t;
+        }
+        for (int k = 0; k <= 40; ++k) {
+          place(in * k / 40.0);
+          if (!cube::detail::surelyTouching(a, b, defaultTolerance<S>())) continue;
+          ++proved;
+          for (const auto solver : {fcl::GST_LIBCCD, fcl::GST_INDEP}) {
+            ++checked;
+            EXPECT_TRUE(fclSays(a, b, solver)) << na << " vs " << nb << " at " << in * k / 40.0;
+            EXPECT_TRUE(fclSays(b, a, solver)) << nb << " vs " << na << " at " << in * k / 40.0;
+          }
+          EXPECT_TRUE(cube::detail::surelyTouching(b, a, defaultTolerance<S>()));
+          EXPECT_EQ(cube::detail::verdict(a, b, defaultTolerance<S>(), true),
+                    cube::detail::Verdict::kTouching);
+          EXPECT_EQ(cube::detail::verdict(a, b, defaultTolerance<S>(), false),
+                    cube::detail::Verdict::kUnknown);
+        }
+        // Not occupied: FCL's shape collision reports nothing, so nothing is proved.
+        place(0);
+        const S density = ga->cost_density;
+        ga->cost_density = S(0.5) * ga->threshold_occupied;
+        EXPECT_FALSE(cube::detail::surelyTouching(a, b, defaultTolerance<S>()));
+        ga->cost_density = density;
+      }
+    }
+  EXPECT_GT(proved, 300u) << "the proofs must be exercised";
+  EXPECT_GT(checked, 0u);
+}
+
 // The default callbacks cull: collideAll on a cube manager gives exactly the contacts of
 // fcl::collide over every pair (all contacts requested), on scenes of every kind.
 TYPED_TEST(Culling, CollideAllEqualsBruteForceNarrowPhase) {

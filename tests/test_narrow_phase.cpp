@@ -164,13 +164,14 @@ TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
   EXPECT_TRUE(sameContacts(a, b, false));
   const std::size_t candidates = cube::overlappingPairs<S>(m).size();
   EXPECT_EQ(first.candidate_pairs, candidates);
-  EXPECT_EQ(first.culled + first.narrow_calls, candidates);
+  EXPECT_EQ(first.culled + first.proved + first.narrow_calls, candidates);
   EXPECT_EQ(first.cached, 0u);
   EXPECT_GT(first.culled, 0u);
   EXPECT_GT(first.narrow_calls, 0u);
   EXPECT_EQ(second.candidate_pairs, candidates);
   EXPECT_EQ(second.narrow_calls, 0u);
   EXPECT_EQ(second.culled, 0u);
+  EXPECT_EQ(second.proved, 0u);
   EXPECT_EQ(second.cached, candidates);
   EXPECT_EQ(cache.size(), candidates);
 }
@@ -234,7 +235,7 @@ TYPED_TEST(NarrowPhase, CacheFollowsAMotionLoop) {
         const auto want = cube::collideAll<S>(m, all, cube::NarrowPhaseOptions<S>{threads});
         EXPECT_TRUE(sameContacts(got, want)) << "step " << step << ", " << threads << " threads";
         EXPECT_EQ(st.candidate_pairs, candidates.size());
-        EXPECT_EQ(st.culled + st.cached + st.narrow_calls, st.candidate_pairs);
+        EXPECT_EQ(st.culled + st.proved + st.cached + st.narrow_calls, st.candidate_pairs);
         if (threads == 1 && step > 0) {
           // Every unchanged pair that was a candidate last step too comes from the cache, and
           // no pair with a changed object does (its object was compared with its pose).
@@ -373,7 +374,7 @@ TYPED_TEST(NarrowPhase, EveryKindOfMotionInvalidatesTheCache) {
       EXPECT_GT(st.narrow_calls, 0u) << what;
     else
       EXPECT_EQ(st.narrow_calls, 0u) << what;
-    EXPECT_EQ(st.culled + st.cached + st.narrow_calls, st.candidate_pairs) << what;
+    EXPECT_EQ(st.culled + st.proved + st.cached + st.narrow_calls, st.candidate_pairs) << what;
   };
   expectRecomputed("nothing moved", false);
 
@@ -653,8 +654,8 @@ TYPED_TEST(NarrowPhase, ContactBudgetEndingInsideAPairKeepsFclsContacts) {
 // A request for one contact calls FCL no more often on several threads than on one, with and
 // without a cache, for a pair list, a self-collide and a manager query: pairs are answered one
 // at a time and the walk stops at the first contact. The scene: 40 capsule pairs whose tight
-// volumes overlap but whose capsules do not (each costs an FCL call), a touching sphere pair
-// after the first 20 of them.
+// volumes overlap but whose capsules do not (each costs an FCL call), a touching box pair after
+// the first 20 of them (corner to corner, so that their inscribed balls do not prove it).
 TYPED_TEST(NarrowPhase, OneContactRequestCallsFclNoMoreOftenOnThreads) {
   using S = TypeParam;
   std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objects;
@@ -668,11 +669,11 @@ TYPED_TEST(NarrowPhase, OneContactRequestCallsFclNoMoreOftenOnThreads) {
     return objects.back().get();
   };
   auto capsule = std::make_shared<fcl::Capsule<S>>(S(1), S(2));
-  auto ball = std::make_shared<fcl::Sphere<S>>(S(1));
+  auto box = std::make_shared<fcl::Box<S>>(S(2), S(2), S(2));
   for (int i = 0; i < 41; ++i) {
     const S x = S(20) * S(i);
     if (i == 20)
-      pairs.emplace_back(add(ball, {x, 0, 0}), add(ball, {x + S(1.5), 0, 0}));
+      pairs.emplace_back(add(box, {x, 0, 0}), add(box, {x + S(1.9), S(1.9), 0}));
     else  // corner to corner: boxes and bounding spheres overlap, the capsules are 1.3 apart
       pairs.emplace_back(add(capsule, {x, 0, 0}), add(capsule, {x + S(1.9), S(1.9), S(3.9)}));
     m.registerObject(pairs.back().first);
@@ -684,7 +685,7 @@ TYPED_TEST(NarrowPhase, OneContactRequestCallsFclNoMoreOftenOnThreads) {
   po.threads = 1;
   po.stats = &probe;
   ASSERT_TRUE(cube::collideMerged<S>(pairs, any, po).isCollision());
-  ASSERT_EQ(probe.narrow_calls, 21u) << "20 capsule pairs survive the cull, then the spheres";
+  ASSERT_EQ(probe.narrow_calls, 21u) << "20 capsule pairs survive the cull, then the boxes";
   const auto calls = [&](int threads, int query, cube::NarrowPhaseCache<S>* cache) {
     cube::NarrowPhaseStats st;
     cube::NarrowPhaseOptions<S> o;

@@ -21,12 +21,17 @@ struct CollisionData {
   fcl::CollisionRequest<S> request;
   fcl::CollisionResult<S> result;
   bool done = false;
-  /// fcl::collide calls made so far; pairs proved apart without it are not counted.
+  /// fcl::collide calls made so far; pairs settled without it are not counted: proved apart by
+  /// tight volumes, or (for a request without enable_contact, costs or a cached GJK guess)
+  /// proved touching by balls inscribed in two primitive shapes, which get the one contact FCL
+  /// would give them (narrow_phase.h, NarrowPhaseStats::proved).
   std::size_t narrow_calls = 0;
 };
 
-/// Runs fcl::collide on the pair and accumulates into CollisionData::result. Returns true (stop)
-/// once the result holds request.num_max_contacts contacts and costs are not requested.
+/// Runs fcl::collide on the pair and accumulates into CollisionData::result, with the result FCL
+/// gives, unless tight volumes settle the pair first (CollisionData::narrow_calls says how).
+/// Returns true (stop) once the result holds request.num_max_contacts contacts and costs are
+/// not requested.
 template <typename S>
 bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data);
 
