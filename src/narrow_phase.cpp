@@ -29,17 +29,20 @@ int resolveThreads(int threads) {
   return threads > 0 ? threads : hardwareThreads();
 }
 
-// When threads pay. Work is counted in shape pairs' FCL calls (1-3 us each here; a pair with a
-// mesh or an octree counts kHeavyPairWork). Opening a two-thread region costs about 1 us while
-// the other core idles and tens of us while it is busy (benchmarks/README.md, "Threads"), so a
-// region is opened only for kParallelMinWork or more: about 50 us of calls.
-constexpr std::size_t kHeavyPairWork = 16;
-constexpr std::size_t kParallelMinWork = 32;
-// A collide stream answers its first kSerialCalls FCL calls at once, on the calling thread,
-// then gathers chunks of kFirstChunkWork, doubling up to kMaxChunkWork.
+// When threads pay. Work is counted in candidate pairs of shapes: the cull (about 0.1 us) and,
+// for one pair in three or so, FCL's call (0.2-2 us): 0.25-0.5 us a pair here. A pair with a
+// mesh or an octree counts kHeavyPairWork (its FCL call takes 10-100 us). Opening a two-thread
+// region costs about 1 us while the other core idles and tens of us while it is busy, so a
+// region is opened only for kParallelMinWork or more: 30-60 us of work.
+constexpr std::size_t kHeavyPairWork = 64;
+constexpr std::size_t kParallelMinWork = 128;
+// A collide stream answers pairs at once on the calling thread until it has made kSerialCalls
+// FCL calls or seen kSerialPairs pairs (most object queries and robot checks end before), then
+// gathers chunks of kFirstChunkWork, doubling up to kMaxChunkWork.
 constexpr std::size_t kSerialCalls = 8;
-constexpr std::size_t kFirstChunkWork = 64;
-constexpr std::size_t kMaxChunkWork = 1024;
+constexpr std::size_t kSerialPairs = 128;
+constexpr std::size_t kFirstChunkWork = 256;
+constexpr std::size_t kMaxChunkWork = 4096;
 // forEachPair runs a caller's function of unknown cost: threads from this many pairs on.
 constexpr std::size_t kParallelMinPairs = 4;
 
@@ -62,8 +65,12 @@ void parallelFor(std::size_t n, int threads, const Body& body) {
   if (threads <= 1 || n < 2) {
     for (std::size_t i = 0; i < n; ++i) guarded(i);
   } else {
-    // Dynamic chunks of 2: narrow-phase costs differ by orders of magnitude between pairs.
-#pragma omp parallel for schedule(dynamic, 2) num_threads(threads)
+    // Dynamic chunks: narrow-phase costs differ by orders of magnitude between pairs. About 8
+    // chunks a thread, at most 32 items each: a chunk of 2 cost about as much to hand out as
+    // culling its pairs (clustered 10,000-object self-collide: 1.17x on two threads).
+    const int grain = static_cast<int>(
+        std::clamp<std::size_t>(n / (8 * static_cast<std::size_t>(threads)), 1, 32));
+#pragma omp parallel for schedule(dynamic, grain) num_threads(threads)
     for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
       guarded(static_cast<std::size_t>(i));
   }
@@ -398,13 +405,11 @@ using CollideEntry = typename CollideCache<S>::template Entry<std::vector<fcl::C
 template <typename S>
 using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResult<S>>;
 
-// The cache and the cull, on the calling thread (a lookup compares and updates the objects'
-// poses): kCached with the entry, kApart, or kComputed for a pair FCL must answer.
+// The tight volumes' verdict: kApart, kProved, or kComputed for a pair FCL must answer. Safe
+// on several threads at once.
 template <typename S>
-Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
-                fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
-  cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
-  if (cached != nullptr) return Answer::kCached;
+Answer judge(const fcl::CollisionRequest<S>& request, const fcl::CollisionObject<S>* a,
+             const fcl::CollisionObject<S>* b) {
   if (!plainRequest(request)) return Answer::kComputed;
   switch (verdict(*a, *b, S(request.gjk_tolerance), provable(request))) {
     case Verdict::kApart:
@@ -415,6 +420,16 @@ Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
       break;
   }
   return Answer::kComputed;
+}
+
+// The cache, then the tight volumes: kCached with the entry, or judge's verdict. On the calling
+// thread (a lookup compares and updates the objects' poses).
+template <typename S>
+Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
+                fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
+  cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
+  if (cached != nullptr) return Answer::kCached;
+  return judge(request, a, b);
 }
 
 // The one contact FCL's shape collision gives a touching pair when the request asks for no
@@ -510,9 +525,9 @@ template <typename S>
 bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
   if (done_) return true;
   ++stats_.candidate_pairs;
-  CollideEntry<S>* cached = nullptr;
-  const Answer kind = classify(cache_, request_, a, b, cached);
   if (serial_) {
+    CollideEntry<S>* cached = nullptr;
+    const Answer kind = classify(cache_, request_, a, b, cached);
     if (cache_ == nullptr) {
       answerNow(a, b, kind);
     } else {
@@ -520,23 +535,26 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>*
       scratch_->cached = cached;
       answerNow(ObjectPair<S>(a, b), *scratch_);
     }
+    // A request that may stop at its first contact stays on this thread: a chunk would call FCL
+    // for pairs after the stop. Others go to the threads once the query proves large.
+    if (threads_ > 1 && request_.num_max_contacts > 1 &&
+        (served_ >= kSerialCalls || stats_.candidate_pairs >= kSerialPairs))
+      serial_ = false;
     return done_;
   }
+  // In chunks: the cache is looked up here, the cull and FCL run in the chunk, on the threads.
   const std::size_t i = chunk_.size();
   chunk_.emplace_back(a, b);
   if (slots_.size() <= i) slots_.resize(i + 1);
-  slots_[i].kind = kind;
-  slots_[i].cached = cached;
-  if (kind == Answer::kProved) {
-    slots_[i].fresh.clear();
-    slots_[i].fresh.addContact(provedContact(chunk_[i]));
-  }
-  if (kind == Answer::kComputed) {
+  Slot& s = slots_[i];
+  s.cached = cache_ != nullptr ? cache_->collide.find(*cache_, a, b) : nullptr;
+  s.kind = s.cached != nullptr ? Answer::kCached : Answer::kComputed;
+  if (s.cached == nullptr) {
     pending_.push_back(i);
     pending_work_ += workOf(chunk_[i]);
   }
-  // Pairs answered without FCL are merged at once while nothing waits for FCL before them, so
-  // that a full result stops the walk where it would on one thread.
+  // A cached answer is merged at once while nothing waits before it, so that a full result
+  // stops the walk where it would on one thread.
   if (pending_.empty() || pending_work_ >= chunk_work_) flush();
   return done_;
 }
@@ -578,7 +596,7 @@ void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObjec
   // FCL's own way, one accumulating result: FCL decides which contacts fit.
   fclCollide(a, b, request_, result_);
   markDone();
-  countServed();
+  ++served_;
 }
 
 template <typename S>
@@ -602,17 +620,9 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
       fclCollide(pair.first, pair.second, request_, s.fresh);
       merge(pair, s);
       keepPair(s.kind, pair, cache_, s.fresh);
-      countServed();
+      ++served_;
       return;
   }
-}
-
-template <typename S>
-void CollideStream<S>::countServed() {
-  // A request that may stop at its first contact stays on this thread: a chunk would call FCL
-  // for pairs after the stop. Others go to the threads after a few calls, by which time a small
-  // query (most object queries) has ended without opening a parallel region.
-  if (++served_ >= kSerialCalls && threads_ > 1 && request_.num_max_contacts > 1) serial_ = false;
 }
 
 template <typename S>
@@ -646,8 +656,11 @@ void CollideStream<S>::flush() {
   if (!done_) {
     const auto run = [&](std::size_t k) {
       Slot& s = slots_[pending_[k]];
+      const ObjectPair<S>& pair = chunk_[pending_[k]];
+      s.kind = judge(request_, pair.first, pair.second);
       s.fresh.clear();
-      fclCollide(chunk_[pending_[k]].first, chunk_[pending_[k]].second, request_, s.fresh);
+      if (s.kind == Answer::kProved) s.fresh.addContact(provedContact(pair));
+      if (s.kind == Answer::kComputed) fclCollide(pair.first, pair.second, request_, s.fresh);
     };
     // Threads only for work that pays for waking them (a region costs about 1 us here when
     // the other core is idle, tens of us when it is busy).
@@ -806,19 +819,25 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
   std::vector<fcl::CollisionResult<S>> results(pairs.size());
   std::vector<detail::Answer> kind(pairs.size());
   std::vector<detail::CollideEntry<S>*> cached(pairs.size());
-  // The cache and the cull on this thread; FCL's calls on the threads if they pay.
-  std::vector<std::size_t> computed;
+  // The cache on this thread; the cull and FCL's calls on the threads if they pay.
+  std::vector<std::size_t> rest;
   std::size_t work = 0;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
-    kind[i] = detail::classify(cache, request, pairs[i].first, pairs[i].second, cached[i]);
-    if (kind[i] != detail::Answer::kComputed) continue;
-    computed.push_back(i);
+    cached[i] =
+        cache != nullptr ? cache->collide.find(*cache, pairs[i].first, pairs[i].second) : nullptr;
+    if (cached[i] != nullptr) {
+      kind[i] = detail::Answer::kCached;
+      continue;
+    }
+    rest.push_back(i);
     work += detail::workOf(pairs[i]);
   }
   const int threads = work >= kParallelMinWork ? resolveThreads(options.threads) : 1;
-  parallelFor(computed.size(), threads, [&](std::size_t k) {
-    const std::size_t i = computed[k];
-    detail::fclCollide(pairs[i].first, pairs[i].second, request, results[i]);
+  parallelFor(rest.size(), threads, [&](std::size_t k) {
+    const std::size_t i = rest[k];
+    kind[i] = detail::judge(request, pairs[i].first, pairs[i].second);
+    if (kind[i] == detail::Answer::kComputed)
+      detail::fclCollide(pairs[i].first, pairs[i].second, request, results[i]);
   });
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     detail::count(stats, kind[i]);

@@ -20,10 +20,10 @@ enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
 
 /// Accumulates fcl::collide answers exactly as one result passed to fcl::collide for each pair
 /// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial).
-/// The cache and the cull run as each pair is pushed, on the calling thread. FCL's calls run at
-/// once on this thread at first (and always for a request of one contact, and on one thread);
-/// after a few, the pairs FCL must answer are gathered into chunks whose calls run on the
-/// threads when there are enough of them to pay for a parallel region.
+/// Pairs are answered at once on the calling thread at first (and always for a request of one
+/// contact, and on one thread); once the query proves large, they are gathered into chunks (the
+/// cache looked up on the calling thread) whose cull and FCL calls run on the threads when there
+/// is enough work to pay for a parallel region.
 template <typename S>
 class CollideStream {
  public:
@@ -49,7 +49,6 @@ class CollideStream {
   struct Slot;
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
-  void countServed();
   void merge(const ObjectPair<S>& pair, const Slot& slot);
   void markDone();
   void flush();
@@ -60,12 +59,12 @@ class CollideStream {
   typename NarrowPhaseCache<S>::Impl* cache_;
   int threads_;
   bool done_ = false;
-  bool serial_ = true;           // answer each pair as it comes
-  std::size_t served_ = 0;       // FCL calls answered at once
-  std::size_t chunk_work_ = 64;  // flush once the pending work reaches this
+  bool serial_ = true;          // answer each pair as it comes
+  std::size_t served_ = 0;      // FCL calls answered at once
+  std::size_t chunk_work_ = 0;  // flush once the pending work reaches this
   std::size_t pending_work_ = 0;
   std::vector<ObjectPair<S>> chunk_;
-  std::vector<std::size_t> pending_;  // the chunk's pairs FCL must answer
+  std::vector<std::size_t> pending_;  // the chunk's pairs not in the cache
   std::vector<Slot> slots_;           // one per pair of the chunk
   std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
   fcl::CollisionResult<S> empty_;
