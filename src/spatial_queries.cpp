@@ -361,6 +361,11 @@ bool earlier(const Found<S>& a, const Found<S>& b) {
   return ta < tb || (ta == tb && a.seq < b.seq);
 }
 
+// How far past the box's exit (in t) an exact hit may fall and still count (hitOne's contract in
+// spatial_queries.h): far above the few ulps by which the box's and the exact test's formulas
+// differ, far below anything a caller could see as a distance.
+constexpr double kExitRounding = 1e-9;
+
 // The narrow phase of hitOne, given where the segment enters and leaves the object's box. Kept
 // out of line: the box test it follows is the walk's inner loop, and stays small.
 template <typename S>
@@ -369,9 +374,11 @@ template <typename S>
   double first;
   if (narrow.exact(obj, first)) {
     // The answer the bisection converges to: no hit unless the segment meets the object by the
-    // box's exit, and never before the box's entry.
-    if (first > exit) return false;
-    t = first > enter ? first : enter;
+    // box's exit, and never before the box's entry. The object lies in its box, so an exact hit
+    // past the exit is rounding: the two compute the crossing of a box of zero thickness (an
+    // axis-aligned plane's) by different formulas, a few ulps apart.
+    if (first > exit + kExitRounding) return false;
+    t = first > enter ? (first < exit ? first : exit) : enter;
     return true;
   }
   Caster<S>& caster = narrow.caster();

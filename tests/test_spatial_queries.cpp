@@ -740,6 +740,69 @@ TYPED_TEST(ExactNarrowPhase, ExactTMatchesTheBisectionOnRotatedPrimitives) {
   EXPECT_GT(inside, 40);
 }
 
+// A segment that crosses a plane hits it, wherever it crosses: planes whose normal is along an
+// axis (their box has no thickness along it: the exact crossing and the box's exit are computed
+// by different formulas, a few ulps apart) and oblique ones, through raycastObject, raycastFirst
+// and raycastAll, at t within rounding of the crossing. Includes the segment of issue 38.
+TYPED_TEST(ExactNarrowPhase, SegmentsCrossingAPlaneHitIt) {
+  using S = TypeParam;
+  std::mt19937 rng(38);
+  std::uniform_real_distribution<double> u(-10, 10), side(0.5, 12);
+  std::normal_distribution<double> g(0, 1);
+  const double tol = std::is_same<S, double>::value ? 1e-9 : 1e-5;
+  std::vector<V3<S>> normals = {{1, 0, 0},  {0, 1, 0},  {0, 0, 1},
+                                {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}};
+  for (int k = 0; k < 4; ++k)
+    normals.push_back(V3<S>(S(g(rng)), S(g(rng)), S(g(rng))).normalized());
+  std::size_t tried = 0;
+  for (const V3<S>& n : normals) {
+    const S d = std::is_same<S, double>::value && n.z() == 1 ? S(1.704196565302869) : S(u(rng));
+    auto plane = std::make_unique<Obj<S>>(std::make_shared<fcl::Plane<S>>(n, d));
+    plane->computeAABB();
+    cube::CubeCollisionManager<S> m;
+    m.registerObject(plane.get());
+    std::vector<std::pair<V3<S>, V3<S>>> segments;
+    if (std::is_same<S, double>::value && n.z() == 1)
+      segments.emplace_back(
+          V3<S>(S(0.61908092191168773), S(8.1087003765085441), S(12.782941783756129)),
+          V3<S>(S(2.0555134614619028), S(1.5661106793651922), S(-0.44045242773822779)));
+    for (int i = 0; i < 2000; ++i) {
+      // A point on the plane, and the two ends on either side of it by 0.5 to 12.
+      const V3<S> on = V3<S>(S(u(rng)), S(u(rng)), S(u(rng)));
+      const V3<S> p = on - n * (n.dot(on) - d);
+      V3<S> dir(S(g(rng)), S(g(rng)), S(g(rng)));
+      if (std::abs(dir.normalized().dot(n)) < S(0.2)) dir += n;
+      dir.normalize();
+      if (dir.dot(n) < 0) dir = -dir;
+      segments.emplace_back(p + dir * S(side(rng)), p - dir * S(side(rng)));
+    }
+    for (const auto& [from, to] : segments) {
+      ++tried;
+      // The crossing, in double from the values as stored.
+      const double f0 = double(n.x()) * from.x() + double(n.y()) * from.y() +
+                        double(n.z()) * from.z() - double(d);
+      const double f1 =
+          double(n.x()) * to.x() + double(n.y()) * to.y() + double(n.z()) * to.z() - double(d);
+      ASSERT_GT(f0, 0.05);
+      ASSERT_LT(f1, -0.05);
+      const double want = f0 / (f0 - f1);
+      const auto one = cube::raycastObject(*plane, plane->getAABB(), from, to);
+      ASSERT_TRUE(one.has_value()) << "normal " << n.transpose() << " d " << d << " from "
+                                   << from.transpose() << " to " << to.transpose();
+      EXPECT_NEAR(double(one->t), want, tol);
+      EXPECT_EQ(one->kind, cube::HitKind::narrow_phase);
+      const auto first = cube::raycastFirst(m, from, to);
+      ASSERT_TRUE(first.has_value());
+      EXPECT_EQ(first->object, plane.get());
+      EXPECT_EQ(first->t, one->t);
+      const auto all = cube::raycastAll(m, from, to);
+      ASSERT_EQ(all.size(), 1u);
+      EXPECT_EQ(all[0].t, one->t);
+    }
+  }
+  EXPECT_GE(tried, 20000u);
+}
+
 // Touching counts, and the degenerate cases, on axis-aligned primitives where the answer is
 // exact in both scalars: segments on a box face, along a cylinder's or capsule's side line, in a
 // cylinder's cap, tangent to a sphere, in a plane, ending on a halfspace's boundary; zero length

@@ -83,7 +83,10 @@ std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
 /// sphere, ellipsoid, capsule, cone, cylinder, convex, plane, halfspace): t is the first point of
 /// the segment, up to the box's exit, in the object (closed: touching counts; 0 if `from` is
 /// already inside a solid), raised to the box's entry if below it; no hit if there is none. t is
-/// never below the box's entry.
+/// never below the box's entry nor above its exit. For the exact geometries, a first point up
+/// to 1e-9 (in t) past the box's exit counts, at the exit: the box and the exact test compute a
+/// crossing by different formulas, and a box of zero thickness (a plane with an axis-aligned
+/// normal) puts the exact crossing a few ulps past it.
 /// - Exact, in double, for spheres, boxes, capsules, cylinders, ellipsoids (all radii > 0),
 ///   planes and halfspaces whose sizes are finite and >= 0: the segment is taken into the
 ///   object's frame (FCL 0.7's: centred on the origin; box: `side` full lengths; capsule and
