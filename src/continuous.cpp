@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/broadphase.h"
+#include "query_guard.h"
 
 namespace cube {
 
@@ -264,8 +265,13 @@ ObjectPairs<S> sweptPairs(const CubeCollisionManager<S>& manager,
   for (fcl::CollisionObject<S>* obj : objs) swept.setFilter(obj, core.filter(obj));
   swept.setKeep(core.keep());
   Found<S> found{&table, &moving, {}, {}};
-  swept.collideSelf(&found, &Found<S>::movers, nullptr);
-  swept.collide(core, &found, &Found<S>::withStill, nullptr);
+  {
+    // The pair predicate is the user's code: a mutation of the manager from it is refused, as
+    // from the manager's own queries.
+    const detail::QueryScope scope(&core);
+    swept.collideSelf(&found, &Found<S>::movers, nullptr);
+    swept.collide(core, &found, &Found<S>::withStill, nullptr);
+  }
 
   std::vector<std::size_t> order(found.pairs.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;

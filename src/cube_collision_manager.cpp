@@ -14,6 +14,7 @@
 
 #include "core/broadphase.h"
 #include "cull.h"
+#include "query_guard.h"
 #include "self_collide_threads.h"
 
 namespace cube {
@@ -58,36 +59,8 @@ Box<S> checkedQueryBox(const fcl::CollisionObject<S>* obj, const char* where) {
   return b;
 }
 
-// The queries running on this thread, innermost first: each query pushes a frame naming the
-// cores it walks, and a mutation of one of them from inside a callback is refused. Per thread,
-// so that const queries share no state and concurrent queries from other threads are unaffected.
-struct QueryFrame {
-  const void* core;
-  const void* other;
-  const QueryFrame* outer;
-};
-thread_local const QueryFrame* t_queries = nullptr;
-
-class QueryScope {
- public:
-  QueryScope(const void* core, const void* other = nullptr) : frame_{core, other, t_queries} {
-    t_queries = &frame_;
-  }
-  ~QueryScope() { t_queries = frame_.outer; }
-  QueryScope(const QueryScope&) = delete;
-  QueryScope& operator=(const QueryScope&) = delete;
-
- private:
-  QueryFrame frame_;
-};
-
-void refuseInsideQuery(const void* core, const char* call) {
-  for (const QueryFrame* f = t_queries; f != nullptr; f = f->outer)
-    if (f->core == core || f->other == core)
-      throw std::logic_error(std::string("cube::CubeCollisionManager::") + call +
-                             ": called from inside a callback of a query on this manager; the "
-                             "manager is unchanged");
-}
+using detail::QueryScope;
+using detail::refuseInsideQuery;
 
 // Config::cull_pairs: the user's callback behind the test of the tight volumes. The margin is
 // sized for FCL's default GJK tolerance, the one the user's fcl::collide most likely runs with.

@@ -7,6 +7,7 @@
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "narrow_phase_stream.h"
+#include "query_guard.h"
 #include "self_collide_threads.h"
 
 namespace cube {
@@ -157,12 +158,15 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
 
 namespace {
 
-// collideConcurrently's state: the chunk gathered from the walk and the stop flag.
+// collideConcurrently's state: the chunk gathered from the walk and the stop flag. `core`: the
+// cube manager's core, named by a query guard on whichever thread runs the callback (a worker
+// thread has no frame of the walk's), so that a mutation from the callback is refused there too.
 template <typename S>
 struct ConcurrentCalls {
   void* cdata;
   fcl::CollisionCallBack<S> callback;
   int threads;
+  const void* core;
   std::vector<ObjectPair<S>> chunk;
   std::atomic<bool> stop{false};
 
@@ -170,8 +174,9 @@ struct ConcurrentCalls {
     forEachPair<S>(
         chunk,
         [this](std::size_t, fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
-          if (!stop.load(std::memory_order_relaxed) && callback(a, b, cdata))
-            stop.store(true, std::memory_order_relaxed);
+          if (stop.load(std::memory_order_relaxed)) return;
+          const detail::QueryScope scope(core);
+          if (callback(a, b, cdata)) stop.store(true, std::memory_order_relaxed);
         },
         threads);
     chunk.clear();
@@ -190,7 +195,10 @@ template <typename S>
 void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
                          fcl::CollisionCallBack<S> callback, int threads, bool split_walk) {
   if (callback == nullptr) throw std::invalid_argument("cube::collideConcurrently: null callback");
-  ConcurrentCalls<S> calls{cdata, callback, threads, {}};
+  const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(&manager);
+  ConcurrentCalls<S> calls{cdata, callback, threads,
+                           cube != nullptr ? static_cast<const void*>(&cube->core()) : nullptr,
+                           {}};
   selfWalk(manager, &calls, &ConcurrentCalls<S>::gather, threads, split_walk);
   if (!calls.stop.load()) calls.flush();
 }

@@ -31,7 +31,9 @@
 
 #include "cube_collision/callbacks.h"
 #include "cube_collision/config.h"
+#include "cube_collision/continuous.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
 #include "support/oracle.h"
 
 namespace {
@@ -1350,6 +1352,155 @@ TEST(ReFarDistance, ScatteredSceneMatchesNaive) {
         EXPECT_NEAR(counted.data.result.min_distance, nd.result.min_distance,
                     1e-9 * nd.result.min_distance);
       }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// User code off the manager's own query path (issue 38, items 3 and 4): the pair predicate
+// during sweptPairs and continuousCollideAll, and a collideConcurrently callback on whichever
+// thread runs it. Every kind of mutation is refused with std::logic_error there too, and the
+// manager keeps its objects and passes validate().
+
+struct GuardWorld {
+  std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
+  std::unique_ptr<fcl::CollisionObjectd> spare;
+  cube::CubeCollisionManagerd m;
+  explicit GuardWorld(int n) {
+    auto box = std::make_shared<fcl::Boxd>(1, 1, 1);
+    for (int i = 0; i < n; ++i) {
+      // A row of touching boxes: every neighbour pair overlaps.
+      objects.push_back(std::make_unique<fcl::CollisionObjectd>(
+          box, fcl::Transform3d(Eigen::Translation3d(0.9 * (i % 40), 0.9 * (i / 40), 0))));
+      objects.back()->computeAABB();
+      m.registerObject(objects.back().get());
+    }
+    spare = std::make_unique<fcl::CollisionObjectd>(box);
+    spare->computeAABB();
+  }
+};
+
+constexpr int kGuardMutations = 12;
+
+// Mutation k of m; throws what the manager throws.
+void guardMutate(GuardWorld& w, int k) {
+  fcl::CollisionObjectd* first = w.objects.front().get();
+  std::vector<fcl::CollisionObjectd*> some{first};
+  switch (k) {
+    case 0:
+      w.m.registerObject(w.spare.get());
+      return;
+    case 1:
+      w.m.registerObjects({w.spare.get()});
+      return;
+    case 2:
+      w.m.unregisterObject(first);
+      return;
+    case 3:
+      w.m.setup();
+      return;
+    case 4:
+      w.m.update();
+      return;
+    case 5:
+      w.m.update(first);
+      return;
+    case 6:
+      w.m.update(some);
+      return;
+    case 7:
+      w.m.clear();
+      return;
+    case 8:
+      w.m.setFilter(first, 2, 2);
+      return;
+    case 9:
+      w.m.setPairFilter({});
+      return;
+    case 10:
+      w.m.setMargin(0.5);
+      return;
+    case 11:
+      w.m.setMargin(first, 0.5);
+      return;
+    default:
+      return;
+  }
+}
+
+// Counts the attempts and the refusals; an attempt that got through is a failure.
+struct GuardCount {
+  std::atomic<int> tried{0}, refused{0};
+  void attempt(GuardWorld& w, int k) {
+    ++tried;
+    try {
+      guardMutate(w, k);
+    } catch (const std::logic_error&) {
+      ++refused;
+    }
+  }
+};
+
+::testing::AssertionResult unchanged(GuardWorld& w, std::size_t n) {
+  std::string why;
+  if (w.m.size() != n) return ::testing::AssertionFailure() << w.m.size() << " objects, not " << n;
+  if (!w.m.validate(&why)) return ::testing::AssertionFailure() << "validate: " << why;
+  if (w.m.filter(w.objects.front().get()).first != 1)
+    return ::testing::AssertionFailure() << "bits";
+  if (w.m.margin(w.objects.front().get()) != 0) return ::testing::AssertionFailure() << "margin";
+  return ::testing::AssertionSuccess();
+}
+
+TEST(ReentrancyOffThePath, PredicateOfContinuousQueriesCannotMutate) {
+  for (int k = 0; k < kGuardMutations; ++k)
+    for (const bool full : {false, true}) {  // sweptPairs, continuousCollideAll
+      GuardWorld w(40);
+      GuardCount count;
+      w.m.setPairFilter([&](fcl::CollisionObjectd*, fcl::CollisionObjectd*) {
+        if (count.tried.load() == 0) count.attempt(w, k);
+        return true;
+      });
+      std::vector<cube::Motion<double>> motions(1);
+      motions[0].object = w.objects[5].get();
+      motions[0].end = fcl::Transform3d(Eigen::Translation3d(4.5, 0.3, 0));
+      if (full)
+        cube::continuousCollideAll(w.m, motions);
+      else
+        cube::sweptPairs(w.m, motions);
+      EXPECT_EQ(count.tried.load(), 1) << "mutation " << k << " full " << full;
+      EXPECT_EQ(count.refused.load(), 1) << "mutation " << k << " full " << full;
+      EXPECT_TRUE(unchanged(w, 40)) << "mutation " << k << " full " << full;
+    }
+}
+
+TEST(ReentrancyOffThePath, CollideConcurrentlyCallbacksCannotMutateOnAnyThread) {
+  struct Data {
+    GuardWorld* w;
+    GuardCount* count;
+    int k;
+    std::atomic<int> on_other_threads{0};
+    std::thread::id caller;
+  };
+  for (int k = 0; k < kGuardMutations; ++k)
+    for (const int threads : {1, 2, 3}) {
+      GuardWorld w(1500);
+      GuardCount count;
+      Data d{&w, &count, k, {}, std::this_thread::get_id()};
+      cube::collideConcurrently<double>(
+          w.m, &d,
+          [](fcl::CollisionObjectd*, fcl::CollisionObjectd*, void* p) {
+            auto& x = *static_cast<Data*>(p);
+            if (std::this_thread::get_id() != x.caller) ++x.on_other_threads;
+            x.count->attempt(*x.w, x.k);
+            return false;
+          },
+          threads);
+      EXPECT_GT(count.tried.load(), 1000) << "mutation " << k;
+      EXPECT_EQ(count.refused.load(), count.tried.load())
+          << "mutation " << k << " threads " << threads;
+      if (threads > 1 && cube::hardwareThreads() > 1) {
+        EXPECT_GT(d.on_other_threads.load(), 0) << "the callbacks must run on worker threads too";
+      }
+      EXPECT_TRUE(unchanged(w, 1500)) << "mutation " << k << " threads " << threads;
     }
 }
 

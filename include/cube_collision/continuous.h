@@ -66,7 +66,9 @@ fcl::AABB<S> sweptBox(const fcl::CollisionObject<S>& object, const fcl::Transfor
 /// Each pair once, the earlier registered object first, sorted by registration order.
 /// Throws std::invalid_argument, before any work, for a null or unregistered object, an object
 /// listed twice, a NaN or infinite transform (start or end), or a motion type sweptBox refuses.
-/// Const and thread-safe like the manager's queries; the manager is not changed.
+/// Const and thread-safe like the manager's queries; the manager is not changed. The manager's
+/// filter bits, pair predicate and margins apply as in its queries; a mutation of the manager
+/// from the pair predicate is refused with std::logic_error, as from its queries' callbacks.
 template <typename S>
 std::vector<std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>> sweptPairs(
     const CubeCollisionManager<S>& manager, const std::vector<Motion<S>>& motions,

@@ -68,7 +68,9 @@ fcl::CollisionResult<S> collideAll(
 /// callback that is safe to call concurrently (on cdata too). Pairs are gathered in chunks from
 /// the walk; once a call returns true no new call starts and the walk stops, but calls of the
 /// same chunk already running finish. The order of the calls is not specified. An exception
-/// from the callback is rethrown here; a null callback throws std::invalid_argument.
+/// from the callback is rethrown here; a null callback throws std::invalid_argument. On a
+/// CubeCollisionManager, a mutation of it from the callback is refused with std::logic_error on
+/// every thread, as from its own queries' callbacks.
 /// `split_walk`: as NarrowPhaseOptions::split_walk.
 template <typename S>
 void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void* cdata,
