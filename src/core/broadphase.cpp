@@ -239,7 +239,19 @@ void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
 template <typename S>
 void Broadphase<S>::setup() {
   if (regroupDue() || policy_.dueAtSetup(tree_, !setup_done_)) rebuild();
+  // A removal swaps the list's last object into the gap: put the list in registration order, so
+  // that the first setup() makes the callback order a function of the live registrations alone.
+  if (!setup_done_) orderUnbounded();
   setup_done_ = true;
+}
+
+template <typename S>
+void Broadphase<S>::orderUnbounded() {
+  std::sort(unbounded_.begin(), unbounded_.end(), [&](const Item<S>& a, const Item<S>& b) {
+    return table_.seq(a.id) < table_.seq(b.id);
+  });
+  for (std::size_t p = 0; p < unbounded_.size(); ++p)
+    table_.setLocation(unbounded_[p].id, std::uint32_t(p) | kUnboundedBit);
 }
 
 template <typename S>

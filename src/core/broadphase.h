@@ -148,6 +148,8 @@ class Broadphase {
   void place(ObjectId id, Object* obj, const Box<S>& box);
   /// Takes an id out of wherever it is.
   void unplace(ObjectId id);
+  /// Sorts the unbounded list by registration number.
+  void orderUnbounded();
   /// Sets one registered object's box, moving it between the cubes and the list if its kind
   /// changed; false if not registered. Rebuilds nothing: the caller asks the policy after.
   bool move(const Object* obj, const Box<S>& box);
