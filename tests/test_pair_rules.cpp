@@ -2,6 +2,8 @@
 // brute force over every pair of objects.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/plane.h>
 #include <fcl/narrowphase/collision.h>
 #include <gtest/gtest.h>
 
@@ -18,6 +20,7 @@
 #include "cube_collision/inspect.h"
 #include "cube_collision/margins.h"
 #include "cube_collision/queries.h"
+#include "cube_collision/spatial_queries.h"
 #include "scenes.h"
 #include "support/oracle.h"
 
@@ -461,6 +464,127 @@ std::vector<Pair<S>> calls(const CubeCollisionManager<S>& m) {
   std::vector<Pair<S>> c;
   m.collide([&](Obj<S>* a, Obj<S>* b) { c.emplace_back(a, b); });
   return c;
+}
+
+// Contracts stated in the headers (issue 38, item 7), each against what the calls do.
+namespace contracts {
+
+std::unique_ptr<Obj<double>> box(double x, double size = 1) {
+  auto o = std::make_unique<Obj<double>>(std::make_shared<fcl::Boxd>(size, size, size),
+                                         fcl::Transform3d(Eigen::Translation3d(x, 0, 0)));
+  o->computeAABB();
+  return o;
+}
+
+std::size_t pairsBetween(const CubeCollisionManager<double>& m,
+                         fcl::BroadPhaseCollisionManagerd& o) {
+  std::size_t n = 0;
+  m.collide(&o, &n, [](Obj<double>*, Obj<double>*, void* d) {
+    ++*static_cast<std::size_t*>(d);
+    return false;
+  });
+  return n;
+}
+
+}  // namespace contracts
+
+// setMargin: against another cube manager each side's objects are grown by their own manager's
+// margins; against any other manager, its objects by this manager's manager-wide margin.
+TEST(Contracts, MarginsBetweenManagers) {
+  using contracts::box;
+  // Unit boxes whose faces are 1.8 apart: within 1.0 + 1.0, not within 1.0 + 0.5 or 0.5 + 0.5.
+  auto a = box(0), b = box(2.8);
+  CubeCollisionManager<double> ma, mb;
+  ma.registerObject(a.get());
+  mb.registerObject(b.get());
+  ma.setMargin(1.0);
+  mb.setMargin(0.5);
+  fcl::DynamicAABBTreeCollisionManagerd fa, fb;
+  fa.registerObject(a.get());
+  fb.registerObject(b.get());
+  fa.setup();
+  fb.setup();
+  EXPECT_EQ(contracts::pairsBetween(ma, mb), 0u) << "cube-cube: 1.0 + 0.5 < 1.8";
+  EXPECT_EQ(contracts::pairsBetween(mb, ma), 0u);
+  EXPECT_EQ(contracts::pairsBetween(ma, fb), 1u) << "b grown by ma's margin: 1.0 + 1.0 > 1.8";
+  EXPECT_EQ(contracts::pairsBetween(mb, fa), 0u) << "a grown by mb's margin: 0.5 + 0.5 < 1.8";
+  mb.setMargin(b.get(), 0.9);  // b's own margin: cube-cube now 1.0 + 0.9 > 1.8
+  EXPECT_EQ(contracts::pairsBetween(ma, mb), 1u);
+  EXPECT_EQ(contracts::pairsBetween(mb, ma), 1u);
+}
+
+// setPairFilter: in distance queries the predicate is asked for pairs whose boxes do not overlap
+// (all the branch and bound hands over), and its false keeps a pair out of the minimum.
+TEST(Contracts, PredicateInDistanceQueriesSeesPairsApart) {
+  using contracts::box;
+  auto a = box(0), b = box(3), c = box(10);
+  CubeCollisionManager<double> m;
+  m.registerObjects({a.get(), b.get(), c.get()});
+  std::size_t apart = 0;
+  m.setPairFilter([&](Obj<double>* x, Obj<double>* y) {
+    apart += !x->getAABB().overlap(y->getAABB());
+    return !((x == a.get() && y == b.get()) || (x == b.get() && y == a.get()));
+  });
+  double best = std::numeric_limits<double>::max();
+  m.distance(&best, &cube::oracle::narrowDistance<double>);
+  EXPECT_GT(apart, 0u);
+  EXPECT_NEAR(best, 6.0, 1e-9) << "a-b (2 apart) dropped: b-c (6 apart) is the nearest";
+}
+
+// setFilter / setMargin: unregistering an object forgets its bits and its own margin.
+TEST(Contracts, UnregisterForgetsBitsAndMargin) {
+  using contracts::box;
+  auto a = box(0), b = box(1.5);
+  CubeCollisionManager<double> m;
+  m.registerObjects({a.get(), b.get()});
+  m.setFilter(a.get(), 2, 2);
+  m.setMargin(a.get(), 3.0);
+  EXPECT_EQ(m.filter(a.get()), std::make_pair(std::uint64_t(2), std::uint64_t(2)));
+  EXPECT_EQ(m.margin(a.get()), 3.0);
+  m.unregisterObject(a.get());
+  m.registerObject(a.get());
+  EXPECT_EQ(m.filter(a.get()), std::make_pair(std::uint64_t(1), ~std::uint64_t(0)));
+  EXPECT_EQ(m.margin(a.get()), 0.0);
+  std::string why;
+  EXPECT_TRUE(m.validate(&why)) << why;
+}
+
+// contactsWithinMargin: a pair with a plane gets the distance of the objects' own AABBs, not
+// of the boxes grown by the margins.
+TEST(Contracts, PlaneContactsUseTheObjectsOwnAabbs) {
+  using contracts::box;
+  auto b = box(0);  // spans z in [-0.5, 0.5]
+  Obj<double> plane(std::make_shared<fcl::Planed>(fcl::Vector3d(0, 0, 1), 2.0));
+  plane.computeAABB();
+  CubeCollisionManager<double> m;
+  m.registerObjects({b.get(), &plane});
+  m.setMargin(1.0);  // 1.5 apart, within 1.0 + 1.0
+  const auto found = cube::contactsWithinMargin<double>(m);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_FALSE(found[0].colliding);
+  EXPECT_EQ(found[0].distance, b->getAABB().distance(plane.getAABB()));
+  EXPECT_NEAR(found[0].distance, 1.5, 1e-12);
+}
+
+// raycastObject's box test: the intersection of [0, 1] with every axis' interval. A segment that
+// ends before the box or starts after it misses; one that ends on its face touches it at t = 1.
+TEST(Contracts, RayBoxTestIsTheIntersectionOfTheIntervals) {
+  auto o = contracts::box(0.5);  // the unit cube [0, 1]^3
+  cube::RayOptions<double> box_only;
+  box_only.narrow_phase = false;
+  const auto hit = [&](double x0, double x1) {
+    return cube::raycastObject<double>(*o, o->getAABB(), fcl::Vector3d(x0, 0.5, 0.5),
+                                       fcl::Vector3d(x1, 0.5, 0.5), box_only);
+  };
+  EXPECT_FALSE(hit(-3, -1).has_value()) << "ends before the box";
+  EXPECT_FALSE(hit(2, 3).has_value()) << "starts after it";
+  EXPECT_FALSE(hit(-1, -3).has_value()) << "moves away from it";
+  ASSERT_TRUE(hit(-1, 0).has_value());
+  EXPECT_EQ(hit(-1, 0)->t, 1.0) << "ends on its face";
+  ASSERT_TRUE(hit(-1, 3).has_value());
+  EXPECT_EQ(hit(-1, 3)->t, 0.25);
+  ASSERT_TRUE(hit(0.5, 3).has_value());
+  EXPECT_EQ(hit(0.5, 3)->t, 0.0) << "starts inside";
 }
 
 TEST(CanonicalPairs, SameCallsWhateverTheTree) {

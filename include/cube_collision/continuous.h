@@ -77,7 +77,16 @@ std::vector<std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>> swept
 /// fcl::continuousCollide(a, end_a, b, end_b, request) on every pair sweptPairs lists (a still
 /// object's end is its current transform) and the pairs it reports colliding, sorted by time of
 /// contact, ties in the order of sweptPairs. The answer equals fcl::continuousCollide over every
-/// pair with a mover: a pair left out cannot collide at any pose FCL visits. With
+/// pair with a mover that passes the manager's filter bits and pair predicate (with margins,
+/// boxes grown by them as in sweptPairs: a margin lists more pairs, never changes FCL's answer
+/// for one): a pair left out cannot collide at any pose FCL visits. One exception, FCL 0.7's:
+/// its yes/no cylinder-plane test (fcl::detail::cylinderPlaneIntersect without contacts, in
+/// narrowphase/detail/primitive_shape_algorithm/plane-inl.h) projects the cylinder's full length
+/// lz where half of it belongs, so for a cylinder and a Plane (not a Halfspace) FCL's sampling
+/// reports contact while the cylinder's end is up to lz/2 further from the plane than touching.
+/// Such a pair whose swept boxes do not overlap is left out, so the true answer (no contact) is
+/// given where fcl::continuousCollide over every pair reports one; where the boxes overlap,
+/// FCL's answer is passed on as it is (its time of contact may be early). With
 /// `earliest_only`, only the first contact (or none). Double only: FCL 0.7's float
 /// continuousCollide does not compile (its float motion classes are abstract).
 /// Accepts what FCL's continuous collision answers by intersections: request.ccd_solver_type

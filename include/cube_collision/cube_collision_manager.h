@@ -121,23 +121,30 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// Filter bits of a registered object (as Box2D, Bullet and Jolt): a pair reaches a callback
   /// only if (a.category & b.mask) != 0 and (b.category & a.mask) != 0. Default: category 1,
   /// mask all ones. O(1); applies to every query from the next one on, pair list included.
-  /// Query objects not registered here have the default bits. Throws std::invalid_argument
-  /// (nothing changed) if obj is null or not registered.
+  /// Query objects not registered here have the default bits. Unregistering an object forgets
+  /// its bits (and its own margin): registered again, it has the defaults. Throws
+  /// std::invalid_argument (nothing changed) if obj is null or not registered.
   void setFilter(Object* obj, std::uint64_t category, std::uint64_t mask);
   /// {category, mask} of obj; the default bits for an object not registered here.
   std::pair<std::uint64_t, std::uint64_t> filter(const Object* obj) const;
-  /// A predicate asked for each pair whose boxes overlap and whose bits pass, before the
-  /// callback (a collision matrix, say): false drops the pair. Called as keep(a, b) with the
-  /// callback's argument order, from the querying thread: concurrent const queries call it
-  /// concurrently. An empty function removes it.
+  /// A predicate asked for each pair whose bits pass, before the callback is called for it (a
+  /// collision matrix, say): false drops the pair. In collide queries, the pairs whose boxes
+  /// overlap; in distance queries, every pair the branch and bound would hand to the callback,
+  /// whose boxes need not overlap. Called as keep(a, b) with the callback's argument order, from
+  /// the querying thread: concurrent const queries call it concurrently. An empty function
+  /// removes it.
   void setPairFilter(std::function<bool(Object*, Object*)> keep);
   /// Manager-wide margin (>= 0, finite), for every object without one of its own and for query
   /// objects not registered here: queries report the pairs whose AABBs overlap once each is
-  /// grown by its margin. Re-reads every AABB (as update()). Throws std::invalid_argument
-  /// (nothing changed) for a negative, infinite or NaN margin.
+  /// grown by its margin. Between managers: against another CubeCollisionManager, each side's
+  /// objects are grown by their own manager's margins; against any other manager, its objects
+  /// are query objects here, grown by this manager's manager-wide margin. Re-reads every AABB
+  /// (as update()). Throws std::invalid_argument (nothing changed) for a negative, infinite or
+  /// NaN margin.
   void setMargin(S margin);
-  /// obj's own margin (>= 0, finite); re-reads obj's AABB (as update(obj)). Throws
-  /// std::invalid_argument (nothing changed) if obj is null, not registered, or the margin bad.
+  /// obj's own margin (>= 0, finite), kept until obj is unregistered; re-reads obj's AABB (as
+  /// update(obj)). Throws std::invalid_argument (nothing changed) if obj is null, not
+  /// registered, or the margin bad.
   void setMargin(Object* obj, S margin);
   /// The margin obj's AABB is grown by: its own, else the manager-wide one.
   S margin(const Object* obj) const;

@@ -20,7 +20,8 @@ struct MarginContact {
   fcl::CollisionObject<S>* b = nullptr;
   /// fcl::distance between them; 0 when fcl::collide reports contact (FCL 0.7's distance gives
   /// no depth). For a pair with a plane, halfspace or octree (whose fcl::distance FCL 0.7 cannot
-  /// answer) the distance of their AABBs stands in, and nearest points are left at zero.
+  /// answer) the distance of the two objects' own AABBs (getAABB(), not grown by the margins)
+  /// stands in, and nearest points are left at zero.
   S distance = 0;
   bool colliding = false;  ///< fcl::collide reported contact
   /// Nearest points in world coordinates from fcl::distance (pairs apart and answered by FCL).

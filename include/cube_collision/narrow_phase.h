@@ -135,8 +135,9 @@ fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
 /// Calls fn(i, pairs[i].first, pairs[i].second) for every i on `threads` threads (fewer than 4
 /// pairs: on the calling thread): for callers who run their own narrow phase. fn must be
 /// safe to call concurrently; write results by index to keep them independent of the threads.
-/// An exception thrown by fn is rethrown here after the other calls finished (the first one, in
-/// pair order, if several threw). An empty fn throws std::invalid_argument.
+/// An exception thrown by fn stops nothing: fn is still called for every other index, and once
+/// all calls have returned the exception is rethrown here (the first one in pair order, if
+/// several threw). An empty fn throws std::invalid_argument.
 template <typename S>
 void forEachPair(
     const std::vector<ObjectPair<S>>& pairs,

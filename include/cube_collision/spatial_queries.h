@@ -73,11 +73,14 @@ std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
 /// The per-object test behind raycastFirst and raycastAll, against `box` (the object's AABB as
 /// the manager holds it; obj.getAABB() outside one).
 ///
-/// Box test, in double: per axis with to_k != from_k, the segment's entry and exit are
-/// (lo_k - from_k) * (1 / (to_k - from_k)) and the same with hi_k (swapped if negative), clamped
-/// to [0, 1]; an axis where the segment does not move (or moves less than 1 / DBL_MAX) requires
-/// lo_k <= from_k <= hi_k. The box is met (closed: touching counts) if the largest entry is at
-/// most the smallest exit. No hit if it is not met.
+/// Box test, in double: per axis with to_k != from_k, the segment's parameters inside the slab
+/// lo_k <= x_k <= hi_k are the interval from (lo_k - from_k) * (1 / (to_k - from_k)) to the same
+/// with hi_k (swapped if the factor is negative); an axis where the segment does not move (or
+/// moves less than 1 / DBL_MAX) requires lo_k <= from_k <= hi_k. The box is met (closed:
+/// touching counts) if the intersection of [0, 1] with every axis' interval is not empty: its
+/// start (the largest of 0 and the entries) is the box's entry, its end (the smallest of 1 and
+/// the exits) the box's exit. So a segment that ends before the box, or starts after it, misses
+/// it. No hit if it is not met.
 ///
 /// Narrow phase (options.narrow_phase, and a geometry FCL can test: meshes (BVHModel), box,
 /// sphere, ellipsoid, capsule, cone, cylinder, convex, plane, halfspace): t is the first point of
