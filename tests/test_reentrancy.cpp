@@ -1472,6 +1472,30 @@ TEST(ReentrancyOffThePath, PredicateOfContinuousQueriesCannotMutate) {
     }
 }
 
+// collideAll runs no user callback, but the manager's pair predicate: with the walk split over
+// threads (split_walk, 5,000 objects) it is still asked on the calling thread, inside the
+// query's guard, and every mutation from it is refused.
+TEST(ReentrancyOffThePath, PredicateDuringASplitCollideAllCannotMutate) {
+  for (int k = 0; k < kGuardMutations; ++k) {
+    GuardWorld w(5000);
+    GuardCount count;
+    w.m.setPairFilter([&](fcl::CollisionObjectd*, fcl::CollisionObjectd*) {
+      if (count.tried.load() < 50) count.attempt(w, k);
+      return true;
+    });
+    fcl::CollisionRequestd all;
+    all.num_max_contacts = 1 << 30;
+    cube::NarrowPhaseOptions<double> o;
+    o.threads = 2;
+    o.split_walk = true;
+    const auto r = cube::collideAll<double>(w.m, all, o);
+    EXPECT_GT(r.numContacts(), 1000u);
+    EXPECT_EQ(count.tried.load(), 50) << "mutation " << k;
+    EXPECT_EQ(count.refused.load(), 50) << "mutation " << k;
+    EXPECT_TRUE(unchanged(w, 5000)) << "mutation " << k;
+  }
+}
+
 TEST(ReentrancyOffThePath, CollideConcurrentlyCallbacksCannotMutateOnAnyThread) {
   struct Data {
     GuardWorld* w;
