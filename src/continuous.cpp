@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/broadphase.h"
+#include "manager_access.h"
 #include "query_guard.h"
 
 namespace cube {
@@ -223,7 +224,7 @@ ObjectPairs<S> sweptPairs(const CubeCollisionManager<S>& manager,
                           const std::vector<Motion<S>>& motions, fcl::CCDMotionType motion_type) {
   const char* where = "sweptPairs";
   checkMotionType(motion_type, where);
-  const detail::Broadphase<S>& core = manager.core();
+  const detail::Broadphase<S>& core = detail::coreOf(manager);
   const detail::ObjectTable<S>& table = core.table();
   std::vector<char> moving(table.idBound(), 0);
   for (std::size_t i = 0; i < motions.size(); ++i) {
@@ -304,7 +305,7 @@ std::vector<ContinuousContact> continuousCollideAll(
 
   const auto pairs = sweptPairs(manager, motions, request.ccd_motion_type);
   // Each mover's end; a still object ends where it is.
-  const detail::ObjectTable<double>& table = manager.core().table();
+  const detail::ObjectTable<double>& table = detail::coreOf(manager).table();
   std::vector<const fcl::Transform3d*> end(table.idBound(), nullptr);
   for (const Motion<double>& m : motions) end[table.find(m.object)] = &m.end;
   const auto endOf = [&](const fcl::CollisionObject<double>* obj) -> const fcl::Transform3d& {

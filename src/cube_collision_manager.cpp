@@ -14,6 +14,7 @@
 
 #include "core/broadphase.h"
 #include "cull.h"
+#include "manager_access.h"
 #include "query_guard.h"
 #include "self_collide_threads.h"
 
@@ -287,13 +288,13 @@ void againstManager(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisio
                     const char* where, Self&& self_run, Cube&& cube_run, One&& object_run) {
   if (other == nullptr) fail(where, "null manager");
   if (other == &self) {
-    const QueryScope scope(&self.core());
+    const QueryScope scope(&detail::coreOf(self));
     self_run();
     return;
   }
   if (const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(other)) {
-    const QueryScope scope(&self.core(), &cube->core());
-    cube_run(cube->core());
+    const QueryScope scope(&detail::coreOf(self), &detail::coreOf(*cube));
+    cube_run(detail::coreOf(*cube));
     return;
   }
   std::vector<fcl::CollisionObject<S>*> objs;
@@ -301,7 +302,7 @@ void againstManager(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisio
   std::vector<Box<S>> boxes;
   boxes.reserve(objs.size());
   for (const auto* o : objs) boxes.push_back(checkedQueryBox(o, where));
-  const QueryScope scope(&self.core());
+  const QueryScope scope(&detail::coreOf(self));
   for (std::size_t i = 0; i < objs.size(); ++i)
     if (object_run(objs[i], boxes[i])) return;
 }
@@ -430,7 +431,7 @@ template <typename S>
 void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
                           fcl::CollisionCallBack<S> callback, int threads) {
   if (callback == nullptr) fail("collide", "null callback");
-  const Broadphase<S>& core = manager.core();
+  const Broadphase<S>& core = detail::coreOf(manager);
   if (core.size() < 2) return;  // no pair
   CulledCallback<S> culled{cdata, callback};
   culled.install(core.config().cull_pairs, cdata, callback);

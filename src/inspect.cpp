@@ -14,6 +14,7 @@
 #include "core/broadphase.h"
 #include "core/walk.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "manager_access.h"
 
 namespace cube {
 
@@ -38,7 +39,7 @@ BoundingBox toBox(const detail::Box<S>& b) {
 
 template <typename S>
 HierarchyView<S>::HierarchyView(const CubeCollisionManager<S>& manager) {
-  const detail::Broadphase<S>& core = manager.core();
+  const detail::Broadphase<S>& core = detail::coreOf(manager);
   const detail::CubeTree<S>& h = core.tree();
   const detail::NodeArray& nodes = h.nodes();
   const auto& items = h.items();

@@ -6,6 +6,7 @@
 
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "manager_access.h"
 #include "narrow_phase_stream.h"
 #include "query_guard.h"
 #include "self_collide_threads.h"
@@ -196,9 +197,12 @@ void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void
                          fcl::CollisionCallBack<S> callback, int threads, bool split_walk) {
   if (callback == nullptr) throw std::invalid_argument("cube::collideConcurrently: null callback");
   const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(&manager);
-  ConcurrentCalls<S> calls{cdata, callback, threads,
-                           cube != nullptr ? static_cast<const void*>(&cube->core()) : nullptr,
-                           {}};
+  ConcurrentCalls<S> calls{
+      cdata,
+      callback,
+      threads,
+      cube != nullptr ? static_cast<const void*>(&detail::coreOf(*cube)) : nullptr,
+      {}};
   selfWalk(manager, &calls, &ConcurrentCalls<S>::gather, threads, split_walk);
   if (!calls.stop.load()) calls.flush();
 }

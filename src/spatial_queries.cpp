@@ -28,6 +28,7 @@
 #include "core/broadphase.h"
 #include "core/walk.h"
 #include "fcl_narrow.h"
+#include "manager_access.h"
 
 namespace cube {
 
@@ -433,7 +434,7 @@ struct RayQuery {
 
   RayQuery(const CubeCollisionManager<S>& m, const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
            const RayOptions<S>& o)
-      : seg(makeSegment(from, to)), table(m.core().table()) {
+      : seg(makeSegment(from, to)), table(detail::coreOf(m).table()) {
     if (o.narrow_phase) narrow_phase.emplace(from, to, o.tolerance);
   }
   Narrow<S>* narrow() { return narrow_phase ? &*narrow_phase : nullptr; }
@@ -555,9 +556,9 @@ struct RegionVisitor {
 template <typename S, class Pred>
 std::vector<fcl::CollisionObject<S>*> region(const CubeCollisionManager<S>& manager,
                                              const Pred& pred) {
-  const detail::Scene<S> scene = manager.core().scene();
+  const detail::Scene<S> scene = detail::coreOf(manager).scene();
   std::vector<std::pair<std::uint32_t, fcl::CollisionObject<S>*>> found;
-  RegionVisitor<S, Pred> v{scene.cubes, pred, found, manager.core().table()};
+  RegionVisitor<S, Pred> v{scene.cubes, pred, found, detail::coreOf(manager).table()};
   if (scene.cubes.root != kNone) {
     const Node& root = scene.cubes.nodes[scene.cubes.root];
     if (pred(root.lo, root.hi)) detail::walkTree(scene.cubes.nodes, scene.cubes.root, char{}, v);
@@ -629,7 +630,7 @@ std::optional<RayHit<S>> raycastFirst(const CubeCollisionManager<S>& manager,
                                       const RayOptions<S>& options) {
   checkRay(from, to, options);
   RayQuery<S> q(manager, from, to, options);
-  const detail::Scene<S> scene = manager.core().scene();
+  const detail::Scene<S> scene = detail::coreOf(manager).scene();
   std::optional<Found<S>> best;
   std::vector<std::pair<double, std::uint32_t>> order;
   FirstVisitor<S> v{scene.cubes, q, best, order};
@@ -651,7 +652,7 @@ std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
                                   const RayOptions<S>& options) {
   checkRay(from, to, options);
   RayQuery<S> q(manager, from, to, options);
-  const detail::Scene<S> scene = manager.core().scene();
+  const detail::Scene<S> scene = detail::coreOf(manager).scene();
   std::vector<Found<S>> found;
   AllVisitor<S> v{scene.cubes, q, found};
   if (scene.cubes.root != kNone) {

@@ -10,6 +10,7 @@
 
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "manager_access.h"
 #include "scenes.h"
 #include "support/correctness.h"
 
@@ -376,7 +377,7 @@ TYPED_TEST(Dynamic, AutomaticPolicyRebuildsOnScatterNotOnJitter) {
     CubeCollisionManager<S> cube;
     cube.registerObjects(objs);
     cube.setup();
-    const auto& t = cube.core().tree();
+    const auto& t = ::cube::detail::coreOf(cube).tree();
     const double threshold = cube.config().rebuild_threshold;
     const auto built = t.buildCount();
     for (std::uint32_t round = 0; round < 5; ++round) {
@@ -410,7 +411,7 @@ TYPED_TEST(Dynamic, RefitPolicyNeverRebuildsOnUpdate) {
     CubeCollisionManager<S> cube(c);
     cube.registerObjects(objs);
     cube.setup();
-    const auto& t = cube.core().tree();
+    const auto& t = ::cube::detail::coreOf(cube).tree();
     const auto built = t.buildCount();
     for (std::uint32_t round = 0; round < 3; ++round) {
       applyUpdate(cube, variant, scenes::jitter(sc, 1.0, 2 * kHalf, true, 400 + round));
@@ -436,15 +437,17 @@ TYPED_TEST(Dynamic, LaterSetupKeepsIncrementalWorkUnlessPolicyForces) {
     CubeCollisionManager<S> cube(c);
     cube.registerObjects(std::vector<Obj<S>*>(objs.begin(), objs.begin() + 450));
     cube.setup();
-    const auto built = cube.core().tree().buildCount();
+    const auto built = ::cube::detail::coreOf(cube).tree().buildCount();
     for (std::size_t i = 450; i < objs.size(); ++i) cube.registerObject(objs[i]);
     for (std::size_t i = 0; i < 20; ++i) cube.unregisterObject(objs[i]);
-    EXPECT_EQ(cube.core().tree().buildCount(), built);
+    EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), built);
     cube.setup();
     if (policy == UpdatePolicy::automatic) {
-      EXPECT_EQ(cube.core().tree().buildCount(), built) << "setup() threw the insertions away";
+      EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), built)
+          << "setup() threw the insertions away";
     } else {
-      EXPECT_EQ(cube.core().tree().buildCount(), built + 1) << "forced policy did not rebuild";
+      EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), built + 1)
+          << "forced policy did not rebuild";
     }
     ASSERT_TRUE(valid(cube));
     const std::vector<Obj<S>*> kept(objs.begin() + 20, objs.end());
@@ -462,7 +465,7 @@ TYPED_TEST(Dynamic, RebuildPolicyAlwaysRebuilds) {
   CubeCollisionManager<S> cube(c);
   cube.registerObjects(objs);
   cube.setup();
-  const auto& t = cube.core().tree();
+  const auto& t = ::cube::detail::coreOf(cube).tree();
   for (std::uint32_t round = 0; round < 3; ++round) {
     for (Variant variant : {Variant::all, Variant::single, Variant::vector}) {
       SCOPED_TRACE(name(variant));
@@ -549,14 +552,14 @@ TYPED_TEST(Dynamic, NoMotionUpdateKeepsCallbackOrder) {
       const Sequence<S> before = record(cube, queries);
       ASSERT_GT(before.self.size(), 50u);
       ASSERT_FALSE(before.objects.empty());
-      const auto builds = cube.core().tree().buildCount();
+      const auto builds = ::cube::detail::coreOf(cube).tree().buildCount();
       cube.update();
       EXPECT_TRUE(record(cube, queries) == before) << "after update()";
       cube.update(objs);
       EXPECT_TRUE(record(cube, queries) == before) << "after update(vector of all)";
       for (auto* o : objs) cube.update(o);
       EXPECT_TRUE(record(cube, queries) == before) << "after update(obj) of each";
-      EXPECT_EQ(cube.core().tree().buildCount(), builds);
+      EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), builds);
       EXPECT_TRUE(valid(cube));
     }
   }
@@ -592,13 +595,13 @@ TYPED_TEST(Dynamic, ObjectsMoveBetweenCubesAndUnboundedList) {
     extra[0]->setAABB(V(-inf, -inf, -1), V(inf, inf, 1));  // a slab through z = 0
     applyUpdate(cube, variant, {extra[0].get()});
     ASSERT_TRUE(valid(cube));
-    EXPECT_EQ(cube.core().unboundedItems().size(), 1u);
+    EXPECT_EQ(::cube::detail::coreOf(cube).unboundedItems().size(), 1u);
     EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
     EXPECT_EQ(cubeObjectCalls<S>(cube, extra[1].get()), bruteCrossPairs<S>(objs, {extra[1].get()}));
     extra[0]->setAABB(V(0, 0, 0), V(10, 10, 10));
     applyUpdate(cube, variant, {extra[0].get()});
     ASSERT_TRUE(valid(cube));
-    EXPECT_EQ(cube.core().unboundedItems().size(), 0u);
+    EXPECT_EQ(::cube::detail::coreOf(cube).unboundedItems().size(), 0u);
     EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
   }
 }
@@ -677,10 +680,10 @@ void pairListRun(std::size_t n, bool keep, std::uint32_t seed) {
         what = "registerObject";
       }
     } else if (op < 17) {
-      const std::size_t builds = cube.core().tree().buildCount();
+      const std::size_t builds = ::cube::detail::coreOf(cube).tree().buildCount();
       cube.setup();
       // A setup() that does not rebuild leaves the list as it was.
-      expect_listed = listed_before && cube.core().tree().buildCount() == builds;
+      expect_listed = listed_before && ::cube::detail::coreOf(cube).tree().buildCount() == builds;
       what = "setup()";
     } else if (op < 18) {  // a third of the objects move: update() drops the list
       for (std::size_t k = 0; k < reg.live.size() / 3 + 1; ++k) {

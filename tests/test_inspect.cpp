@@ -16,6 +16,7 @@
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/inspect.h"
+#include "manager_access.h"
 #include "scenes.h"
 
 namespace {
@@ -32,7 +33,7 @@ template <typename S>
 HierarchyView<S> checkView(const CubeCollisionManager<S>& m) {
   std::string why;
   EXPECT_TRUE(m.validate(&why)) << why;
-  const auto& h = m.core().tree();
+  const auto& h = ::cube::detail::coreOf(m).tree();
   HierarchyView<S> v(m);
   const int n = v.getNumberCells();
 

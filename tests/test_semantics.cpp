@@ -14,6 +14,7 @@
 
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "manager_access.h"
 #include "scenes.h"
 #include "support/correctness.h"
 
@@ -306,14 +307,14 @@ TYPED_TEST(Semantics, SetupIsIdempotent) {
   CubeCollisionManager<S> cube;
   for (auto* o : sc.pointers()) cube.registerObject(o);
   cube.setup();
-  const auto builds = cube.core().tree().buildCount();
+  const auto builds = ::cube::detail::coreOf(cube).tree().buildCount();
   Calls<S> before;
   cube.collide(&before, &Calls<S>::record);
   DistCalls<S> dbefore;
   cube.distance(sc.objects[7].get(), &dbefore, &DistCalls<S>::record);
   ASSERT_FALSE(before.calls.empty());
   for (int i = 0; i < 3; ++i) cube.setup();
-  EXPECT_EQ(cube.core().tree().buildCount(), builds);
+  EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), builds);
   Calls<S> after;
   cube.collide(&after, &Calls<S>::record);
   DistCalls<S> dafter;
@@ -548,7 +549,7 @@ TYPED_TEST(Semantics, UnboundedObjectsAreTestedByEveryQuery) {
   cube.registerObjects(objs);
   cube.setup();
   ASSERT_TRUE(valid(cube));
-  EXPECT_EQ(cube.core().unboundedItems().size(), 2u);
+  EXPECT_EQ(::cube::detail::coreOf(cube).unboundedItems().size(), 2u);
   const auto brute = oracle::bruteSelfPairs(objs);
   EXPECT_EQ(oracle::selfPairs<S>(cube), brute);
   fcl::NaiveCollisionManager<S> naive;
@@ -658,8 +659,8 @@ TYPED_TEST(Semantics, DegenerateScenesIdenticalAndZeroSizeBoxes) {
       cube.registerObjects(ptrs);
       cube.setup();
       ASSERT_TRUE(valid(cube));
-      for (const auto& [c, depth] : liveCubes(cube.core().tree())) {
-        const auto& n = cube.core().tree().nodes()[c];
+      for (const auto& [c, depth] : liveCubes(::cube::detail::coreOf(cube).tree())) {
+        const auto& n = ::cube::detail::coreOf(cube).tree().nodes()[c];
         if (n.isLeaf()) {
           EXPECT_LE(n.count, std::uint32_t(leaf_size)) << "depth " << depth;
         }
@@ -710,7 +711,7 @@ TYPED_TEST(Semantics, BuildSplitsEveryCubeAtItsMedian) {
       cube.registerObjects(ptrs);
       cube.setup();
       ASSERT_TRUE(valid(cube));
-      const auto& t = cube.core().tree();
+      const auto& t = ::cube::detail::coreOf(cube).tree();
       const auto& nodes = t.nodes();
       const auto& items = t.items();
       // Each cube's object range, children before parents (children have larger indices).
@@ -753,7 +754,8 @@ TYPED_TEST(Semantics, BuildSplitsEveryCubeAtItsMedian) {
           float a[3], b[3];
           detail::roundOut(items[p].box, a, b);
           const float c = a[axis] + b[axis];
-          return std::make_pair(c == c ? c : 0.0f, cube.core().table().seq(items[p].id));
+          return std::make_pair(c == c ? c : 0.0f,
+                                ::cube::detail::coreOf(cube).table().seq(items[p].id));
         };
         const std::uint32_t count = range[i].second - range[i].first;
         const std::uint32_t split = range[n.first].second - range[i].first;
@@ -796,7 +798,7 @@ TEST(Semantics, BoxesBeyondFloatRangeInsideTheCubes) {
     cube.registerObjects(ptrs);
     cube.setup();
     ASSERT_TRUE(valid(cube));
-    EXPECT_TRUE(cube.core().unboundedItems().empty());  // all in the cubes
+    EXPECT_TRUE(::cube::detail::coreOf(cube).unboundedItems().empty());  // all in the cubes
     EXPECT_EQ(oracle::selfPairs<S>(cube), brute);
     EXPECT_EQ(cubeObjectCalls<S>(cube, ptrs[30]), bruteCrossPairs<S>(ptrs, {ptrs[30]}));
   }
@@ -917,7 +919,7 @@ TYPED_TEST(Semantics, LeafSizeAndMaxDepthShapeTheTree) {
           cube.setup();
         }
         ASSERT_TRUE(valid(cube));
-        const auto& t = cube.core().tree();
+        const auto& t = ::cube::detail::coreOf(cube).tree();
         int deepest = 0;
         std::size_t crowded = 0, in_leaves = 0;
         for (const auto& [c, depth] : liveCubes(t)) {

@@ -24,6 +24,7 @@
 #include "core/traversal.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
+#include "manager_access.h"
 #include "scenes.h"
 #include "self_collide_threads.h"
 #include "support/oracle.h"
@@ -122,10 +123,10 @@ TEST(SplitWalk, TasksConcatenateToTheSerialWalk) {
       m.registerObjects(w.all);
       if (rules) addRules(m, w.all, false);
       ASSERT_TRUE(m.validate());
-      const cube::detail::Scene<S> scene = m.core().scene();
+      const cube::detail::Scene<S> scene = ::cube::detail::coreOf(m).scene();
       ASSERT_NE(scene.unbounded.root, cube::detail::kNone);
       cube::detail::PairGate<S> gate;
-      gate.filters_a = gate.filters_b = m.core().table().filters();
+      gate.filters_a = gate.filters_b = ::cube::detail::coreOf(m).table().filters();
       const cube::detail::PairGate<S>* g = rules ? &gate : nullptr;
       std::vector<std::uint64_t> all_serial;
       cube::detail::forSelfViews(scene, [&](const auto& a, const auto& b, bool self) {
@@ -147,9 +148,9 @@ TEST(SplitWalk, TasksConcatenateToTheSerialWalk) {
       // And the walk is right: brute force over every object.
       std::vector<Pair> got;
       for (const std::uint64_t p : all_serial)
-        got.push_back(
-            cube::oracle::unordered(m.core().table().object(cube::detail::ObjectId(p >> 32)),
-                                    m.core().table().object(cube::detail::ObjectId(p))));
+        got.push_back(cube::oracle::unordered(
+            ::cube::detail::coreOf(m).table().object(cube::detail::ObjectId(p >> 32)),
+            ::cube::detail::coreOf(m).table().object(cube::detail::ObjectId(p))));
       std::sort(got.begin(), got.end());
       EXPECT_EQ(got, bruteKept(m, w.all, false));
     }

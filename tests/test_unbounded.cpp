@@ -23,6 +23,7 @@
 
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "manager_access.h"
 #include "support/oracle.h"
 
 namespace {
@@ -205,10 +206,11 @@ TEST(Unbounded, PlanesAndHalfspacesStayOutOfTheCubes) {
   Scene s = mixedScene(1, 40, false);
   Manager m;
   m.registerObjects(s.all());
-  EXPECT_EQ(m.core().unboundedItems().size(), 7u);
-  for (const auto& it : m.core().unboundedItems()) EXPECT_TRUE(isPlanar(it.obj));
+  EXPECT_EQ(::cube::detail::coreOf(m).unboundedItems().size(), 7u);
+  for (const auto& it : ::cube::detail::coreOf(m).unboundedItems()) EXPECT_TRUE(isPlanar(it.obj));
   // The cubes stay the size of the bounded scene, not of the planes.
-  const auto& root = m.core().tree().nodes()[m.core().tree().root()];
+  const auto& root =
+      ::cube::detail::coreOf(m).tree().nodes()[::cube::detail::coreOf(m).tree().root()];
   for (int k = 0; k < 3; ++k) EXPECT_LT(root.hi[k] - root.lo[k], 100.f);
   expectLikeNaive(m, s.all(), s.all());
 }
@@ -288,7 +290,7 @@ TEST(Unbounded, ObjectsCrossBetweenCubesAndUnboundedList) {
       }
       std::size_t far_count = 0;
       for (std::size_t i = 0; i < 30; ++i) far_count += s.owned[i]->getAABB().max_[0] > 1e15;
-      EXPECT_EQ(m.core().unboundedItems().size(), planes + far_count);
+      EXPECT_EQ(::cube::detail::coreOf(m).unboundedItems().size(), planes + far_count);
       expectLikeNaive(m, objs, {s.owned[0].get(), s.owned[31].get()});
       // And in and out of the manager altogether.
       m.unregisterObject(moved[0]);
@@ -309,7 +311,7 @@ TEST(Unbounded, OnlyUnboundedObjects) {
         pose(0, 0, 0));
   Manager m;
   m.registerObjects(s.all());
-  EXPECT_EQ(m.core().unboundedItems().size(), 3u);
+  EXPECT_EQ(::cube::detail::coreOf(m).unboundedItems().size(), 3u);
   expectLikeNaive(m, s.all(), s.all());
   Manager empty;
   expectPairsWith(m, empty, s.all());
@@ -358,7 +360,7 @@ TEST(Unbounded, OrderAfterTheFirstSetupIgnoresRemovedObjects) {
     churned.setup();
     std::string why;
     ASSERT_TRUE(churned.validate(&why)) << why;
-    ASSERT_GE(plain.core().unboundedItems().size(), 3u);
+    ASSERT_GE(::cube::detail::coreOf(plain).unboundedItems().size(), 3u);
     const auto a = calls(plain), b = calls(churned);
     ASSERT_GT(a.size(), 300u);
     EXPECT_TRUE(a == b) << "batch " << batch << ": the call orders differ";

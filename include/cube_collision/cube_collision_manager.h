@@ -17,7 +17,8 @@ namespace cube {
 
 namespace detail {
 template <typename S>
-class Broadphase;  // the core (src/core/broadphase.h), private to the library
+class Broadphase;      // the core (src/core/broadphase.h), private to the library
+struct ManagerAccess;  // the library's and its tests' way to the core (src/manager_access.h)
 }  // namespace detail
 
 /// A drop-in fcl::BroadPhaseCollisionManager<S> backed by a cube hierarchy (axis-aligned cuboids
@@ -161,10 +162,9 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   std::size_t bytes() const;
   /// Whether the next self-collide is served from the pair list (Config::keep_pairs).
   bool pairsListed() const;
-  /// The core, for the library's inspection code and tests (its type is private to the library).
-  const detail::Broadphase<S>& core() const { return *core_; }
 
  private:
+  friend struct detail::ManagerAccess;
   std::unique_ptr<detail::Broadphase<S>> core_;
 };
 

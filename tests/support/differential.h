@@ -33,6 +33,7 @@
 
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "manager_access.h"
 #include "oracle.h"
 
 namespace cube {
@@ -578,7 +579,7 @@ class Runner {
   std::string dump() const {
     std::ostringstream s;
     s.precision(9);
-    const auto& h = mgr_.core().tree();
+    const auto& h = ::cube::detail::coreOf(mgr_).tree();
     s << "\n--- hierarchy: root " << h.root() << " ---";
     for (std::size_t i = 0; i < h.nodes().size(); ++i) {
       const auto& n = h.nodes()[i];
@@ -589,7 +590,8 @@ class Runner {
     for (std::size_t i = 0; i < h.items().size(); ++i)
       s << "\n  item " << i << " " << (h.items()[i].obj ? name(h.items()[i].obj) : "dead")
         << " leaf " << h.items()[i].leaf;
-    for (const auto& it : mgr_.core().unboundedItems()) s << "\n  unbounded " << name(it.obj);
+    for (const auto& it : ::cube::detail::coreOf(mgr_).unboundedItems())
+      s << "\n  unbounded " << name(it.obj);
     return s.str();
   }
 
