@@ -32,12 +32,17 @@ struct Tight {
   fcl::Vector3<S> e;
 
   // The box from the geometry's local AABB (its centre replaces c); false if not finite.
+  // computeLocalAABB() sets aabb_center to that centre, so c usually stands as it is.
   bool withBox() {
     const fcl::AABB<S>& local = g->aabb_local;
     e = (local.max_ - local.min_) * S(0.5);
     R = tf->linear();
-    c = R * ((local.max_ + local.min_) * S(0.5)) + tf->translation();
-    return e.allFinite() && R.allFinite() && c.allFinite() && (e.array() >= S(0)).all();
+    const fcl::Vector3<S> mid = (local.max_ + local.min_) * S(0.5);
+    if (mid != g->aabb_center) {
+      c = R * mid + tf->translation();
+      if (!c.allFinite()) return false;
+    }
+    return e.allFinite() && R.allFinite() && (e.array() >= S(0)).all();
   }
 };
 
