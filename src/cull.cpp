@@ -114,8 +114,9 @@ S boxGap(const Tight<S>& a, const Tight<S>& b, S stop) {
 }
 
 // A ball inside the geometry (centre c in world coordinates, radius r), for the shapes that
-// have an obvious one; false for the others and for non-finite input. FCL's primitives are
-// centred on their frame's origin; a cone's base is at z = -lz/2 and its apex at +lz/2.
+// have an obvious one; false for the others and for non-finite or non-positive sizes. FCL's
+// primitives are centred on their frame's origin; a cone's base is at z = -lz/2 and its apex at
+// +lz/2.
 template <typename S>
 bool inscribedBall(const fcl::CollisionObject<S>& o, fcl::Vector3<S>& c, S& r) {
   const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
@@ -129,9 +130,12 @@ bool inscribedBall(const fcl::CollisionObject<S>& o, fcl::Vector3<S>& c, S& r) {
     case fcl::GEOM_BOX:
       r = S(0.5) * static_cast<const fcl::Box<S>*>(g)->side.minCoeff();
       break;
-    case fcl::GEOM_CAPSULE:
-      r = static_cast<const fcl::Capsule<S>*>(g)->radius;
+    case fcl::GEOM_CAPSULE: {
+      const auto* cap = static_cast<const fcl::Capsule<S>*>(g);
+      if (!(cap->lz >= S(0))) return false;
+      r = cap->radius;
       break;
+    }
     case fcl::GEOM_CYLINDER: {
       const auto* cyl = static_cast<const fcl::Cylinder<S>*>(g);
       r = std::min(cyl->radius, S(0.5) * cyl->lz);
@@ -144,6 +148,7 @@ bool inscribedBall(const fcl::CollisionObject<S>& o, fcl::Vector3<S>& c, S& r) {
       // The ball touching the base and the side: r = R h / (R + slant), centred r above the base.
       const auto* cone = static_cast<const fcl::Cone<S>*>(g);
       const S h = cone->lz, R = cone->radius;
+      if (!(h > S(0) && R > S(0))) return false;
       r = R * h / (R + std::hypot(R, h));
       c = tf * fcl::Vector3<S>(0, 0, r - S(0.5) * h);
       break;

@@ -483,8 +483,8 @@ void keepPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
   cache->collide.store(*cache, pair.first, pair.second, std::move(contacts));
 }
 
-// What FCL's narrow phase costs for a pair, in units of a shape pair's call (about 1-2 us
-// here): a pair with a mesh or an octree costs tens of them.
+// What a pair handed to the threads costs, in kParallelMinWork's unit (a candidate pair of
+// shapes): a pair with a mesh or an octree counts kHeavyPairWork.
 template <typename S>
 std::size_t workOf(const ObjectPair<S>& pair) {
   const auto heavy = [](const fcl::CollisionObject<S>* o) {
