@@ -977,7 +977,8 @@ Check runCheck(const Spec& spec, SceneSet& s) {
               std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
       break;
     }
-    case Case::queries_narrow: {
+    case Case::queries_narrow:
+    case Case::queries_narrow_mt: {
       s.derive();
       if (!ref.counts.count("queries_narrow")) {
         std::size_t c = 0;
@@ -985,9 +986,11 @@ Check runCheck(const Spec& spec, SceneSet& s) {
         ref.counts["queries_narrow"] = c;
       }
       const std::size_t want = ref.counts["queries_narrow"];
+      const int threads = spec.c == Case::queries_narrow_mt ? 0 : 1;
       std::size_t got = 0;
-      for (Object* q : s.queries) got += narrowQuery(spec.m, *s.mainManager(spec.m), q);
+      for (Object* q : s.queries) got += narrowQuery(spec.m, *s.mainManager(spec.m), q, threads);
       ck.counters["contacts"] = double(got);
+      if (threads == 0) ck.counters["threads"] = double(cube::hardwareThreads());
       compare(got == want,
               std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
       break;
@@ -1009,22 +1012,6 @@ Check runCheck(const Spec& spec, SceneSet& s) {
       ck.counters["contacts"] = double(got);
       compare(got == want, "after 3 steps: " + std::to_string(got) + " contacts vs " +
                                std::to_string(want) + " expected");
-      break;
-    }
-    case Case::queries_narrow_mt: {
-      s.derive();
-      if (!ref.counts.count("queries_narrow")) {
-        std::size_t c = 0;
-        for (Object* q : s.queries) c += narrowQuery(rm, *s.mainManager(rm), q);
-        ref.counts["queries_narrow"] = c;
-      }
-      const std::size_t want = ref.counts["queries_narrow"];
-      std::size_t got = 0;
-      for (Object* q : s.queries) got += narrowQuery(spec.m, *s.mainManager(spec.m), q, 0);
-      ck.counters["contacts"] = double(got);
-      ck.counters["threads"] = double(cube::hardwareThreads());
-      compare(got == want,
-              std::to_string(got) + " contacts vs " + std::to_string(want) + " expected");
       break;
     }
     case Case::objdistance_mt: {
