@@ -138,6 +138,27 @@ TYPED_TEST(Culling, NeverDropsACollidingPairOfAnyKind) {
   EXPECT_GT(culled * 10, apart_pairs * 3) << culled << " of " << apart_pairs;
 }
 
+// Slides b along a line, place(t) putting it at t: false if the pair does not collide at t = 0
+// or still collides at t = 10 (a plane or halfspace: no touching position this way); otherwise
+// bisects [0, 10] down to in (the last position FCL reports contact) and out (the first it does
+// not), 10 / 2^50 apart.
+template <typename S, class Place>
+bool slideToTouching(fcl::CollisionObject<S>& a, fcl::CollisionObject<S>& b, Place&& place,
+                     double& in, double& out) {
+  place(0);
+  if (!collides(a, b)) return false;
+  place(10);
+  if (collides(a, b)) return false;
+  in = 0;
+  out = 10;
+  for (int k = 0; k < 50; ++k) {
+    const double mid = 0.5 * (in + out);
+    place(mid);
+    (collides(a, b) ? in : out) = mid;
+  }
+  return true;
+}
+
 // Pairs at the touching position: b slides towards a along a random direction, and bisection
 // with fcl::collide finds where FCL starts to report contact. At that first colliding position,
 // and a hair beyond, the pair must not be culled; a little way outside it may be.
@@ -160,17 +181,8 @@ TYPED_TEST(Culling, KeepsPairsAtTheTouchingPosition) {
           b.setTransform(rb, dir * S(t));
           b.computeAABB();
         };
-        // Colliding at t = 0 (same centre)? Then bisect on [0, 10] for the last contact.
-        place(0);
-        if (!collides(a, b)) continue;
-        place(10);
-        if (collides(a, b)) continue;  // a plane or halfspace: no touching position this way
-        double in = 0, out = 10;
-        for (int k = 0; k < 50; ++k) {
-          const double mid = 0.5 * (in + out);
-          place(mid);
-          (collides(a, b) ? in : out) = mid;
-        }
+        double in, out;
+        if (!slideToTouching(a, b, place, in, out)) continue;
         place(in);
         ASSERT_TRUE(collides(a, b));
         ASSERT_FALSE(cube::detail::surelyApart(a, b, defaultTolerance<S>()))
@@ -217,16 +229,8 @@ TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
           b.setTransform(rb, a.getTranslation() + dir * S(t));
           b.computeAABB();
         };
-        place(0);
-        if (!collides(a, b)) continue;
-        place(10);
-        if (collides(a, b)) continue;  // a plane or halfspace
-        double in = 0, out = 10;
-        for (int k = 0; k < 50; ++k) {
-          const double mid = 0.5 * (in + out);
-          place(mid);
-          (collides(a, b) ? in : out) = mid;
-        }
+        double in, out;
+        if (!slideToTouching(a, b, place, in, out)) continue;
         for (double t : {out, out + 1e-9, out + 0.01, out + 1.0}) {
           place(t);
           EXPECT_FALSE(cube::detail::surelyTouching(a, b, defaultTolerance<S>()))
