@@ -59,9 +59,9 @@ class CollideStream {
   typename NarrowPhaseCache<S>::Impl* cache_;
   int threads_;
   bool done_ = false;
-  bool serial_ = true;          // answer each pair as it comes
-  std::size_t served_ = 0;      // FCL calls answered at once
-  std::size_t chunk_work_ = 0;  // flush once the pending work reaches this
+  bool serial_ = true;           // answer each pair as it comes
+  std::size_t serial_work_ = 0;  // work answered at once (narrow_phase.cpp, kSerialWork)
+  std::size_t chunk_work_ = 0;   // flush once the pending work reaches this
   std::size_t pending_work_ = 0;
   std::vector<ObjectPair<S>> chunk_;
   std::vector<std::size_t> pending_;  // the chunk's pairs not in the cache

@@ -566,10 +566,10 @@ struct BudgetScene {
 // deepest contacts (shape pairs) or its first (meshes): the pipeline keeps the same ones, on
 // every thread count, with and without a cache, for a pair list, a self-collide, an object
 // query and a manager query. The budget leaves room for 1, 2 and 3 of the pair's contacts
-// after 3 and after 12 sphere pairs (12: past the calls answered at once, in a chunk).
+// after 3 and after 1,100 sphere pairs (1,100: past the pairs answered at once, in chunks).
 TYPED_TEST(NarrowPhase, ContactBudgetEndingInsideAPairKeepsFclsContacts) {
   using S = TypeParam;
-  for (std::size_t before : {std::size_t(3), std::size_t(12)}) {
+  for (std::size_t before : {std::size_t(3), std::size_t(1100)}) {
     BudgetScene<S> scene(before);
     fcl::CollisionRequest<S> probe;
     probe.enable_contact = true;

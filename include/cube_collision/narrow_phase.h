@@ -82,13 +82,14 @@ struct NarrowPhaseOptions {
   /// Threads for the narrow phase: 0 (or less) = hardwareThreads(), 1 = this thread only.
   /// Results are the same for every count. Threads are used only where they pay for a parallel
   /// region (about 1 us to open on an idle 2-core machine, tens of us on a busy one): a collide
-  /// answers its pairs on the calling thread until it has made 8 FCL calls or seen 128 candidate
-  /// pairs, then hands the cull and FCL's calls to the threads in chunks of at least 128 pairs
-  /// (a pair with a mesh or an octree counts 64); the cache is always looked up on the calling
-  /// thread. So a small query (most object queries, a robot against its surroundings) runs on
-  /// the calling thread as with 1. A collide that stops at its first contact (num_max_contacts ==
-  /// 1, FCL's default) calls FCL one pair at a time on any count, never more often than on one
-  /// thread; minimumDistance without a cache runs on the calling thread (queries.h says why).
+  /// answers its pairs on the calling thread until it has seen 1,024 candidate pairs (an FCL
+  /// call on a mesh or an octree counts 64 more), then hands the cull and FCL's calls to the
+  /// threads in chunks of at least 128 pairs (a pair with a mesh or an octree counts 64); the
+  /// cache is always looked up on the calling thread. So a small query (most object queries, a
+  /// robot against its surroundings) runs on the calling thread as with 1. A collide that stops at
+  /// its first contact (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any
+  /// count, never more often than on one thread; minimumDistance without a cache runs on the
+  /// calling thread (queries.h says why).
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;
