@@ -599,7 +599,7 @@ void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObjec
   // FCL's own way, one accumulating result: FCL decides which contacts fit.
   fclCollide(a, b, request_, result_);
   markDone();
-  serial_work_ += workOf(ObjectPair<S>(a, b)) - 1;
+  if (threads_ > 1) serial_work_ += workOf(ObjectPair<S>(a, b)) - 1;  // one thread never leaves
 }
 
 template <typename S>
@@ -623,7 +623,7 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
       fclCollide(pair.first, pair.second, request_, s.fresh);
       merge(pair, s);
       keepPair(s.kind, pair, cache_, s.fresh);
-      serial_work_ += workOf(pair) - 1;
+      if (threads_ > 1) serial_work_ += workOf(pair) - 1;
       return;
   }
 }
