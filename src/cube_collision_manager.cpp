@@ -15,8 +15,8 @@
 #include "core/broadphase.h"
 #include "cull.h"
 #include "manager_access.h"
+#include "manager_walks.h"
 #include "query_guard.h"
-#include "self_collide_threads.h"
 
 namespace cube {
 
@@ -74,9 +74,10 @@ struct CulledCallback {
     if (detail::surelyApart(*a, *b, S(1e-6))) return false;
     return c.fn(a, b, c.data);
   }
-  // Swaps (cdata, callback) for this wrapper when culling is on.
+  // Swaps (cdata, callback) for this wrapper when culling is on (a null callback stays null,
+  // for the query's check).
   void install(bool on, void*& cdata, fcl::CollisionCallBack<S>& callback) {
-    if (!on) return;
+    if (!on || callback == nullptr) return;
     cdata = this;
     callback = &CulledCallback::call;
   }
@@ -233,16 +234,42 @@ void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
   distance(other_manager, cdata, callback, nullptr);
 }
 
+namespace {
+
+template <typename S>
+bool isNull(const detail::CollideFn<S>& fn) {
+  return fn.plain == nullptr && fn.with_ids == nullptr;
+}
+
+// The collides behind FCL's interface and the library's (manager_walks.h), after the cull of
+// Config::cull_pairs, if any, is installed.
+template <typename S>
+void runObjectCollide(const detail::Broadphase<S>& core, fcl::CollisionObject<S>* obj, void* cdata,
+                      detail::CollideFn<S> fn, QueryStats* stats) {
+  const Box<S> box = checkedQueryBox(obj, "collide");
+  if (isNull(fn)) fail("collide", "null callback");
+  if (core.size() == 0) return;  // checked, nothing to meet: skip the set-up of a walk
+  const QueryScope scope(&core);
+  core.collide(obj, box, cdata, fn, stats);
+}
+
+template <typename S>
+void runSelfCollide(const detail::Broadphase<S>& core, void* cdata, detail::CollideFn<S> fn,
+                    QueryStats* stats) {
+  if (isNull(fn)) fail("collide", "null callback");
+  if (core.size() < 2) return;  // no pair
+  const QueryScope scope(&core);
+  core.collideSelf(cdata, fn, stats);
+}
+
+}  // namespace
+
 template <typename S>
 void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
-  const Box<S> box = checkedQueryBox(obj, "collide");
-  if (callback == nullptr) fail("collide", "null callback");
-  if (core_->size() == 0) return;  // checked, nothing to meet: skip the set-up of a walk
   CulledCallback<S> culled{cdata, callback};
   culled.install(core_->config().cull_pairs, cdata, callback);
-  const QueryScope scope(core_.get());
-  core_->collide(obj, box, cdata, callback, stats);
+  runObjectCollide(*core_, obj, cdata, detail::CollideFn<S>(callback), stats);
 }
 
 template <typename S>
@@ -259,12 +286,9 @@ void CubeCollisionManager<S>::distance(Object* obj, void* cdata, fcl::DistanceCa
 template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
-  if (callback == nullptr) fail("collide", "null callback");
-  if (core_->size() < 2) return;  // no pair
   CulledCallback<S> culled{cdata, callback};
   culled.install(core_->config().cull_pairs, cdata, callback);
-  const QueryScope scope(core_.get());
-  core_->collideSelf(cdata, callback, stats);
+  runSelfCollide(*core_, cdata, detail::CollideFn<S>(callback), stats);
 }
 
 template <typename S>
@@ -309,18 +333,30 @@ void againstManager(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisio
 
 }  // namespace
 
+namespace {
+
+template <typename S>
+void runManagerCollide(const CubeCollisionManager<S>& manager,
+                       fcl::BroadPhaseCollisionManager<S>* other_manager, void* cdata,
+                       detail::CollideFn<S> fn, QueryStats* stats) {
+  if (isNull(fn)) fail("collide", "null callback");
+  const detail::Broadphase<S>& core = detail::coreOf(manager);
+  againstManager(
+      manager, other_manager, "collide", [&] { core.collideSelf(cdata, fn, stats); },
+      [&](const detail::Broadphase<S>& other) { core.collide(other, cdata, fn, stats); },
+      [&](fcl::CollisionObject<S>* obj, const Box<S>& box) {
+        return core.collide(obj, box, cdata, fn, stats);
+      });
+}
+
+}  // namespace
+
 template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
-  if (callback == nullptr) fail("collide", "null callback");
   CulledCallback<S> culled{cdata, callback};
   culled.install(core_->config().cull_pairs, cdata, callback);
-  againstManager(
-      *this, other_manager, "collide", [&] { core_->collideSelf(cdata, callback, stats); },
-      [&](const detail::Broadphase<S>& other) { core_->collide(other, cdata, callback, stats); },
-      [&](Object* obj, const Box<S>& box) {
-        return core_->collide(obj, box, cdata, callback, stats);
-      });
+  runManagerCollide(*this, other_manager, cdata, detail::CollideFn<S>(callback), stats);
 }
 
 template <typename S>
@@ -428,16 +464,51 @@ template class CubeCollisionManager<float>;
 namespace detail {
 
 template <typename S>
-void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
-                          fcl::CollisionCallBack<S> callback, int threads) {
-  if (callback == nullptr) fail("collide", "null callback");
+void collideSelfOnThreadsWithIds(const CubeCollisionManager<S>& manager, void* cdata,
+                                 CollideFn<S> fn, int threads) {
+  if (isNull(fn)) fail("collide", "null callback");
   const Broadphase<S>& core = detail::coreOf(manager);
   if (core.size() < 2) return;  // no pair
-  CulledCallback<S> culled{cdata, callback};
-  culled.install(core.config().cull_pairs, cdata, callback);
   const QueryScope scope(&core);
-  core.collideSelfSplit(cdata, callback, threads);
+  core.collideSelfSplit(cdata, fn, threads);
 }
+
+template <typename S>
+void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
+                          fcl::CollisionCallBack<S> callback, int threads) {
+  CulledCallback<S> culled{cdata, callback};
+  culled.install(detail::coreOf(manager).config().cull_pairs, cdata, callback);
+  collideSelfOnThreadsWithIds(manager, cdata, CollideFn<S>(callback), threads);
+}
+
+template <typename S>
+void collideWithIds(const CubeCollisionManager<S>& manager, void* cdata, CollideFn<S> fn) {
+  runSelfCollide(coreOf(manager), cdata, fn, nullptr);
+}
+
+template <typename S>
+void collideWithIds(const CubeCollisionManager<S>& manager, fcl::CollisionObject<S>* obj,
+                    void* cdata, CollideFn<S> fn) {
+  runObjectCollide(coreOf(manager), obj, cdata, fn, nullptr);
+}
+
+template <typename S>
+void collideWithIds(const CubeCollisionManager<S>& manager,
+                    fcl::BroadPhaseCollisionManager<S>* other, void* cdata, CollideFn<S> fn) {
+  runManagerCollide(manager, other, cdata, fn, nullptr);
+}
+
+#define CUBE_INSTANTIATE_WALKS(S)                                                                  \
+  template void collideSelfOnThreadsWithIds<S>(const CubeCollisionManager<S>&, void*,              \
+                                               CollideFn<S>, int);                                 \
+  template void collideWithIds<S>(const CubeCollisionManager<S>&, void*, CollideFn<S>);            \
+  template void collideWithIds<S>(const CubeCollisionManager<S>&, fcl::CollisionObject<S>*, void*, \
+                                  CollideFn<S>);                                                   \
+  template void collideWithIds<S>(const CubeCollisionManager<S>&,                                  \
+                                  fcl::BroadPhaseCollisionManager<S>*, void*, CollideFn<S>);
+CUBE_INSTANTIATE_WALKS(double)
+CUBE_INSTANTIATE_WALKS(float)
+#undef CUBE_INSTANTIATE_WALKS
 
 template void collideSelfOnThreads<double>(const CubeCollisionManager<double>&, void*,
                                            fcl::CollisionCallBack<double>, int);

@@ -10,7 +10,9 @@
 #include <fcl/geometry/shape/sphere.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace cube {
@@ -161,6 +163,121 @@ bool inscribedBall(const fcl::CollisionObject<S>& o, fcl::Vector3<S>& c, S& r) {
 
 }  // namespace
 
+namespace {
+
+// inscribedBall in the geometry's frame: the ball's centre is on the z axis at `z`.
+template <typename S>
+bool localInscribedBall(const fcl::CollisionGeometry<S>& g, double& z, double& r) {
+  if (!g.isOccupied()) return false;
+  z = 0;
+  switch (g.getNodeType()) {
+    case fcl::GEOM_SPHERE:
+      r = static_cast<const fcl::Sphere<S>&>(g).radius;
+      break;
+    case fcl::GEOM_BOX:
+      r = 0.5 * double(static_cast<const fcl::Box<S>&>(g).side.minCoeff());
+      break;
+    case fcl::GEOM_CAPSULE: {
+      const auto& cap = static_cast<const fcl::Capsule<S>&>(g);
+      if (!(cap.lz >= S(0))) return false;
+      r = cap.radius;
+      break;
+    }
+    case fcl::GEOM_CYLINDER: {
+      const auto& cyl = static_cast<const fcl::Cylinder<S>&>(g);
+      r = std::min(double(cyl.radius), 0.5 * double(cyl.lz));
+      break;
+    }
+    case fcl::GEOM_ELLIPSOID:
+      r = static_cast<const fcl::Ellipsoid<S>&>(g).radii.minCoeff();
+      break;
+    case fcl::GEOM_CONE: {
+      const auto& cone = static_cast<const fcl::Cone<S>&>(g);
+      const double h = cone.lz, R = cone.radius;
+      if (!(h > 0 && R > 0)) return false;
+      r = R * h / (R + std::hypot(R, h));
+      z = r - 0.5 * h;
+      break;
+    }
+    default:
+      return false;
+  }
+  return std::isfinite(r) && r > 0;
+}
+
+}  // namespace
+
+template <typename S>
+void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape) {
+  sphere = VolumeSphere{{0.f, 0.f, 0.f}, -1.f};
+  shape = VolumeShape{};
+  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
+  if (g == nullptr) return;
+  const fcl::NODE_TYPE type = g->getNodeType();
+  if (type == fcl::GEOM_PLANE || type == fcl::GEOM_HALFSPACE || type == fcl::GEOM_OCTREE) return;
+  // In double whatever S is; rounded outward to floats below.
+  const Eigen::Matrix3d R = o.getTransform().linear().template cast<double>();
+  const Eigen::Vector3d t = o.getTransform().translation().template cast<double>();
+  const Eigen::Vector3d lo = g->aabb_local.min_.template cast<double>();
+  const Eigen::Vector3d hi = g->aabb_local.max_.template cast<double>();
+  const Eigen::Vector3d e = (hi - lo) * 0.5;
+  const Eigen::Vector3d mid = (hi + lo) * 0.5;
+  const bool is_sphere = type == fcl::GEOM_SPHERE;
+  // A sphere's own radius about its frame's origin; any other geometry, its local AABB's
+  // circumscribed sphere (FCL's aabb_radius) about that box's centre.
+  const double r = is_sphere ? double(static_cast<const fcl::Sphere<S>*>(g)->radius) : e.norm();
+  const Eigen::Vector3d c = is_sphere ? t : Eigen::Vector3d(R * mid + t);
+  if (!(R.allFinite() && c.allFinite() && e.allFinite() && std::isfinite(r) && r >= 0 &&
+        (e.array() >= 0).all()))
+    return;
+  const double cmax = c.cwiseAbs().maxCoeff();
+  // 8 float ulps of |c| and r: more than rounding the centre (under 1 ulp of |c| a coordinate)
+  // and the axes (1.5 ulps of r) moves the shape, with room for rounding the sizes themselves to
+  // the nearest float (half an ulp of each).
+  const double slack = 4.0 * FLT_EPSILON * (cmax + r) + FLT_MIN;
+  for (int k = 0; k < 3; ++k) {
+    sphere.c[k] = static_cast<float>(c[k]);
+    shape.e[k] = static_cast<float>(e[k] + slack);
+    for (int j = 0; j < 3; ++j) shape.R[3 * k + j] = static_cast<float>(R(k, j));
+  }
+  shape.scale = static_cast<float>(std::max(cmax, r));
+  shape.flags = is_sphere ? kVolumeSphere : 0u;
+  double z = 0, inner = 0;
+  // The ball's centre is given from the box's centre: only for geometries centred on their
+  // frame's origin, as FCL's primitives are.
+  if ((is_sphere || mid.cwiseAbs().maxCoeff() <= 1e-12 * (1 + r)) &&
+      localInscribedBall(*g, z, inner) && inner - slack > 0) {
+    shape.inner_r = static_cast<float>(inner - slack);
+    shape.inner_z = static_cast<float>(z);
+  }
+  const float rf = static_cast<float>(r + slack);
+  // Out of float's range: no volumes (r stays negative).
+  if (std::isfinite(rf) && std::isfinite(shape.scale) && std::isfinite(sphere.c[0]) &&
+      std::isfinite(sphere.c[1]) && std::isfinite(sphere.c[2]) && std::isfinite(shape.e[0]) &&
+      std::isfinite(shape.e[1]) && std::isfinite(shape.e[2]))
+    sphere.r = rf;
+}
+
+template <typename S>
+bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+                   VolumeShape& shape) {
+  const S* m = o.getTransform().matrix().data();  // 4x4, by columns
+  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
+  S now[18];
+  for (int k = 0; k < 3; ++k) {
+    now[k] = m[k];
+    now[3 + k] = m[4 + k];
+    now[6 + k] = m[8 + k];
+    now[9 + k] = m[12 + k];
+    now[12 + k] = g != nullptr ? g->aabb_local.min_[k] : S(0);
+    now[15 + k] = g != nullptr ? g->aabb_local.max_[k] : S(0);
+  }
+  if (std::memcmp(now, source.v, sizeof now) == 0) return false;
+  std::memcpy(source.v, now, sizeof now);
+  buildVolume(o, sphere, shape);
+  return true;
+}
+
 template <typename S>
 Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
                          S tolerance, S enough) {
@@ -216,6 +333,12 @@ Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>&
   return Verdict::kUnknown;
 }
 
+template void buildVolume<double>(const fcl::CollisionObject<double>&, VolumeSphere&, VolumeShape&);
+template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&, VolumeShape&);
+template bool refreshVolume<double>(const fcl::CollisionObject<double>&, VolumeSource<double>&,
+                                    VolumeSphere&, VolumeShape&);
+template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
+                                   VolumeSphere&, VolumeShape&);
 template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
                                                const fcl::CollisionObject<double>&, double, double);
 template Separation<float> separation<float>(const fcl::CollisionObject<float>&,

@@ -9,7 +9,12 @@
 #include <fcl/narrowphase/collision_object.h>
 #include <fcl/narrowphase/collision_request.h>
 
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
 #include <limits>
+
+#include "core/volume.h"
 
 namespace cube {
 namespace detail {
@@ -70,6 +75,118 @@ template <typename S>
 bool provable(const fcl::CollisionRequest<S>& request) {
   return !request.enable_contact && !request.enable_cost && !request.enable_cached_gjk_guess &&
          request.num_max_contacts > 0;
+}
+
+/// The margin of verdictOf per unit of scale, for FCL's `tolerance` in scalar type S: separation's
+/// rate, max(2 tolerance, 1e-6 for double or 1e-4 for float), plus 32 float ulps for the float
+/// records' own arithmetic.
+template <typename S>
+float volumeMarginRate(S tolerance) {
+  const double floor = sizeof(S) >= 8 ? 1e-6 : 1e-4;
+  return float(std::max(2.0 * double(tolerance), floor) + 32.0 * FLT_EPSILON);
+}
+
+namespace volume_detail {
+
+// Distance from point p to the box (centre c, axes the columns of row-major R, half extents e).
+inline float pointBox(const float* p, const VolumeSphere& s, const VolumeShape& h) {
+  const float d[3] = {p[0] - s.c[0], p[1] - s.c[1], p[2] - s.c[2]};
+  float out2 = 0.f;
+  for (int i = 0; i < 3; ++i) {
+    const float q = h.R[i] * d[0] + h.R[3 + i] * d[1] + h.R[6 + i] * d[2];
+    const float o = std::max(std::fabs(q) - h.e[i], 0.f);
+    out2 += o * o;
+  }
+  return std::sqrt(out2);
+}
+
+// separation's boxGap on the records: the largest separating-axis gap of the two boxes, or the
+// first one above `stop`.
+inline float boxGap(const VolumeSphere& sa, const VolumeShape& a, const VolumeSphere& sb,
+                    const VolumeShape& b, float stop) {
+  const float d[3] = {sb.c[0] - sa.c[0], sb.c[1] - sa.c[1], sb.c[2] - sa.c[2]};
+  float R[3][3], A[3][3], t[3];
+  for (int i = 0; i < 3; ++i) {
+    t[i] = a.R[i] * d[0] + a.R[3 + i] * d[1] + a.R[6 + i] * d[2];
+    for (int j = 0; j < 3; ++j) {
+      R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
+      A[i][j] = std::fabs(R[i][j]) + 16.f * FLT_EPSILON;
+    }
+  }
+  float gap = -std::numeric_limits<float>::infinity();
+  for (int i = 0; i < 3; ++i)
+    gap = std::max(
+        gap, std::fabs(t[i]) - a.e[i] - (b.e[0] * A[i][0] + b.e[1] * A[i][1] + b.e[2] * A[i][2]));
+  for (int j = 0; j < 3; ++j) {
+    const float tj = t[0] * R[0][j] + t[1] * R[1][j] + t[2] * R[2][j];
+    gap = std::max(
+        gap, std::fabs(tj) - (a.e[0] * A[0][j] + a.e[1] * A[1][j] + a.e[2] * A[2][j]) - b.e[j]);
+  }
+  if (gap > stop) return gap;
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const float len2 = 1.f - R[i][j] * R[i][j];
+      // The float axes are orthonormal to a few ulps only, and dividing by the axis' length
+      // magnifies that error: near-parallel edges (length below 0.1) are left out, and the
+      // others' slack loses 16 ulps of its terms first.
+      if (!(len2 >= 1e-2f)) continue;
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const float dist = std::fabs(t[i2] * R[i1][j] - t[i1] * R[i2][j]);
+      const float ra = a.e[i1] * A[i2][j] + a.e[i2] * A[i1][j];
+      const float rb = b.e[j1] * A[i][j2] + b.e[j2] * A[i][j1];
+      const float slack =
+          dist - ra - rb - 16.f * FLT_EPSILON * (std::fabs(t[i1]) + std::fabs(t[i2]) + ra + rb);
+      if (slack <= 0.f) continue;
+      gap = std::max(gap, slack / std::sqrt(len2));
+      if (gap > stop) return gap;
+    }
+  }
+  return gap;
+}
+
+}  // namespace volume_detail
+
+/// verdict() from two objects' records (buildVolume), for a request whose tolerance gives
+/// `rate` (volumeMarginRate): kApart when the spheres' gap, a sphere's gap to the other's box or
+/// the boxes' separating-axis gap beats rate x (1 + the larger scale); kTouching, with `prove`,
+/// when the inscribed balls overlap by more than rate x (1 + scale + both inner radii); else
+/// kUnknown, and always kUnknown for a record without volumes. Inline: the stream calls it for
+/// every candidate pair.
+inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                         const VolumeShape& hb, float rate, bool prove) {
+  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;
+  const float dx = sb.c[0] - sa.c[0], dy = sb.c[1] - sa.c[1], dz = sb.c[2] - sa.c[2];
+  const float d2 = dx * dx + dy * dy + dz * dz;
+  const float scale = std::max(ha.scale, hb.scale);
+  const float margin = rate * (1.f + scale);
+  const float reach = sa.r + sb.r + margin;
+  if (d2 > reach * reach) return Verdict::kApart;
+  const bool sphere_a = (ha.flags & kVolumeSphere) != 0, sphere_b = (hb.flags & kVolumeSphere) != 0;
+  if (!(sphere_a && sphere_b)) {
+    // Each box holds the ball of its smallest half extent: while those balls overlap beyond the
+    // margin, no separating axis can beat it.
+    const float d = std::sqrt(d2);
+    const float ia = sphere_a ? sa.r : std::min({ha.e[0], ha.e[1], ha.e[2]});
+    const float ib = sphere_b ? sb.r : std::min({hb.e[0], hb.e[1], hb.e[2]});
+    if (d - ia - ib > margin) {
+      const float gap = sphere_a   ? volume_detail::pointBox(sa.c, sb, hb) - sa.r
+                        : sphere_b ? volume_detail::pointBox(sb.c, sa, ha) - sb.r
+                                   : volume_detail::boxGap(sa, ha, sb, hb, margin);
+      if (gap > margin) return Verdict::kApart;
+    }
+  }
+  if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f) {
+    float gap2 = 0.f;
+    for (int k = 0; k < 3; ++k) {
+      const float g =
+          (sb.c[k] + hb.inner_z * hb.R[3 * k + 2]) - (sa.c[k] + ha.inner_z * ha.R[3 * k + 2]);
+      gap2 += g * g;
+    }
+    const float reach_in = ha.inner_r + hb.inner_r - rate * (1.f + scale + ha.inner_r + hb.inner_r);
+    if (reach_in > 0.f && gap2 < reach_in * reach_in) return Verdict::kTouching;
+  }
+  return Verdict::kUnknown;
 }
 
 extern template bool surelyTouching<double>(const fcl::CollisionObject<double>&,

@@ -502,9 +502,17 @@ std::size_t workOf(const ObjectPair<S>& pair) {
 template <typename S>
 struct CollideStream<S>::Slot {
   Answer kind = Answer::kApart;
+  bool judged = false;  // kind is the cull's already (pairs with volumes)
   CollideEntry<S>* cached = nullptr;
   fcl::CollisionResult<S> fresh;
 };
+
+// Whether a pair's answer goes to the cache: not one the volumes gave, which they give again
+// next time for less than a lookup costs.
+template <typename S>
+bool CollideStream<S>::kept(const Slot& s) {
+  return !(s.judged && (s.kind == Answer::kApart || s.kind == Answer::kProved));
+}
 
 template <typename S>
 CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
@@ -514,7 +522,10 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
       cache_(options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)),
       chunk_work_(kFirstChunkWork),
-      scratch_(cache_ != nullptr ? std::make_unique<Slot>() : nullptr) {
+      scratch_(cache_ != nullptr ? std::make_unique<Slot>() : nullptr),
+      rate_(volumeMarginRate(S(request.gjk_tolerance))),
+      plain_(plainRequest(request)),
+      prove_(provable(request)) {
   if (cache_ != nullptr) {
     ++cache_->stamp;
     cache_->collide.begin(*cache_, request);
@@ -525,17 +536,85 @@ template <typename S>
 CollideStream<S>::~CollideStream() = default;
 
 template <typename S>
+void CollideStream<S>::useVolumes(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
+                                  const VolumeSphere* spheres_b, const VolumeShape* shapes_b) {
+  spheres_[0] = spheres_a;
+  shapes_[0] = shapes_a;
+  spheres_[1] = spheres_b;
+  shapes_[1] = shapes_b;
+}
+
+template <typename S>
+typename CollideStream<S>::Volumes CollideStream<S>::volumesOf(int side,
+                                                               const fcl::CollisionObject<S>* o,
+                                                               ObjectId id) {
+  if (id != kNone && spheres_[side] != nullptr) return {spheres_[side] + id, shapes_[side] + id};
+  // The query object comes with every pair of its query: built once.
+  if (memo_obj_[side] != o) {
+    buildVolume(*o, memo_sphere_[side], memo_shape_[side]);
+    memo_obj_[side] = o;
+  }
+  return {&memo_sphere_[side], &memo_shape_[side]};
+}
+
+template <typename S>
 bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+  return pushJudged(a, b, nullptr, nullptr);
+}
+
+template <typename S>
+bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
+                            ObjectId ib) {
+  if (done_) return true;
+  if (!plain_) return pushJudged(a, b, nullptr, nullptr);
+  const Volumes va = volumesOf(0, a, ia), vb = volumesOf(1, b, ib);
+  return pushJudged(a, b, &va, &vb);
+}
+
+namespace {
+
+template <typename S>
+Answer answerOf(Verdict v) {
+  switch (v) {
+    case Verdict::kApart:
+      return Answer::kApart;
+    case Verdict::kTouching:
+      return Answer::kProved;
+    case Verdict::kUnknown:
+      break;
+  }
+  return Answer::kComputed;
+}
+
+}  // namespace
+
+template <typename S>
+bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
+                                  const Volumes* va, const Volumes* vb) {
   if (done_) return true;
   ++stats_.candidate_pairs;
+  // With volumes the cull runs here, before the cache (it costs less than a lookup).
+  const auto cull = [&] {
+    return answerOf<S>(verdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
+  };
   if (serial_) {
     ++serial_work_;
     CollideEntry<S>* cached = nullptr;
-    const Answer kind = classify(cache_, request_, a, b, cached);
+    Answer kind;
+    if (va == nullptr) {
+      kind = classify(cache_, request_, a, b, cached);
+    } else {
+      kind = cull();
+      if (kind == Answer::kComputed && cache_ != nullptr) {
+        cached = cache_->collide.find(*cache_, a, b);
+        if (cached != nullptr) kind = Answer::kCached;
+      }
+    }
     if (cache_ == nullptr) {
       answerNow(a, b, kind);
     } else {
       scratch_->kind = kind;
+      scratch_->judged = va != nullptr;
       scratch_->cached = cached;
       answerNow(ObjectPair<S>(a, b), *scratch_);
     }
@@ -545,14 +624,22 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>*
       serial_ = false;
     return done_;
   }
-  // In chunks: the cache is looked up here, the cull and FCL run in the chunk, on the threads.
+  // In chunks: the cache is looked up here (and the cull on volumes runs here), the rest of the
+  // cull and FCL run in the chunk, on the threads.
   const std::size_t i = chunk_.size();
   chunk_.emplace_back(a, b);
   if (slots_.size() <= i) slots_.resize(i + 1);
   Slot& s = slots_[i];
-  s.cached = cache_ != nullptr ? cache_->collide.find(*cache_, a, b) : nullptr;
-  s.kind = s.cached != nullptr ? Answer::kCached : Answer::kComputed;
-  if (s.cached == nullptr) {
+  s.judged = va != nullptr;
+  s.kind = s.judged ? cull() : Answer::kComputed;
+  s.cached = cache_ != nullptr && s.kind == Answer::kComputed ? cache_->collide.find(*cache_, a, b)
+                                                              : nullptr;
+  if (s.cached != nullptr) s.kind = Answer::kCached;
+  if (s.kind == Answer::kProved) {
+    s.fresh.clear();
+    s.fresh.addContact(provedContact(chunk_[i]));
+  }
+  if (s.kind == Answer::kComputed) {
     pending_.push_back(i);
     pending_work_ += workOf(chunk_[i]);
   }
@@ -585,6 +672,12 @@ bool CollideStream<S>::callback(fcl::CollisionObject<S>* a, fcl::CollisionObject
 }
 
 template <typename S>
+bool CollideStream<S>::callbackWithIds(fcl::CollisionObject<S>* a, ObjectId ia,
+                                       fcl::CollisionObject<S>* b, ObjectId ib, void* stream) {
+  return static_cast<CollideStream*>(stream)->push(a, ia, b, ib);
+}
+
+template <typename S>
 void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
                                  Answer kind) {
   count(stats_, kind);
@@ -610,13 +703,13 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
       merge(pair, s);
       return;
     case Answer::kApart:
-      keepPair(s.kind, pair, cache_, empty_);
+      if (kept(s)) keepPair(s.kind, pair, cache_, empty_);
       return;
     case Answer::kProved:
       s.fresh.clear();
       s.fresh.addContact(provedContact(pair));
       merge(pair, s);
-      keepPair(s.kind, pair, cache_, s.fresh);
+      if (kept(s)) keepPair(s.kind, pair, cache_, s.fresh);
       return;
     case Answer::kComputed:
       s.fresh.clear();
@@ -660,7 +753,7 @@ void CollideStream<S>::flush() {
     const auto run = [&](std::size_t k) {
       Slot& s = slots_[pending_[k]];
       const ObjectPair<S>& pair = chunk_[pending_[k]];
-      s.kind = judge(request_, pair.first, pair.second);
+      if (!s.judged) s.kind = judge(request_, pair.first, pair.second);
       s.fresh.clear();
       if (s.kind == Answer::kProved) s.fresh.addContact(provedContact(pair));
       if (s.kind == Answer::kComputed) fclCollide(pair.first, pair.second, request_, s.fresh);
@@ -675,8 +768,9 @@ void CollideStream<S>::flush() {
     }
     if (cache_ != nullptr)
       for (std::size_t i = 0; i < n; ++i)
-        keepPair(slots_[i].kind, chunk_[i], cache_,
-                 slots_[i].kind == Answer::kApart ? empty_ : slots_[i].fresh);
+        if (kept(slots_[i]))
+          keepPair(slots_[i].kind, chunk_[i], cache_,
+                   slots_[i].kind == Answer::kApart ? empty_ : slots_[i].fresh);
     if (!pending_.empty()) chunk_work_ = std::min(chunk_work_ * 2, kMaxChunkWork);
   }
   chunk_.clear();

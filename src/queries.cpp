@@ -7,9 +7,9 @@
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "manager_access.h"
+#include "manager_walks.h"
 #include "narrow_phase_stream.h"
 #include "query_guard.h"
-#include "self_collide_threads.h"
 
 namespace cube {
 
@@ -76,9 +76,36 @@ struct CountedCollide {
 // Requests whose costs or cached GJK guess travel from pair to pair through the one result run
 // the default callback, which accumulates as FCL does. Others run the pipeline, with the same
 // answer.
-template <typename S, class Walk>
+// The stream's walk through a cube manager: with ids, so that the cull reads the object tables'
+// volumes. False (nothing done) for any other kind of manager, or one without volumes
+// (Config::tight_volumes off).
+template <typename S, class Run>
+bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
+                 const fcl::BroadPhaseCollisionManager<S>* other, detail::CollideStream<S>& stream,
+                 Run&& run) {
+  const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(&manager);
+  if (cube == nullptr) return false;
+  const auto& mine = detail::coreOf(*cube).table();
+  if (mine.spheres() == nullptr) return false;
+  const auto* theirs =
+      other == &manager ? cube : dynamic_cast<const CubeCollisionManager<S>*>(other);
+  if (other == nullptr) {
+    stream.useVolumes(mine.spheres(), mine.shapes(), nullptr, nullptr);
+  } else if (theirs != nullptr) {
+    const auto& table = detail::coreOf(*theirs).table();
+    stream.useVolumes(mine.spheres(), mine.shapes(), table.spheres(), table.shapes());
+  } else {
+    stream.useVolumes(mine.spheres(), mine.shapes(), nullptr, nullptr);
+  }
+  run(*cube, static_cast<void*>(&stream),
+      detail::CollideFn<S>(&detail::CollideStream<S>::callbackWithIds));
+  return true;
+}
+
+template <typename S, class Walk, class IdWalk>
 fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
-                                    const NarrowPhaseOptions<S>& options, const Walk& walk) {
+                                    const NarrowPhaseOptions<S>& options, const Walk& walk,
+                                    const IdWalk& id_walk) {
   if (request.enable_cost || request.enable_cached_gjk_guess) {
     CountedCollide<S> c;
     c.data.request = request;
@@ -114,7 +141,7 @@ fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
     }
   }
   detail::CollideStream<S> stream(request, options);
-  walk(&stream, &detail::CollideStream<S>::callback);
+  if (!id_walk(stream)) walk(&stream, &detail::CollideStream<S>::callback);
   return stream.finish();
 }
 
@@ -132,9 +159,21 @@ template <typename S>
 fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& manager,
                                    const fcl::CollisionRequest<S>& request,
                                    const NarrowPhaseOptions<S>& options) {
-  return collideWith(request, options, [&](void* data, fcl::CollisionCallBack<S> f) {
-    selfWalk(manager, data, f, options.threads, options.split_walk);
-  });
+  return collideWith(
+      request, options,
+      [&](void* data, fcl::CollisionCallBack<S> f) {
+        selfWalk(manager, data, f, options.threads, options.split_walk);
+      },
+      [&](detail::CollideStream<S>& stream) {
+        // A self query: both ids index the manager's table.
+        return walkWithIds(manager, &manager, stream, [&](const auto& cube, void* data, auto fn) {
+          if (options.split_walk)
+            detail::collideSelfOnThreadsWithIds(
+                cube, data, fn, options.threads > 0 ? options.threads : hardwareThreads());
+          else
+            detail::collideWithIds(cube, data, fn);
+        });
+      });
 }
 
 template <typename S>
@@ -142,9 +181,14 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
                                    fcl::CollisionObject<S>* obj,
                                    const fcl::CollisionRequest<S>& request,
                                    const NarrowPhaseOptions<S>& options) {
-  return collideWith(request, options, [&](void* data, fcl::CollisionCallBack<S> f) {
-    manager.collide(obj, data, f);
-  });
+  return collideWith(
+      request, options,
+      [&](void* data, fcl::CollisionCallBack<S> f) { manager.collide(obj, data, f); },
+      [&](detail::CollideStream<S>& stream) {
+        return walkWithIds<S>(manager, nullptr, stream, [&](const auto& cube, void* data, auto fn) {
+          detail::collideWithIds(cube, obj, data, fn);
+        });
+      });
 }
 
 template <typename S>
@@ -152,9 +196,14 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
                                    fcl::BroadPhaseCollisionManager<S>& other,
                                    const fcl::CollisionRequest<S>& request,
                                    const NarrowPhaseOptions<S>& options) {
-  return collideWith(request, options, [&](void* data, fcl::CollisionCallBack<S> f) {
-    manager.collide(&other, data, f);
-  });
+  return collideWith(
+      request, options,
+      [&](void* data, fcl::CollisionCallBack<S> f) { manager.collide(&other, data, f); },
+      [&](detail::CollideStream<S>& stream) {
+        return walkWithIds(manager, &other, stream, [&](const auto& cube, void* data, auto fn) {
+          detail::collideWithIds(cube, &other, data, fn);
+        });
+      });
 }
 
 namespace {

@@ -105,6 +105,19 @@ S defaultTolerance() {
   return S(fcl::CollisionRequest<S>().gjk_tolerance);
 }
 
+// The cull the pipeline runs on the object tables' float records (buildVolume, verdictOf): it
+// must keep every promise surelyApart and surelyTouching keep.
+template <typename S>
+cube::detail::Verdict volumeVerdict(const fcl::CollisionObject<S>& a,
+                                    const fcl::CollisionObject<S>& b, bool prove) {
+  cube::detail::VolumeSphere sa, sb;
+  cube::detail::VolumeShape ha, hb;
+  cube::detail::buildVolume(a, sa, ha);
+  cube::detail::buildVolume(b, sb, hb);
+  return cube::detail::verdictOf(sa, ha, sb, hb,
+                                 cube::detail::volumeMarginRate(defaultTolerance<S>()), prove);
+}
+
 // Random poses: every pair of kinds, rotated at random, centres within a distance where about
 // half the pairs collide. A culled pair never collides, and culling removes a good share of the
 // pairs that do not (else the test would pass with a cull that never culls).
@@ -113,7 +126,7 @@ TYPED_TEST(Culling, NeverDropsACollidingPairOfAnyKind) {
   const auto kinds = allKinds<S>();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.3, 1.3);
-  std::size_t apart_pairs = 0, culled = 0, colliding = 0;
+  std::size_t apart_pairs = 0, culled = 0, colliding = 0, volume_culled = 0;
   for (const auto& [na, ga] : kinds)
     for (const auto& [nb, gb] : kinds) {
       if (!fclCanCollide(na, nb)) continue;
@@ -125,17 +138,22 @@ TYPED_TEST(Culling, NeverDropsACollidingPairOfAnyKind) {
         b.computeAABB();
         const bool cull = cube::detail::surelyApart(a, b, defaultTolerance<S>());
         const bool hit = collides(a, b);
+        const bool volume_cull = volumeVerdict(a, b, false) == cube::detail::Verdict::kApart;
         ASSERT_FALSE(cull && hit) << na << " vs " << nb << " rep " << rep;
+        ASSERT_FALSE(volume_cull && hit) << na << " vs " << nb << " rep " << rep << " (records)";
         colliding += hit;
         if (!hit && a.getAABB().overlap(b.getAABB())) {
           ++apart_pairs;
           culled += cull;
+          volume_culled += volume_cull;
         }
       }
     }
   EXPECT_GT(colliding, 1000u);
   EXPECT_GT(apart_pairs, 1000u);
   EXPECT_GT(culled * 10, apart_pairs * 3) << culled << " of " << apart_pairs;
+  // The records lose only what float rounding and near-parallel edges cost.
+  EXPECT_GE(volume_culled * 100, culled * 97) << volume_culled << " against " << culled;
 }
 
 // Slides b along a line, place(t) putting it at t: false if the pair does not collide at t = 0
@@ -162,38 +180,46 @@ bool slideToTouching(fcl::CollisionObject<S>& a, fcl::CollisionObject<S>& b, Pla
 // Pairs at the touching position: b slides towards a along a random direction, and bisection
 // with fcl::collide finds where FCL starts to report contact. At that first colliding position,
 // and a hair beyond, the pair must not be culled; a little way outside it may be.
+// The same far from the origin (1,000 away), where the records' float coordinates round most.
 TYPED_TEST(Culling, KeepsPairsAtTheTouchingPosition) {
   using S = TypeParam;
   const auto kinds = allKinds<S>();
   std::mt19937 rng(11);
   std::normal_distribution<double> n(0, 1);
-  std::size_t touching = 0, culled_outside = 0;
-  for (const auto& [na, ga] : kinds)
-    for (const auto& [nb, gb] : kinds) {
-      if (!fclCanCollide(na, nb)) continue;
-      fcl::CollisionObject<S> a(ga), b(gb);
-      for (int rep = 0; rep < 8; ++rep) {
-        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
-        const fcl::Matrix3<S> rb = randomRotation<S>(rng);
-        fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
-        dir.normalize();
-        auto place = [&](double t) {
-          b.setTransform(rb, dir * S(t));
-          b.computeAABB();
-        };
-        double in, out;
-        if (!slideToTouching(a, b, place, in, out)) continue;
-        place(in);
-        ASSERT_TRUE(collides(a, b));
-        ASSERT_FALSE(cube::detail::surelyApart(a, b, defaultTolerance<S>()))
-            << na << " vs " << nb << " at the last colliding position " << in;
-        ++touching;
-        place(out + 0.01);
-        culled_outside += cube::detail::surelyApart(a, b, defaultTolerance<S>());
+  std::size_t touching = 0, culled_outside = 0, volume_culled_outside = 0;
+  for (const double offset : {0.0, 1000.0})
+    for (const auto& [na, ga] : kinds)
+      for (const auto& [nb, gb] : kinds) {
+        if (!fclCanCollide(na, nb)) continue;
+        fcl::CollisionObject<S> a(ga), b(gb);
+        const fcl::Vector3<S> base(S(offset), S(-0.5 * offset), S(0.25 * offset));
+        for (int rep = 0; rep < 8; ++rep) {
+          a.setTransform(randomRotation<S>(rng), base);
+          a.computeAABB();
+          const fcl::Matrix3<S> rb = randomRotation<S>(rng);
+          fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
+          dir.normalize();
+          auto place = [&](double t) {
+            b.setTransform(rb, base + dir * S(t));
+            b.computeAABB();
+          };
+          double in, out;
+          if (!slideToTouching(a, b, place, in, out)) continue;
+          place(in);
+          ASSERT_TRUE(collides(a, b));
+          ASSERT_FALSE(cube::detail::surelyApart(a, b, defaultTolerance<S>()))
+              << na << " vs " << nb << " at the last colliding position " << in;
+          ASSERT_NE(volumeVerdict(a, b, true), cube::detail::Verdict::kApart)
+              << na << " vs " << nb << " at the last colliding position " << in << " (records)";
+          ++touching;
+          place(out + 0.01);
+          culled_outside += cube::detail::surelyApart(a, b, defaultTolerance<S>());
+          volume_culled_outside += volumeVerdict(a, b, false) == cube::detail::Verdict::kApart;
+        }
       }
-    }
-  EXPECT_GT(touching, 400u);
+  EXPECT_GT(touching, 800u);
   EXPECT_GT(culled_outside, 0u);  // outside by 0.01, the tight volumes do separate some pairs
+  EXPECT_GT(volume_culled_outside, 0u);
 }
 
 // Proofs of contact (surelyTouching, what lets the pipeline skip FCL for a touching pair of
@@ -207,7 +233,7 @@ TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
   const auto kinds = allKinds<S>();
   std::mt19937 rng(23);
   std::normal_distribution<double> n(0, 1);
-  std::size_t proved = 0, checked = 0;
+  std::size_t proved = 0, checked = 0, volume_proved = 0;
   const auto fclSays = [](fcl::CollisionObject<S>& x, fcl::CollisionObject<S>& y,
                           fcl::GJKSolverType solver) {
     fcl::CollisionRequest<S> req;
@@ -235,9 +261,19 @@ TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
           place(t);
           EXPECT_FALSE(cube::detail::surelyTouching(a, b, defaultTolerance<S>()))
               << na << " vs " << nb << " proved touching where FCL reports none, at " << t;
+          EXPECT_NE(volumeVerdict(a, b, true), cube::detail::Verdict::kTouching)
+              << na << " vs " << nb << " proved touching where FCL reports none, at " << t
+              << " (records)";
         }
         for (int k = 0; k <= 40; ++k) {
           place(in * k / 40.0);
+          const bool by_records = volumeVerdict(a, b, true) == cube::detail::Verdict::kTouching;
+          volume_proved += by_records;
+          if (by_records)
+            for (const auto solver : {fcl::GST_LIBCCD, fcl::GST_INDEP}) {
+              EXPECT_TRUE(fclSays(a, b, solver)) << na << " vs " << nb << " (records)";
+              EXPECT_TRUE(fclSays(b, a, solver)) << nb << " vs " << na << " (records)";
+            }
           if (!cube::detail::surelyTouching(a, b, defaultTolerance<S>())) continue;
           ++proved;
           for (const auto solver : {fcl::GST_LIBCCD, fcl::GST_INDEP}) {
@@ -256,10 +292,12 @@ TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
         const S density = ga->cost_density;
         ga->cost_density = S(0.5) * ga->threshold_occupied;
         EXPECT_FALSE(cube::detail::surelyTouching(a, b, defaultTolerance<S>()));
+        EXPECT_NE(volumeVerdict(a, b, true), cube::detail::Verdict::kTouching);
         ga->cost_density = density;
       }
     }
   EXPECT_GT(proved, 300u) << "the proofs must be exercised";
+  EXPECT_GE(volume_proved * 100, proved * 97) << volume_proved << " against " << proved;
   EXPECT_GT(checked, 0u);
 }
 

@@ -169,11 +169,13 @@ TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
   EXPECT_GT(first.culled, 0u);
   EXPECT_GT(first.narrow_calls, 0u);
   EXPECT_EQ(second.candidate_pairs, candidates);
+  // The pairs the object tables' volumes settle are settled again (they cost less than a
+  // lookup); the others come from the cache.
   EXPECT_EQ(second.narrow_calls, 0u);
-  EXPECT_EQ(second.culled, 0u);
-  EXPECT_EQ(second.proved, 0u);
-  EXPECT_EQ(second.cached, candidates);
-  EXPECT_EQ(cache.size(), candidates);
+  EXPECT_EQ(second.culled, first.culled);
+  EXPECT_EQ(second.proved, first.proved);
+  EXPECT_EQ(second.cached, first.narrow_calls);
+  EXPECT_EQ(cache.size(), first.narrow_calls);
 }
 
 // A motion loop with one cache: objects move (translated, rotated, some back to where they
@@ -243,20 +245,22 @@ TYPED_TEST(NarrowPhase, CacheFollowsAMotionLoop) {
           EXPECT_GT(st.cached, 0u) << "step " << step;
         }
         if (threads == 2) {
-          EXPECT_EQ(st.cached, candidates.size()) << "the same world again";
+          EXPECT_EQ(st.narrow_calls, 0u) << "the same world again";
+          EXPECT_GT(st.cached, 0u) << "the same world again";
         }
         EXPECT_LE(cache.size(), 2 * candidates.size() + 64) << "step " << step;
       }
     }
     for (auto* o : out) m.registerObject(o);
-    // forget drops exactly the pairs of that object.
+    // forget drops the pairs of that object the cache holds (those FCL answered, this query or
+    // an earlier one).
     const std::size_t held = cache.size();
     std::size_t of_first = 0;
     auto* first = world.objects[0].get();
     for (const auto& [a, b] : cube::overlappingPairs<S>(m)) of_first += a == first || b == first;
     ASSERT_GT(of_first, 0u) << "the first object of a clustered scene has neighbours";
     cache.forget(first);
-    EXPECT_LE(cache.size() + of_first, held);
+    EXPECT_LT(cache.size(), held);
     cube::NarrowPhaseStats st;
     cube::NarrowPhaseOptions<S> o;
     o.threads = 1;
@@ -330,6 +334,91 @@ TYPED_TEST(NarrowPhase, LastHitFirstKeepsTheAnswerAndTestsThatPairFirst) {
   const auto x = cube::collideAll<S>(w, r, any, plain);
   const auto y = cube::collideAll<S>(w, r, any, fast);
   EXPECT_TRUE(sameContacts(x, y, false));
+}
+
+// The per-object volumes the pipeline culls with (Config::tight_volumes) follow every change
+// update() sees, and some FCL's boxes do not show: a rod turned about its centre keeps the box of
+// its bounding sphere but meets another object; a geometry changed in place with the same
+// bounding sphere; a recycled id whose new object has the last one's transform and local AABB.
+// Each time collideAll answers as fcl::collide does, through update(), update(obj) and
+// update(objects), with the volumes and without.
+TYPED_TEST(NarrowPhase, VolumesFollowWhatUpdateSees) {
+  using S = TypeParam;
+  const auto rz = [](double deg) {
+    return fcl::AngleAxis<S>(S(deg * M_PI / 180), fcl::Vector3<S>::UnitZ()).toRotationMatrix();
+  };
+  const auto fclSays = [](fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+    fcl::CollisionRequest<S> req;
+    fcl::CollisionResult<S> res;
+    return fcl::collide(a, b, req, res) > 0;
+  };
+  for (const bool volumes : {true, false})
+    for (int how = 0; how < 3; ++how) {
+      cube::Config config;
+      config.tight_volumes = volumes;
+      cube::CubeCollisionManager<S> m(config);
+      const auto update = [&](fcl::CollisionObject<S>* o) {
+        if (how == 0) m.update();
+        if (how == 1) m.update(o);
+        if (how == 2) m.update(std::vector<fcl::CollisionObject<S>*>{o});
+      };
+      const auto collides = [&] {
+        fcl::CollisionRequest<S> req;
+        return cube::collideAll<S>(m, req, cube::NarrowPhaseOptions<S>{1}).isCollision();
+      };
+      const std::string what =
+          std::string(volumes ? "volumes" : "no volumes") + ", update #" + std::to_string(how);
+      auto rod_shape = std::make_shared<fcl::Box<S>>(S(4), S(0.2), S(0.2));
+      fcl::CollisionObject<S> rod(rod_shape, rz(30), fcl::Vector3<S>::Zero());
+      fcl::CollisionObject<S> probe(std::make_shared<fcl::Box<S>>(S(0.2), S(0.2), S(0.2)),
+                                    fcl::Matrix3<S>::Identity(),
+                                    rz(60) * fcl::Vector3<S>(1.9, 0, 0));
+      rod.computeAABB();
+      probe.computeAABB();
+      m.registerObjects({&rod, &probe});
+      m.setup();
+      ASSERT_FALSE(fclSays(&rod, &probe));
+      EXPECT_FALSE(collides()) << what;
+      // Turned about its centre: FCL's box of the rod stays the same.
+      const fcl::AABB<S> box = rod.getAABB();
+      rod.setTransform(rz(60), fcl::Vector3<S>::Zero());
+      rod.computeAABB();
+      ASSERT_TRUE(box.equal(rod.getAABB()));
+      ASSERT_TRUE(fclSays(&rod, &probe));
+      update(&rod);
+      EXPECT_TRUE(collides()) << what << ": the rod turned";
+      // Back, then the geometry changed in place: the rod now lies along its y axis, which
+      // points at the probe; its bounding sphere, so FCL's box, is the same.
+      rod.setTransform(rz(-30), fcl::Vector3<S>::Zero());
+      rod.computeAABB();
+      update(&rod);
+      EXPECT_FALSE(collides()) << what;
+      rod_shape->side = fcl::Vector3<S>(S(0.2), S(4), S(0.2));
+      rod_shape->computeLocalAABB();
+      rod.computeAABB();
+      ASSERT_TRUE(box.equal(rod.getAABB()));
+      ASSERT_TRUE(fclSays(&rod, &probe));
+      update(&rod);
+      EXPECT_TRUE(collides()) << what << ": the geometry changed";
+      // A recycled id: a ball apart from the probe leaves, and a box with its transform and its
+      // local AABB takes its id; the box's corner reaches the probe.
+      m.unregisterObject(&rod);
+      const fcl::Vector3<S> centre =
+          probe.getTranslation() - fcl::Vector3<S>(0.8, 0.8, 0) / S(std::sqrt(2.0));
+      fcl::CollisionObject<S> ball(std::make_shared<fcl::Sphere<S>>(S(0.6)),
+                                   fcl::Matrix3<S>::Identity(), centre);
+      fcl::CollisionObject<S> cube_(std::make_shared<fcl::Box<S>>(S(1.2), S(1.2), S(1.2)),
+                                    fcl::Matrix3<S>::Identity(), centre);
+      ball.computeAABB();
+      cube_.computeAABB();
+      ASSERT_FALSE(fclSays(&ball, &probe));
+      ASSERT_TRUE(fclSays(&cube_, &probe));
+      m.registerObject(&ball);
+      EXPECT_FALSE(collides()) << what;
+      m.unregisterObject(&ball);
+      m.registerObject(&cube_);
+      EXPECT_TRUE(collides()) << what << ": a recycled id";
+    }
 }
 
 // Every kind of change sends the pairs of the changed object back to FCL: a translation by one
@@ -422,6 +511,9 @@ TYPED_TEST(NarrowPhase, EveryKindOfMotionInvalidatesTheCache) {
   EXPECT_EQ(st.cached, 0u) << "another request";
   EXPECT_GT(st.narrow_calls, 0u);
 
+  // Back to the request with contacts, which nothing proves: the moved object's colliding pair
+  // is in the cache again.
+  query(st, all);
   const std::size_t before = cache.size();
   cache.forget(moved);
   EXPECT_LT(cache.size(), before);

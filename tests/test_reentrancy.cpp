@@ -1525,7 +1525,9 @@ TEST(ReentrancyOffThePath, CollideConcurrentlyCallbacksCannotMutateOnAnyThread) 
       on_workers += d.on_other_threads.load();
       EXPECT_TRUE(unchanged(w, 1500)) << "mutation " << k << " threads " << threads;
     }
-  if (cube::hardwareThreads() > 1) EXPECT_GT(on_workers, 0) << "no callback ran on a worker";
+  if (cube::hardwareThreads() > 1) {
+    EXPECT_GT(on_workers, 0) << "no callback ran on a worker";
+  }
 }
 
 }  // namespace

@@ -26,7 +26,7 @@
 #include "cube_collision/queries.h"
 #include "manager_access.h"
 #include "scenes.h"
-#include "self_collide_threads.h"
+#include "manager_walks.h"
 #include "support/oracle.h"
 
 namespace {

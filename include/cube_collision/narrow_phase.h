@@ -42,14 +42,16 @@ struct NarrowPhaseStats {
 
 /// Last narrow-phase answers per ordered pair (a, b): the contacts for a collision request (an
 /// empty list for a pair the tight volumes proved apart), the distance and nearest points for a
-/// distance request. A pair is answered from it while both of its objects keep the same transform
-/// (bit for bit), the same geometry object and the same local AABB, and the request is the same;
-/// each object is compared with its last pose once per query, not once per pair. A query keeps
-/// the entries it did not use only while they are fewer than those it used (plus 64), so the
-/// cache holds at most about twice one query's pairs. Changing a geometry in place without
-/// changing its local AABB (e.g. a mesh's vertices after computeLocalAABB() gave the same box) is
-/// not seen: call forget(object) or clear(). Owned by the caller and passed to the queries; not
-/// shared between concurrent queries.
+/// distance request. A collide on a CubeCollisionManager keeps only the answers FCL gave: the
+/// pairs its objects' volumes (kept per object by the manager, rebuilt by update()) prove apart
+/// or touching are proved again each time, which costs less than a lookup. A pair is answered from
+/// it while both of its objects keep the same transform (bit for bit), the same geometry object and
+/// the same local AABB, and the request is the same; each object is compared with its last pose
+/// once per query, not once per pair. A query keeps the entries it did not use only while they are
+/// fewer than those it used (plus 64), so the cache holds at most about twice one query's pairs.
+/// Changing a geometry in place without changing its local AABB (e.g. a mesh's vertices after
+/// computeLocalAABB() gave the same box) is not seen: call forget(object) or clear(). Owned by the
+/// caller and passed to the queries; not shared between concurrent queries.
 template <typename S>
 class NarrowPhaseCache {
  public:

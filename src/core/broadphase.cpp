@@ -53,9 +53,9 @@ bool callInOrder(const std::vector<std::uint64_t>& pairs, KeyA&& key_a, KeyB&& k
   std::sort(order.begin(), order.end());
   for (const auto& entry : order) {
     if (stats) ++stats->callbacks;
-    if (fn(obj_a(static_cast<ObjectId>(entry.second >> 32)),
-           obj_b(static_cast<ObjectId>(entry.second)), data))
-      return true;
+    const auto a = static_cast<ObjectId>(entry.second >> 32);
+    const auto b = static_cast<ObjectId>(entry.second);
+    if (fn(obj_a(a), a, obj_b(b), b, data)) return true;
   }
   return false;
 }
@@ -71,6 +71,7 @@ Broadphase<S>::Broadphase(const Config& config)
   }
   unbounded_node_.first = 0;
   unbounded_node_.count = 0;
+  table_.keepVolumes(config_.tight_volumes);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -208,6 +209,7 @@ void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::si
   for (std::size_t i = 0; i < n; ++i) {
     const ObjectId id = table_.find(objs[i]);
     if (id == kNone) continue;
+    table_.refreshVolume(id);
     move(objs[i], grown(boxes[i], id));
     if (keep) moved_.push_back(id);
   }
@@ -427,7 +429,7 @@ bool Broadphase<S>::collideSelfSplit(void* data, CollideFn<S> fn, int threads) c
           if (!kept(x, y)) continue;
           if (canonical)
             in_order.push_back(p);
-          else if (fn(table_.object(x), table_.object(y), data))
+          else if (fn(table_.object(x), x, table_.object(y), y, data))
             return true;
         }
         std::vector<std::uint64_t>().swap(found[i]);

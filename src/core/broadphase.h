@@ -218,6 +218,7 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
       Item<S>& it = items[p];
       if (it.obj == nullptr) continue;
       read(it.obj, b);
+      table_.refreshVolume(it.id);  // even if the box stands: a rotation may keep it
       if constexpr (decltype(margins)::value) b = grown(b, it.id);
       if (sameBox(it.box, b)) continue;  // unmoved: same kind, nothing to refit
       const BoxKind kind = classify(b, config_.unbounded_limit);

@@ -71,6 +71,11 @@ void ObjectTable<S>::reserve(std::size_t n) {
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
+  if (volumes_) {
+    sphere_.reserve(sphere_.size() + fresh);
+    shape_.reserve(shape_.size() + fresh);
+    source_.reserve(source_.size() + fresh);
+  }
   if (!filter_.empty()) {
     filter_.reserve(filter_.size() + fresh);
     group_.reserve(group_.size() + fresh);
@@ -182,6 +187,9 @@ void ObjectTable<S>::clear() {
   obj_ = {};
   seq_ = {};
   loc_ = {};
+  sphere_ = {};
+  shape_ = {};
+  source_ = {};
   filter_ = {};
   group_ = {};
   group_filter_ = {};
@@ -212,7 +220,8 @@ std::size_t ObjectTable<S>::bytes() const {
              sizeof(std::uint32_t) +
          (filter_.capacity() + group_filter_.capacity()) * sizeof(Filter) +
          group_.capacity() * sizeof(Group) + group_users_.capacity() * sizeof(std::uint32_t) +
-         margin_.capacity() * sizeof(S);
+         margin_.capacity() * sizeof(S) + sphere_.capacity() * sizeof(VolumeSphere) +
+         shape_.capacity() * sizeof(VolumeShape) + source_.capacity() * sizeof(VolumeSource<S>);
 }
 
 template <typename S>
@@ -224,6 +233,9 @@ bool ObjectTable<S>::validate(std::string* why) const {
   };
   const bool filters = !filter_.empty(), margins = !margin_.empty();
   if (seq_.size() != obj_.size() || loc_.size() != obj_.size() ||
+      (volumes_ && (sphere_.size() != obj_.size() || shape_.size() != obj_.size() ||
+                    source_.size() != obj_.size())) ||
+      (!volumes_ && !(sphere_.empty() && shape_.empty() && source_.empty())) ||
       (filters && (filter_.size() != obj_.size() || group_.size() != obj_.size())) ||
       (!filters && (!group_.empty() || !group_filter_.empty())) ||
       (margins && margin_.size() != obj_.size()) || group_users_.size() != group_filter_.size() ||

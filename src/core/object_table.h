@@ -8,10 +8,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "core/geometry.h"
+#include "core/volume.h"
 
 namespace cube {
 namespace detail {
@@ -76,6 +78,20 @@ class ObjectTable {
   /// Sets it; the first call since clear() allocates the per-id margins.
   void setOwnMargin(ObjectId id, S margin);
 
+  /// Whether the table keeps the volumes below (Config::tight_volumes). Set before the first
+  /// registration (after clear()).
+  void keepVolumes(bool on) { volumes_ = on; }
+  /// Per id: the tight volumes of the object as of its registration or its last refresh
+  /// (refreshVolume), for the cull; null if not kept (or nothing registered). Entries of free
+  /// ids are stale.
+  const VolumeSphere* spheres() const { return sphere_.empty() ? nullptr : sphere_.data(); }
+  const VolumeShape* shapes() const { return shape_.empty() ? nullptr : shape_.data(); }
+  /// Rebuilds a live id's volumes if its object's transform or local AABB changed (update()
+  /// calls it for every object it reads: a rotation may leave FCL's box of an object as it was).
+  void refreshVolume(ObjectId id) {
+    if (volumes_) detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  }
+
   /// Registered objects in registration order.
   void objects(std::vector<Object*>& out) const;
   /// Heap bytes owned.
@@ -89,6 +105,11 @@ class ObjectTable {
     return next_seq_++;
   }
   void renumber();
+  static VolumeSource<S> unbuilt() {
+    VolumeSource<S> v;
+    for (S& x : v.v) x = std::numeric_limits<S>::quiet_NaN();
+    return v;
+  }
   void reserve(std::size_t n);  // room for n more ids: the map and the per-id arrays
   // A fresh or recycled id for obj, not yet in the map. Inline: addBatch calls it per entry.
   ObjectId take(Object* obj);
@@ -97,9 +118,13 @@ class ObjectTable {
   void leaveGroup(ObjectId id);
   Group joinGroup(const Filter& f);  // the group of bits f, made if new; counts one user
 
-  std::vector<Object*> obj_;        // per id; nullptr: free
-  std::vector<std::uint32_t> seq_;  // per id: registration number
-  std::vector<std::uint32_t> loc_;  // per id: location (see location())
+  std::vector<Object*> obj_;          // per id; nullptr: free
+  std::vector<std::uint32_t> seq_;    // per id: registration number
+  std::vector<std::uint32_t> loc_;    // per id: location (see location())
+  std::vector<VolumeSphere> sphere_;  // per id: the cull's volumes (see spheres())
+  std::vector<VolumeShape> shape_;
+  std::vector<VolumeSource<S>> source_;  // per id: what its volumes were built from
+  bool volumes_ = true;                  // the three above are kept (else empty)
   // The properties most managers never set are allocated by their first use (then kept until
   // clear()): 25 bytes per id that registration and memory would otherwise pay for nothing.
   std::vector<Filter> filter_;              // per id: filter bits; empty: all default
@@ -132,6 +157,11 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
     obj_.push_back(obj);
     seq_.push_back(seq);
     loc_.push_back(kNone);
+    if (volumes_) {
+      sphere_.push_back(kNoVolume);
+      shape_.emplace_back();
+      source_.push_back(unbuilt());
+    }
     if (!filter_.empty()) {
       filter_.emplace_back();
       group_.push_back(0);
@@ -143,6 +173,10 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
     obj_[id] = obj;
     seq_[id] = seq;
     loc_[id] = kNone;
+    if (volumes_) {
+      sphere_[id] = kNoVolume;
+      source_[id] = unbuilt();  // a recycled id's new object may sit where the last one was
+    }
     if (!filter_.empty()) {
       filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
       group_[id] = 0;
@@ -151,6 +185,7 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
   }
   if (!filter_.empty()) ++group_users_[0];
   ++live_;
+  refreshVolume(id);
   return id;
 }
 

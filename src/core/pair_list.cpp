@@ -84,9 +84,8 @@ bool PairList<S>::collide(const ObjectTable<S>& table, void* data, CollideFn<S> 
                           QueryStats* stats) const {
   for (const std::uint64_t p : pairs_) {
     if (stats) ++stats->callbacks;
-    if (fn(table.object(static_cast<ObjectId>(p >> 32)), table.object(static_cast<ObjectId>(p)),
-           data))
-      return true;
+    const auto a = static_cast<ObjectId>(p >> 32), b = static_cast<ObjectId>(p);
+    if (fn(table.object(a), a, table.object(b), b, data)) return true;
   }
   return false;
 }
@@ -121,7 +120,7 @@ bool PairList<S>::collide(const ObjectTable<S>& table, const PairGate<S>& gate, 
                           CollideFn<S> fn, QueryStats* stats) const {
   return forPassing(table, gate, [&](ObjectId a, ObjectId b) {
     if (stats) ++stats->callbacks;
-    return fn(table.object(a), table.object(b), data);
+    return fn(table.object(a), a, table.object(b), b, data);
   });
 }
 

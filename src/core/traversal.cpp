@@ -42,7 +42,9 @@ template <typename S>
 struct CallFn {
   void* data;
   CollideFn<S> fn;
-  bool operator()(const Item<S>& x, const Item<S>& y) const { return fn(x.obj, y.obj, data); }
+  bool operator()(const Item<S>& x, const Item<S>& y) const {
+    return fn(x.obj, x.id, y.obj, y.id, data);
+  }
 };
 
 // ...or note the pair's ids (see collectPairs).
@@ -664,7 +666,7 @@ bool distanceWith(const View<S>& a, const View<S>& b, bool self, const Policy& p
 }  // namespace
 
 template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
                   QueryStats* stats, const PairGate<S>* gate) {
   return collideWith(a, b, self, CallFn<S>{data, fn}, stats, gate);
 }
@@ -682,7 +684,7 @@ bool objectWalk(const View<S>& tree, const View<S>& q, const Sink& sink, QuerySt
 
 template <typename S>
 [[gnu::flatten]] bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data,
-                                    CollideFn<S> fn, QueryStats* stats) {
+                                    CollideFnArg<S> fn, QueryStats* stats) {
   return objectWalk(tree, query.view(), CallFn<S>{data, fn}, stats);
 }
 
@@ -788,7 +790,7 @@ void SplitWalk<S>::collect(std::size_t i, std::vector<std::uint64_t>& out) const
 }
 
 template <typename S>
-bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
                      QueryStats* stats, PairKernel kernel, const PairGate<S>* gate) {
   if (a.slots > kAllPairsMax || b.slots > kAllPairsMax)
     throw std::logic_error("collideAllPairs: view too large");

@@ -16,8 +16,32 @@
 namespace cube {
 namespace detail {
 
+/// What a collide calls for each pair: an FCL callback (the objects and the caller's data), or,
+/// for the library's own queries, a function that is also given the two objects' ids, so that it
+/// can read what the object tables keep per id (the cull's volumes). A query object that is not
+/// registered has the id kNone; in queries of two managers the first id is the first manager's.
 template <typename S>
-using CollideFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void*);
+struct CollideFn {
+  using Object = fcl::CollisionObject<S>;
+  using Plain = bool (*)(Object*, Object*, void*);
+  using WithIds = bool (*)(Object*, ObjectId, Object*, ObjectId, void*);
+  Plain plain = nullptr;
+  WithIds with_ids = nullptr;
+
+  CollideFn(Plain f) : plain(f) {}       // NOLINT: FCL callbacks convert implicitly
+  CollideFn(WithIds f) : with_ids(f) {}  // NOLINT
+  bool operator()(Object* a, ObjectId ia, Object* b, ObjectId ib, void* data) const {
+    return with_ids != nullptr ? with_ids(a, ia, b, ib, data) : plain(a, b, data);
+  }
+};
+/// CollideFn<S> as a parameter that takes no part in deducing S (so that an FCL callback, or a
+/// test's, converts to it).
+template <class T>
+struct NonDeduced {
+  using type = T;
+};
+template <typename S>
+using CollideFnArg = typename NonDeduced<CollideFn<S>>::type;
 template <typename S>
 using DistanceFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void*, S&);
 
@@ -112,14 +136,14 @@ struct SingleView {
 /// overlap (closed) and that pass `gate` (if given). With `self` (a and b are the same view)
 /// each unordered pair comes once. Returns true as soon as fn does (the query stops).
 template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
                   QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
 
 /// An object query without a gate: collidePairs(tree, query.view(), false, data, fn, stats),
 /// straight into the one-object walk. Most queries are short, and the set-up that pairs of
 /// trees need was a tenth of their time.
 template <typename S>
-bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data, CollideFn<S> fn,
+bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data, CollideFnArg<S> fn,
                    QueryStats* stats = nullptr);
 
 /// Appends to `out` every pair of distinct objects x of `a` and y of `b` whose boxes overlap
@@ -183,7 +207,7 @@ bool allPairsFit(const View<S>& a, const View<S>& b, bool self, std::size_t limi
 /// order of `b`. Requires a.slots and b.slots <= kAllPairsMax (std::logic_error otherwise, as
 /// for a kernel this CPU lacks).
 template <typename S>
-bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFn<S> fn,
+bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
                      QueryStats* stats = nullptr, PairKernel kernel = PairKernel::best,
                      const PairGate<S>* gate = nullptr);
 

@@ -1,0 +1,76 @@
+#pragma once
+
+// An object's tight volumes as the object table keeps them per id, so that the cull (cull.h)
+// reads two small records a pair instead of two FCL objects and their geometries. Floats, built
+// in the objects' scalar type and rounded outward (inward for the inscribed ball), so that each
+// record holds the object's true volumes; the cull's margin covers its own float arithmetic. No
+// FCL or Eigen types: the table lives in the core.
+
+#include <cstdint>
+
+namespace fcl {
+template <typename S>
+class CollisionObject;
+}  // namespace fcl
+
+namespace cube {
+namespace detail {
+
+/// The bounding sphere: centre c, radius r. r < 0: the object has no volumes the cull may use
+/// (a plane, a halfspace, an octree, no geometry, or a non-finite size or pose).
+struct VolumeSphere {
+  float c[3];
+  float r;
+};
+static_assert(sizeof(VolumeSphere) == 16, "four spheres per cache line");
+/// No volumes: the cull leaves the pair to FCL.
+inline constexpr VolumeSphere kNoVolume{{0.f, 0.f, 0.f}, -1.f};
+
+/// The rest, read only when the spheres settle nothing: the oriented box of the geometry's local
+/// AABB about the sphere's centre (axes the columns of the row-major R, half extents e), the
+/// scale of the record's coordinates (max |c|, r: the cull's margin grows with it), and a ball
+/// inside the shape (centre c + inner_z along R's third column, radius inner_r; 0: none).
+struct VolumeShape {
+  float R[9];
+  float e[3];
+  float scale;
+  float inner_r;
+  float inner_z;
+  std::uint32_t flags;  ///< kVolumeSphere: the geometry is a sphere (r exact, no box needed)
+};
+static_assert(sizeof(VolumeShape) == 64, "one record per cache line");
+
+inline constexpr std::uint32_t kVolumeSphere = 1u;
+
+/// Builds `o`'s records from its transform and geometry (local AABB, kind, size): the inscribed
+/// ball only for occupied spheres, boxes, capsules, cylinders, cones and ellipsoids. Defined in
+/// cull.cpp.
+template <typename S>
+void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape);
+
+/// What an object's records were built from, bit for bit: its transform (the rotation by
+/// columns, then the translation) and its geometry's local AABB (min, then max). NaN-filled
+/// when new, so that the first refresh builds.
+template <typename S>
+struct VolumeSource {
+  S v[18];
+};
+
+/// Rebuilds the records (buildVolume) if `o`'s transform or local AABB differ from `source`,
+/// which then takes them. Returns whether it rebuilt. update() calls it for every object: a
+/// rotation may leave FCL's box of an object as it was, and an unmoved object costs a compare.
+template <typename S>
+bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+                   VolumeShape& shape);
+
+extern template void buildVolume<double>(const fcl::CollisionObject<double>&, VolumeSphere&,
+                                         VolumeShape&);
+extern template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&,
+                                        VolumeShape&);
+extern template bool refreshVolume<double>(const fcl::CollisionObject<double>&,
+                                           VolumeSource<double>&, VolumeSphere&, VolumeShape&);
+extern template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
+                                          VolumeSphere&, VolumeShape&);
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,47 @@
+#pragma once
+
+// The library's own ways into a CubeCollisionManager's collide walks, beside FCL's interface:
+// walks that hand the pipeline (queries.h) each pair's object ids, so that it reads the object
+// tables' per-id volumes, and a self-collide whose walk runs on several threads (issue 19). Not
+// public: users get them through collideAll and collideConcurrently.
+
+#include "core/traversal.h"
+#include "cube_collision/cube_collision_manager.h"
+
+namespace cube {
+namespace detail {
+
+/// manager.collide(cdata, callback), with the walk of a large scene split over `threads` OpenMP
+/// threads (Broadphase::collideSelfSplit): the callback sees the same pairs in the same order, on
+/// this thread, under the same rules (Config::cull_pairs, mutations from the callback refused),
+/// and may stop the query the same way. Throws std::invalid_argument for a null callback.
+template <typename S>
+void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
+                          fcl::CollisionCallBack<S> callback, int threads);
+
+/// manager.collide(cdata, fn), manager.collide(obj, cdata, fn) and manager.collide(other,
+/// cdata, fn) with a callback that may take ids (detail::CollideFn): the same checks, pairs,
+/// order, query guard and errors, but never Config::cull_pairs (the caller culls). Ids are the
+/// object tables' (the first of the manager, the second of `other` when that is a cube manager),
+/// kNone for an object that is not registered (the query object; other's objects when `other`
+/// is another kind of manager).
+template <typename S>
+void collideWithIds(const CubeCollisionManager<S>& manager, void* cdata, CollideFn<S> fn);
+template <typename S>
+void collideWithIds(const CubeCollisionManager<S>& manager, fcl::CollisionObject<S>* obj,
+                    void* cdata, CollideFn<S> fn);
+template <typename S>
+void collideWithIds(const CubeCollisionManager<S>& manager,
+                    fcl::BroadPhaseCollisionManager<S>* other, void* cdata, CollideFn<S> fn);
+/// collideSelfOnThreads with such a callback, and without Config::cull_pairs.
+template <typename S>
+void collideSelfOnThreadsWithIds(const CubeCollisionManager<S>& manager, void* cdata,
+                                 CollideFn<S> fn, int threads);
+
+extern template void collideSelfOnThreads<double>(const CubeCollisionManager<double>&, void*,
+                                                  fcl::CollisionCallBack<double>, int);
+extern template void collideSelfOnThreads<float>(const CubeCollisionManager<float>&, void*,
+                                                 fcl::CollisionCallBack<float>, int);
+
+}  // namespace detail
+}  // namespace cube
