@@ -272,15 +272,40 @@ void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCa
   runObjectCollide(*core_, obj, cdata, detail::CollideFn<S>(callback), stats);
 }
 
+namespace {
+
+template <typename S>
+bool isNull(const detail::DistanceFn<S>& fn) {
+  return fn.plain == nullptr && fn.with_ids == nullptr;
+}
+
+template <typename S>
+void runObjectDistance(const detail::Broadphase<S>& core, fcl::CollisionObject<S>* obj, void* cdata,
+                       detail::DistanceFn<S> fn, QueryStats* stats) {
+  const Box<S> box = checkedQueryBox(obj, "distance");
+  if (isNull(fn)) fail("distance", "null callback");
+  if (core.size() == 0) return;
+  const QueryScope scope(&core);
+  S best = std::numeric_limits<S>::max();
+  core.distance(obj, box, cdata, fn, best, stats);
+}
+
+template <typename S>
+void runSelfDistance(const detail::Broadphase<S>& core, void* cdata, detail::DistanceFn<S> fn,
+                     QueryStats* stats) {
+  if (isNull(fn)) fail("distance", "null callback");
+  if (core.size() < 2) return;  // no pair
+  const QueryScope scope(&core);
+  S best = std::numeric_limits<S>::max();
+  core.distanceSelf(cdata, fn, best, stats);
+}
+
+}  // namespace
+
 template <typename S>
 void CubeCollisionManager<S>::distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback,
                                        QueryStats* stats) const {
-  const Box<S> box = checkedQueryBox(obj, "distance");
-  if (callback == nullptr) fail("distance", "null callback");
-  if (core_->size() == 0) return;
-  const QueryScope scope(core_.get());
-  S best = std::numeric_limits<S>::max();
-  core_->distance(obj, box, cdata, callback, best, stats);
+  runObjectDistance(*core_, obj, cdata, detail::DistanceFn<S>(callback), stats);
 }
 
 template <typename S>
@@ -294,11 +319,7 @@ void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> cal
 template <typename S>
 void CubeCollisionManager<S>::distance(void* cdata, fcl::DistanceCallBack<S> callback,
                                        QueryStats* stats) const {
-  if (callback == nullptr) fail("distance", "null callback");
-  if (core_->size() < 2) return;  // no pair
-  const QueryScope scope(core_.get());
-  S best = std::numeric_limits<S>::max();
-  core_->distanceSelf(cdata, callback, best, stats);
+  runSelfDistance(*core_, cdata, detail::DistanceFn<S>(callback), stats);
 }
 
 namespace {
@@ -359,19 +380,29 @@ void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
   runManagerCollide(*this, other_manager, cdata, detail::CollideFn<S>(callback), stats);
 }
 
+namespace {
+
+template <typename S>
+void runManagerDistance(const CubeCollisionManager<S>& manager,
+                        fcl::BroadPhaseCollisionManager<S>* other_manager, void* cdata,
+                        detail::DistanceFn<S> fn, QueryStats* stats) {
+  if (isNull(fn)) fail("distance", "null callback");
+  const detail::Broadphase<S>& core = detail::coreOf(manager);
+  S best = std::numeric_limits<S>::max();
+  againstManager(
+      manager, other_manager, "distance", [&] { core.distanceSelf(cdata, fn, best, stats); },
+      [&](const detail::Broadphase<S>& other) { core.distance(other, cdata, fn, best, stats); },
+      [&](fcl::CollisionObject<S>* obj, const Box<S>& box) {
+        return core.distance(obj, box, cdata, fn, best, stats);
+      });
+}
+
+}  // namespace
+
 template <typename S>
 void CubeCollisionManager<S>::distance(Base* other_manager, void* cdata,
                                        fcl::DistanceCallBack<S> callback, QueryStats* stats) const {
-  if (callback == nullptr) fail("distance", "null callback");
-  S best = std::numeric_limits<S>::max();
-  againstManager(
-      *this, other_manager, "distance", [&] { core_->distanceSelf(cdata, callback, best, stats); },
-      [&](const detail::Broadphase<S>& other) {
-        core_->distance(other, cdata, callback, best, stats);
-      },
-      [&](Object* obj, const Box<S>& box) {
-        return core_->distance(obj, box, cdata, callback, best, stats);
-      });
+  runManagerDistance(*this, other_manager, cdata, detail::DistanceFn<S>(callback), stats);
 }
 
 template <typename S>
@@ -498,6 +529,23 @@ void collideWithIds(const CubeCollisionManager<S>& manager,
   runManagerCollide(manager, other, cdata, fn, nullptr);
 }
 
+template <typename S>
+void distanceWithIds(const CubeCollisionManager<S>& manager, void* cdata, DistanceFn<S> fn) {
+  runSelfDistance(coreOf(manager), cdata, fn, nullptr);
+}
+
+template <typename S>
+void distanceWithIds(const CubeCollisionManager<S>& manager, fcl::CollisionObject<S>* obj,
+                     void* cdata, DistanceFn<S> fn) {
+  runObjectDistance(coreOf(manager), obj, cdata, fn, nullptr);
+}
+
+template <typename S>
+void distanceWithIds(const CubeCollisionManager<S>& manager,
+                     fcl::BroadPhaseCollisionManager<S>* other, void* cdata, DistanceFn<S> fn) {
+  runManagerDistance(manager, other, cdata, fn, nullptr);
+}
+
 #define CUBE_INSTANTIATE_WALKS(S)                                                                  \
   template void collideSelfOnThreadsWithIds<S>(const CubeCollisionManager<S>&, void*,              \
                                                CollideFn<S>, int);                                 \
@@ -505,7 +553,12 @@ void collideWithIds(const CubeCollisionManager<S>& manager,
   template void collideWithIds<S>(const CubeCollisionManager<S>&, fcl::CollisionObject<S>*, void*, \
                                   CollideFn<S>);                                                   \
   template void collideWithIds<S>(const CubeCollisionManager<S>&,                                  \
-                                  fcl::BroadPhaseCollisionManager<S>*, void*, CollideFn<S>);
+                                  fcl::BroadPhaseCollisionManager<S>*, void*, CollideFn<S>);       \
+  template void distanceWithIds<S>(const CubeCollisionManager<S>&, void*, DistanceFn<S>);          \
+  template void distanceWithIds<S>(const CubeCollisionManager<S>&, fcl::CollisionObject<S>*,       \
+                                   void*, DistanceFn<S>);                                          \
+  template void distanceWithIds<S>(const CubeCollisionManager<S>&,                                 \
+                                   fcl::BroadPhaseCollisionManager<S>*, void*, DistanceFn<S>);
 CUBE_INSTANTIATE_WALKS(double)
 CUBE_INSTANTIATE_WALKS(float)
 #undef CUBE_INSTANTIATE_WALKS

@@ -147,6 +147,35 @@ inline float boxGap(const VolumeSphere& sa, const VolumeShape& a, const VolumeSp
 
 }  // namespace volume_detail
 
+/// separation() from two objects' records (buildVolume), for a distance request whose tolerance
+/// gives `rate` (volumeMarginRate): a lower bound on the objects' distance (-infinity for a record
+/// without volumes) and the margin it must beat a distance by, rate x (1 + the larger scale). As
+/// there, with a finite `enough` the boxes are looked at only where they could lift the bound
+/// past enough + margin.
+struct VolumeGap {
+  float lower_bound;
+  float margin;
+};
+inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                              const VolumeShape& hb, float rate, float enough) {
+  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return {-std::numeric_limits<float>::infinity(), 0.f};
+  const float dx = sb.c[0] - sa.c[0], dy = sb.c[1] - sa.c[1], dz = sb.c[2] - sa.c[2];
+  const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const float margin = rate * (1.f + std::max(ha.scale, hb.scale));
+  const float spheres = d - sa.r - sb.r;
+  const float stop = enough + margin;
+  const bool sphere_a = (ha.flags & kVolumeSphere) != 0, sphere_b = (hb.flags & kVolumeSphere) != 0;
+  if ((sphere_a && sphere_b) || spheres > stop) return {spheres, margin};
+  const float ia = sphere_a ? sa.r : std::min({ha.e[0], ha.e[1], ha.e[2]});
+  const float ib = sphere_b ? sb.r : std::min({hb.e[0], hb.e[1], hb.e[2]});
+  if (stop < std::numeric_limits<float>::infinity() && !(d - ia - ib > stop))
+    return {spheres, margin};
+  const float gap = sphere_a   ? volume_detail::pointBox(sa.c, sb, hb) - sa.r
+                    : sphere_b ? volume_detail::pointBox(sb.c, sa, ha) - sb.r
+                               : volume_detail::boxGap(sa, ha, sb, hb, stop);
+  return {std::max(spheres, gap), margin};
+}
+
 /// verdict() from two objects' records (buildVolume), for a request whose tolerance gives
 /// `rate` (volumeMarginRate): kApart when the spheres' gap, a sphere's gap to the other's box or
 /// the boxes' separating-axis gap beats rate x (1 + the larger scale); kTouching, with `prove`,

@@ -33,6 +33,15 @@ void collideWithIds(const CubeCollisionManager<S>& manager, fcl::CollisionObject
 template <typename S>
 void collideWithIds(const CubeCollisionManager<S>& manager,
                     fcl::BroadPhaseCollisionManager<S>* other, void* cdata, CollideFn<S> fn);
+/// The same for manager.distance in its three forms.
+template <typename S>
+void distanceWithIds(const CubeCollisionManager<S>& manager, void* cdata, DistanceFn<S> fn);
+template <typename S>
+void distanceWithIds(const CubeCollisionManager<S>& manager, fcl::CollisionObject<S>* obj,
+                     void* cdata, DistanceFn<S> fn);
+template <typename S>
+void distanceWithIds(const CubeCollisionManager<S>& manager,
+                     fcl::BroadPhaseCollisionManager<S>* other, void* cdata, DistanceFn<S> fn);
 /// collideSelfOnThreads with such a callback, and without Config::cull_pairs.
 template <typename S>
 void collideSelfOnThreadsWithIds(const CubeCollisionManager<S>& manager, void* cdata,

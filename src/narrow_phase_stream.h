@@ -119,16 +119,28 @@ class DistanceSearch {
 
   /// Adds one candidate pair; `dist` gets the best distance so far. True once objects touch.
   bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist);
+  /// As CollideStream's: the tables the ids of push(a, ia, b, ib, dist) index.
+  void useVolumes(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
+                  const VolumeSphere* spheres_b, const VolumeShape* shapes_b);
+  /// push, with the objects' ids (kNone: an object of no table): the bound comes from the
+  /// tables' volumes.
+  bool push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b, ObjectId ib,
+            S& dist);
   /// Runs what is pending and returns the result. Call once, at the end.
   fcl::DistanceResult<S> finish();
 
   /// An fcl::DistanceCallBack feeding the DistanceSearch passed as cdata.
   static bool callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* search,
                        S& dist);
+  /// The same for walks that give ids (manager_walks.h).
+  static bool callbackWithIds(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
+                              ObjectId ib, void* search, S& dist);
 
  private:
   struct Slot;
   void flush();
+  // After the bound let the pair through: FCL, or the batch.
+  void answer(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
 
   const fcl::DistanceRequest<S>& request_;
   NarrowPhaseStats stats_;
@@ -138,6 +150,12 @@ class DistanceSearch {
   std::vector<ObjectPair<S>> batch_;
   std::vector<Slot> slots_;
   fcl::DistanceResult<S> result_;
+  const VolumeSphere* spheres_[2] = {nullptr, nullptr};
+  const VolumeShape* shapes_[2] = {nullptr, nullptr};
+  const fcl::CollisionObject<S>* memo_obj_[2] = {nullptr, nullptr};
+  VolumeSphere memo_sphere_[2];
+  VolumeShape memo_shape_[2];
+  float rate_;
 };
 
 extern template class CollideStream<double>;

@@ -79,9 +79,18 @@ struct CountedCollide {
 // The stream's walk through a cube manager: with ids, so that the cull reads the object tables'
 // volumes. False (nothing done) for any other kind of manager, or one without volumes
 // (Config::tight_volumes off).
-template <typename S, class Run>
+template <typename S>
+detail::CollideFn<S> collideIds() {
+  return detail::CollideFn<S>(&detail::CollideStream<S>::callbackWithIds);
+}
+template <typename S>
+detail::DistanceFn<S> distanceIds() {
+  return detail::DistanceFn<S>(&detail::DistanceSearch<S>::callbackWithIds);
+}
+
+template <typename S, class Stream, class Fn, class Run>
 bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
-                 const fcl::BroadPhaseCollisionManager<S>* other, detail::CollideStream<S>& stream,
+                 const fcl::BroadPhaseCollisionManager<S>* other, Stream& stream, Fn fn,
                  Run&& run) {
   const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(&manager);
   if (cube == nullptr) return false;
@@ -97,8 +106,7 @@ bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
   } else {
     stream.useVolumes(mine.spheres(), mine.shapes(), nullptr, nullptr);
   }
-  run(*cube, static_cast<void*>(&stream),
-      detail::CollideFn<S>(&detail::CollideStream<S>::callbackWithIds));
+  run(*cube, static_cast<void*>(&stream), fn);
   return true;
 }
 
@@ -145,11 +153,12 @@ fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
   return stream.finish();
 }
 
-template <typename S, class Walk>
+template <typename S, class Walk, class IdWalk>
 fcl::DistanceResult<S> distanceWith(const fcl::DistanceRequest<S>& request,
-                                    const NarrowPhaseOptions<S>& options, const Walk& walk) {
+                                    const NarrowPhaseOptions<S>& options, const Walk& walk,
+                                    const IdWalk& id_walk) {
   detail::DistanceSearch<S> search(request, options);
-  walk(&search, &detail::DistanceSearch<S>::callback);
+  if (!id_walk(search)) walk(&search, &detail::DistanceSearch<S>::callback);
   return search.finish();
 }
 
@@ -166,13 +175,14 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
       },
       [&](detail::CollideStream<S>& stream) {
         // A self query: both ids index the manager's table.
-        return walkWithIds(manager, &manager, stream, [&](const auto& cube, void* data, auto fn) {
-          if (options.split_walk)
-            detail::collideSelfOnThreadsWithIds(
-                cube, data, fn, options.threads > 0 ? options.threads : hardwareThreads());
-          else
-            detail::collideWithIds(cube, data, fn);
-        });
+        return walkWithIds(
+            manager, &manager, stream, collideIds<S>(), [&](const auto& cube, void* data, auto fn) {
+              if (options.split_walk)
+                detail::collideSelfOnThreadsWithIds(
+                    cube, data, fn, options.threads > 0 ? options.threads : hardwareThreads());
+              else
+                detail::collideWithIds(cube, data, fn);
+            });
       });
 }
 
@@ -185,9 +195,10 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
       request, options,
       [&](void* data, fcl::CollisionCallBack<S> f) { manager.collide(obj, data, f); },
       [&](detail::CollideStream<S>& stream) {
-        return walkWithIds<S>(manager, nullptr, stream, [&](const auto& cube, void* data, auto fn) {
-          detail::collideWithIds(cube, obj, data, fn);
-        });
+        return walkWithIds<S>(manager, nullptr, stream, collideIds<S>(),
+                              [&](const auto& cube, void* data, auto fn) {
+                                detail::collideWithIds(cube, obj, data, fn);
+                              });
       });
 }
 
@@ -200,9 +211,10 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
       request, options,
       [&](void* data, fcl::CollisionCallBack<S> f) { manager.collide(&other, data, f); },
       [&](detail::CollideStream<S>& stream) {
-        return walkWithIds(manager, &other, stream, [&](const auto& cube, void* data, auto fn) {
-          detail::collideWithIds(cube, &other, data, fn);
-        });
+        return walkWithIds(manager, &other, stream, collideIds<S>(),
+                           [&](const auto& cube, void* data, auto fn) {
+                             detail::collideWithIds(cube, &other, data, fn);
+                           });
       });
 }
 
@@ -260,8 +272,14 @@ template <typename S>
 fcl::DistanceResult<S> minimumDistance(const fcl::BroadPhaseCollisionManager<S>& manager,
                                        const fcl::DistanceRequest<S>& request,
                                        const NarrowPhaseOptions<S>& options) {
-  return distanceWith(request, options,
-                      [&](void* data, fcl::DistanceCallBack<S> f) { manager.distance(data, f); });
+  return distanceWith(
+      request, options, [&](void* data, fcl::DistanceCallBack<S> f) { manager.distance(data, f); },
+      [&](detail::DistanceSearch<S>& search) {
+        return walkWithIds(manager, &manager, search, distanceIds<S>(),
+                           [&](const auto& cube, void* data, auto fn) {
+                             detail::distanceWithIds(cube, data, fn);
+                           });
+      });
 }
 
 template <typename S>
@@ -269,9 +287,15 @@ fcl::DistanceResult<S> minimumDistance(const fcl::BroadPhaseCollisionManager<S>&
                                        fcl::CollisionObject<S>* obj,
                                        const fcl::DistanceRequest<S>& request,
                                        const NarrowPhaseOptions<S>& options) {
-  return distanceWith(request, options, [&](void* data, fcl::DistanceCallBack<S> f) {
-    manager.distance(obj, data, f);
-  });
+  return distanceWith(
+      request, options,
+      [&](void* data, fcl::DistanceCallBack<S> f) { manager.distance(obj, data, f); },
+      [&](detail::DistanceSearch<S>& search) {
+        return walkWithIds<S>(manager, nullptr, search, distanceIds<S>(),
+                              [&](const auto& cube, void* data, auto fn) {
+                                detail::distanceWithIds(cube, obj, data, fn);
+                              });
+      });
 }
 
 template <typename S>
@@ -279,9 +303,15 @@ fcl::DistanceResult<S> minimumDistance(const fcl::BroadPhaseCollisionManager<S>&
                                        fcl::BroadPhaseCollisionManager<S>& other,
                                        const fcl::DistanceRequest<S>& request,
                                        const NarrowPhaseOptions<S>& options) {
-  return distanceWith(request, options, [&](void* data, fcl::DistanceCallBack<S> f) {
-    manager.distance(&other, data, f);
-  });
+  return distanceWith(
+      request, options,
+      [&](void* data, fcl::DistanceCallBack<S> f) { manager.distance(&other, data, f); },
+      [&](detail::DistanceSearch<S>& search) {
+        return walkWithIds(manager, &other, search, distanceIds<S>(),
+                           [&](const auto& cube, void* data, auto fn) {
+                             detail::distanceWithIds(cube, &other, data, fn);
+                           });
+      });
 }
 
 #define CUBE_INSTANTIATE_QUERIES(S)                                                                \

@@ -344,7 +344,7 @@ TYPED_TEST(Culling, SeparationIsALowerBoundOnFclDistance) {
   const auto kinds = allKinds<S>();
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-2.0, 2.0);
-  std::size_t checked = 0, informative = 0;
+  std::size_t checked = 0, informative = 0, records_informative = 0;
   for (const auto& [na, ga] : kinds)
     for (const auto& [nb, gb] : kinds) {
       if (!fclCanMeasure(na, nb)) continue;
@@ -362,10 +362,25 @@ TYPED_TEST(Culling, SeparationIsALowerBoundOnFclDistance) {
         ASSERT_LE(sep.lower_bound - sep.margin, d) << na << " vs " << nb << " rep " << rep;
         ++checked;
         informative += sep.lower_bound >= d / 2;
+        // The same from the float records (the pipeline's bound), with the boxes looked at
+        // (enough 0) and without (enough infinite).
+        cube::detail::VolumeSphere sa, sb;
+        cube::detail::VolumeShape ha, hb;
+        cube::detail::buildVolume(a, sa, ha);
+        cube::detail::buildVolume(b, sb, hb);
+        const float rate = cube::detail::volumeMarginRate(S(req.distance_tolerance));
+        for (const float enough : {0.f, std::numeric_limits<float>::infinity()}) {
+          const auto gap = cube::detail::separationOf(sa, ha, sb, hb, rate, enough);
+          ASSERT_LE(double(gap.lower_bound) - double(gap.margin), double(d))
+              << na << " vs " << nb << " rep " << rep << " (records)";
+          if (enough > 0.f) records_informative += gap.lower_bound >= d / 2;
+        }
       }
     }
   EXPECT_GT(checked, 2000u);
   EXPECT_GT(informative * 2, checked) << informative << " of " << checked;
+  EXPECT_GE(records_informative * 100, informative * 97)
+      << records_informative << " against " << informative;
 }
 
 // The default distance callback skips pairs the bound rules out: minimumDistance on a cube

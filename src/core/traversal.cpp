@@ -354,10 +354,10 @@ struct DistancePolicy {
     if (gate != nullptr)
       return gate->through(x, y, [&](const Item<S>& a, const Item<S>& b) {
         count.call();
-        return fn(a.obj, b.obj, data, best);
+        return fn(a.obj, a.id, b.obj, b.id, data, best);
       });
     count.call();
-    return fn(x.obj, y.obj, data, best);
+    return fn(x.obj, x.id, y.obj, y.id, data, best);
   }
 };
 
@@ -814,7 +814,7 @@ std::uint64_t leafOverlapMask(const Item<S>* xs, std::uint32_t nx, const Item<S>
 }
 
 template <typename S>
-bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
+bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFnArg<S> fn,
                    S& best, QueryStats* stats, const PairGate<S>* gate) {
   if (stats)
     return distanceWith(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}, gate});

@@ -42,8 +42,24 @@ struct NonDeduced {
 };
 template <typename S>
 using CollideFnArg = typename NonDeduced<CollideFn<S>>::type;
+/// What a distance walk calls for each pair near enough: FCL's distance callback, or one that is
+/// also given the ids (as CollideFn).
 template <typename S>
-using DistanceFn = bool (*)(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void*, S&);
+struct DistanceFn {
+  using Object = fcl::CollisionObject<S>;
+  using Plain = bool (*)(Object*, Object*, void*, S&);
+  using WithIds = bool (*)(Object*, ObjectId, Object*, ObjectId, void*, S&);
+  Plain plain = nullptr;
+  WithIds with_ids = nullptr;
+
+  DistanceFn(Plain f) : plain(f) {}       // NOLINT: FCL callbacks convert implicitly
+  DistanceFn(WithIds f) : with_ids(f) {}  // NOLINT
+  bool operator()(Object* a, ObjectId ia, Object* b, ObjectId ib, void* data, S& best) const {
+    return with_ids != nullptr ? with_ids(a, ia, b, ib, data, best) : plain(a, b, data, best);
+  }
+};
+template <typename S>
+using DistanceFnArg = typename NonDeduced<DistanceFn<S>>::type;
 
 /// A predicate on two objects: false drops the pair before any callback.
 template <typename S>
@@ -226,7 +242,7 @@ std::uint64_t leafOverlapMask(const Item<S>* xs, std::uint32_t nx, const Item<S>
 /// as soon as fn does. `stats`, if given, counts the work done; pairs that do not pass `gate`
 /// (if given) are skipped.
 template <typename S>
-bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFn<S> fn,
+bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFnArg<S> fn,
                    S& best, QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
 
 /// The two views of one broadphase, its cubes and its unbounded list, and where each id is.
