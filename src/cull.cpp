@@ -258,20 +258,34 @@ void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeS
     sphere.r = rf;
 }
 
+namespace {
+
+// The transform as VolumeSource keeps it.
+template <typename S>
+void sourceOf(const fcl::CollisionObject<S>& o, S (&v)[12]) {
+  const S* m = o.getTransform().matrix().data();  // 4x4, by columns
+  for (int k = 0; k < 3; ++k) {
+    v[k] = m[k];
+    v[3 + k] = m[4 + k];
+    v[6 + k] = m[8 + k];
+    v[9 + k] = m[12 + k];
+  }
+}
+
+}  // namespace
+
+template <typename S>
+void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+                   VolumeShape& shape) {
+  sourceOf(o, source.v);
+  buildVolume(o, sphere, shape);
+}
+
 template <typename S>
 bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
                    VolumeShape& shape) {
-  const S* m = o.getTransform().matrix().data();  // 4x4, by columns
-  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
-  S now[18];
-  for (int k = 0; k < 3; ++k) {
-    now[k] = m[k];
-    now[3 + k] = m[4 + k];
-    now[6 + k] = m[8 + k];
-    now[9 + k] = m[12 + k];
-    now[12 + k] = g != nullptr ? g->aabb_local.min_[k] : S(0);
-    now[15 + k] = g != nullptr ? g->aabb_local.max_[k] : S(0);
-  }
+  S now[12];
+  sourceOf(o, now);
   if (std::memcmp(now, source.v, sizeof now) == 0) return false;
   std::memcpy(source.v, now, sizeof now);
   buildVolume(o, sphere, shape);
@@ -335,6 +349,10 @@ Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>&
 
 template void buildVolume<double>(const fcl::CollisionObject<double>&, VolumeSphere&, VolumeShape&);
 template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&, VolumeShape&);
+template void rebuildVolume<double>(const fcl::CollisionObject<double>&, VolumeSource<double>&,
+                                    VolumeSphere&, VolumeShape&);
+template void rebuildVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
+                                   VolumeSphere&, VolumeShape&);
 template bool refreshVolume<double>(const fcl::CollisionObject<double>&, VolumeSource<double>&,
                                     VolumeSphere&, VolumeShape&);
 template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,

@@ -95,16 +95,17 @@ struct Config {
   bool cull_pairs = false;
 
   /// Keeps each object's tight volumes (bounding sphere, oriented box of its local AABB, a ball
-  /// inside primitives) in float records per object: built at registration, rebuilt by update()
-  /// for each object whose transform or local AABB changed since (bit for bit), so that the
-  /// pipeline of queries.h (collideAll) culls a candidate pair by reading two records instead of
-  /// two FCL objects and their geometries. The records are those of the last registration or
-  /// update(): move objects, then update(), then query, as for the boxes. A geometry changed in
-  /// place without a new local AABB (computeLocalAABB()) is not seen. Trade-off, measured on
-  /// this project's 2-core machine at 10,000 objects: update() compares each object's transform
-  /// and local AABB, about 15 ns an object (an update() that moves nothing costs about 40 ns an
-  /// object instead of about 27); registration builds them, about 40 ns an object; 240 bytes an
-  /// object. Against that, the cull costs about 20 ns a candidate pair (uniform scene; 30
+  /// inside primitives) in float records per object, so that the pipeline of queries.h
+  /// (collideAll, minimumDistance) bounds a candidate pair by reading two records instead of two
+  /// FCL objects and their geometries. They are built at registration, by update(obj) and
+  /// update(objects) for the objects named, and by update() for each object whose box changed
+  /// or whose transform changed (bit for bit: a rotation may leave FCL's box as it was). So move
+  /// objects, update, then query, as for the boxes; and after changing a geometry in place
+  /// (resized, then computeLocalAABB() and computeAABB()), name its object to update(obj):
+  /// update() does not read geometries. Trade-off, measured on this project's 2-core machine at
+  /// 10,000 objects: update() with nothing moved reads each object's transform, about 8 ns an
+  /// object; registration builds the records, about 40 ns an object; 224 bytes an object.
+  /// Against that, the pipeline's cull costs about 19 ns a candidate pair (uniform scene; 30
   /// clustered) instead of 85 to 200. Off: the pipeline culls from the objects, with the same
   /// answers. The callbacks given to collide() never see it (Config::cull_pairs culls from the
   /// objects).

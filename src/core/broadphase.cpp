@@ -209,7 +209,7 @@ void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::si
   for (std::size_t i = 0; i < n; ++i) {
     const ObjectId id = table_.find(objs[i]);
     if (id == kNone) continue;
-    table_.refreshVolume(id);
+    table_.rebuildVolume(id);  // named: rebuilt whatever changed (a geometry in place, too)
     move(objs[i], grown(boxes[i], id));
     if (keep) moved_.push_back(id);
   }

@@ -218,9 +218,12 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
       Item<S>& it = items[p];
       if (it.obj == nullptr) continue;
       read(it.obj, b);
-      table_.refreshVolume(it.id);  // even if the box stands: a rotation may keep it
       if constexpr (decltype(margins)::value) b = grown(b, it.id);
-      if (sameBox(it.box, b)) continue;  // unmoved: same kind, nothing to refit
+      if (sameBox(it.box, b)) {       // unmoved: same kind, nothing to refit
+        table_.refreshVolume(it.id);  // but a rotation may keep the box
+        continue;
+      }
+      table_.rebuildVolume(it.id);
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {
         it.box = b;

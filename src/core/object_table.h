@@ -86,8 +86,12 @@ class ObjectTable {
   /// ids are stale.
   const VolumeSphere* spheres() const { return sphere_.empty() ? nullptr : sphere_.data(); }
   const VolumeShape* shapes() const { return shape_.empty() ? nullptr : shape_.data(); }
-  /// Rebuilds a live id's volumes if its object's transform or local AABB changed (update()
-  /// calls it for every object it reads: a rotation may leave FCL's box of an object as it was).
+  /// Rebuilds a live id's volumes from its object.
+  void rebuildVolume(ObjectId id) {
+    if (volumes_) detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  }
+  /// Rebuilds them if its object's transform changed since (update() calls it for every
+  /// object whose box stands: a rotation may leave FCL's box of an object as it was).
   void refreshVolume(ObjectId id) {
     if (volumes_) detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
   }
@@ -105,11 +109,6 @@ class ObjectTable {
     return next_seq_++;
   }
   void renumber();
-  static VolumeSource<S> unbuilt() {
-    VolumeSource<S> v;
-    for (S& x : v.v) x = std::numeric_limits<S>::quiet_NaN();
-    return v;
-  }
   void reserve(std::size_t n);  // room for n more ids: the map and the per-id arrays
   // A fresh or recycled id for obj, not yet in the map. Inline: addBatch calls it per entry.
   ObjectId take(Object* obj);
@@ -158,9 +157,9 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
     seq_.push_back(seq);
     loc_.push_back(kNone);
     if (volumes_) {
-      sphere_.push_back(kNoVolume);
+      sphere_.emplace_back();
       shape_.emplace_back();
-      source_.push_back(unbuilt());
+      source_.emplace_back();
     }
     if (!filter_.empty()) {
       filter_.emplace_back();
@@ -173,10 +172,6 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
     obj_[id] = obj;
     seq_[id] = seq;
     loc_[id] = kNone;
-    if (volumes_) {
-      sphere_[id] = kNoVolume;
-      source_[id] = unbuilt();  // a recycled id's new object may sit where the last one was
-    }
     if (!filter_.empty()) {
       filter_[id] = Filter{};  // a recycled id keeps nothing of its last object
       group_[id] = 0;
@@ -185,7 +180,7 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
   }
   if (!filter_.empty()) ++group_users_[0];
   ++live_;
-  refreshVolume(id);
+  rebuildVolume(id);
   return id;
 }
 

@@ -48,17 +48,21 @@ inline constexpr std::uint32_t kVolumeSphere = 1u;
 template <typename S>
 void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape);
 
-/// What an object's records were built from, bit for bit: its transform (the rotation by
-/// columns, then the translation) and its geometry's local AABB (min, then max). NaN-filled
-/// when new, so that the first refresh builds.
+/// The transform an object's records were built from, bit for bit: the rotation by columns,
+/// then the translation.
 template <typename S>
 struct VolumeSource {
-  S v[18];
+  S v[12];
 };
 
-/// Rebuilds the records (buildVolume) if `o`'s transform or local AABB differ from `source`,
-/// which then takes them. Returns whether it rebuilt. update() calls it for every object: a
-/// rotation may leave FCL's box of an object as it was, and an unmoved object costs a compare.
+/// Builds the records (buildVolume) and notes the transform in `source`.
+template <typename S>
+void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+                   VolumeShape& shape);
+
+/// rebuildVolume if `o`'s transform differs from `source`; returns whether it rebuilt. For an
+/// object whose box did not change: a rotation may leave FCL's box of an object as it was. Reads
+/// the object only, not its geometry, so that an update() of a still world costs a compare.
 template <typename S>
 bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
                    VolumeShape& shape);
@@ -67,6 +71,10 @@ extern template void buildVolume<double>(const fcl::CollisionObject<double>&, Vo
                                          VolumeShape&);
 extern template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&,
                                         VolumeShape&);
+extern template void rebuildVolume<double>(const fcl::CollisionObject<double>&,
+                                           VolumeSource<double>&, VolumeSphere&, VolumeShape&);
+extern template void rebuildVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
+                                          VolumeSphere&, VolumeShape&);
 extern template bool refreshVolume<double>(const fcl::CollisionObject<double>&,
                                            VolumeSource<double>&, VolumeSphere&, VolumeShape&);
 extern template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
