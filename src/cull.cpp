@@ -208,16 +208,12 @@ bool localInscribedBall(const fcl::CollisionGeometry<S>& g, double& z, double& r
 }  // namespace
 
 template <typename S>
-void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape) {
-  sphere = VolumeSphere{{0.f, 0.f, 0.f}, -1.f};
-  shape = VolumeShape{};
-  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
+void localVolume(const fcl::CollisionGeometry<S>* g, VolumeSource& local) {
+  local = VolumeSource{};
+  local.flags = kVolumeNone;
   if (g == nullptr) return;
   const fcl::NODE_TYPE type = g->getNodeType();
   if (type == fcl::GEOM_PLANE || type == fcl::GEOM_HALFSPACE || type == fcl::GEOM_OCTREE) return;
-  // In double whatever S is; rounded outward to floats below.
-  const Eigen::Matrix3d R = o.getTransform().linear().template cast<double>();
-  const Eigen::Vector3d t = o.getTransform().translation().template cast<double>();
   const Eigen::Vector3d lo = g->aabb_local.min_.template cast<double>();
   const Eigen::Vector3d hi = g->aabb_local.max_.template cast<double>();
   const Eigen::Vector3d e = (hi - lo) * 0.5;
@@ -226,29 +222,69 @@ void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeS
   // A sphere's own radius about its frame's origin; any other geometry, its local AABB's
   // circumscribed sphere (FCL's aabb_radius) about that box's centre.
   const double r = is_sphere ? double(static_cast<const fcl::Sphere<S>*>(g)->radius) : e.norm();
-  const Eigen::Vector3d c = is_sphere ? t : Eigen::Vector3d(R * mid + t);
-  if (!(R.allFinite() && c.allFinite() && e.allFinite() && std::isfinite(r) && r >= 0 &&
-        (e.array() >= 0).all()))
+  if (!(e.allFinite() && mid.allFinite() && std::isfinite(r) && r >= 0 && (e.array() >= 0).all() &&
+        r < 1e30))
     return;
-  const double cmax = c.cwiseAbs().maxCoeff();
-  // 8 float ulps of |c| and r: more than rounding the centre (under 1 ulp of |c| a coordinate)
-  // and the axes (1.5 ulps of r) moves the shape, with room for rounding the sizes themselves to
-  // the nearest float (half an ulp of each).
-  const double slack = 4.0 * FLT_EPSILON * (cmax + r) + FLT_MIN;
   for (int k = 0; k < 3; ++k) {
-    sphere.c[k] = static_cast<float>(c[k]);
-    shape.e[k] = static_cast<float>(e[k] + slack);
-    for (int j = 0; j < 3; ++j) shape.R[3 * k + j] = static_cast<float>(R(k, j));
+    local.mid[k] = is_sphere ? 0.f : static_cast<float>(mid[k]);
+    local.e[k] = static_cast<float>(e[k]);
   }
-  shape.scale = static_cast<float>(std::max(cmax, r));
-  shape.flags = is_sphere ? kVolumeSphere : 0u;
+  local.r = static_cast<float>(r);
+  local.flags = is_sphere ? kVolumeSphere : 0u;
   double z = 0, inner = 0;
   // The ball's centre is given from the box's centre: only for geometries centred on their
   // frame's origin, as FCL's primitives are.
   if ((is_sphere || mid.cwiseAbs().maxCoeff() <= 1e-12 * (1 + r)) &&
-      localInscribedBall(*g, z, inner) && inner - slack > 0) {
-    shape.inner_r = static_cast<float>(inner - slack);
-    shape.inner_z = static_cast<float>(z);
+      localInscribedBall(*g, z, inner)) {
+    local.inner_r = static_cast<float>(inner);
+    local.inner_z = static_cast<float>(z);
+  }
+}
+
+template <typename S>
+void placeVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSphere& sphere,
+                 VolumeShape& shape) {
+  sphere = kNoVolume;
+  shape = VolumeShape{};
+  const S* m = o.getTransform().matrix().data();  // 4x4, by columns
+  double R[9], t[3], mid[3];
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < 3; ++j) {
+      R[3 * k + j] = double(m[4 * j + k]);
+      shape.R[3 * k + j] = static_cast<float>(R[3 * k + j]);  // kept for refreshVolume
+    }
+    t[k] = double(m[12 + k]);
+    local.t[k] = static_cast<float>(t[k]);
+    mid[k] = double(local.mid[k]);
+  }
+  if ((local.flags & kVolumeNone) != 0) return;
+  double c[3], cmax = 0, tmax = 0, midmax = 0;
+  bool finite = true;
+  for (int k = 0; k < 3; ++k) {
+    c[k] = R[3 * k] * mid[0] + R[3 * k + 1] * mid[1] + R[3 * k + 2] * mid[2] + t[k];
+    finite = finite && std::isfinite(c[k]) && std::isfinite(R[3 * k]) &&
+             std::isfinite(R[3 * k + 1]) && std::isfinite(R[3 * k + 2]);
+    cmax = std::max(cmax, std::fabs(c[k]));
+    tmax = std::max(tmax, std::fabs(t[k]));
+    midmax = std::max(midmax, std::fabs(mid[k]));
+  }
+  if (!finite) return;
+  const double r = local.r;
+  // 8 float ulps of |c|, |t|, 3 |mid| and r. Rounding the centre (under 1 ulp of |c| a
+  // coordinate), the axes (1.5 ulps of r) and the local sizes and centre to floats (half an ulp
+  // of each) moves the shape by less than half of that, and a record kept for a transform that
+  // rounds to the same floats as the one it was built from (refreshVolume) is off by under an
+  // ulp of |t| and of 3 |mid| for the centre, and an ulp of each axis: the rest.
+  const double slack = 4.0 * FLT_EPSILON * (cmax + tmax + 3 * midmax + r) + FLT_MIN;
+  for (int k = 0; k < 3; ++k) {
+    sphere.c[k] = static_cast<float>(c[k]);
+    shape.e[k] = static_cast<float>(double(local.e[k]) + slack);
+  }
+  shape.scale = static_cast<float>(std::max(cmax, r));
+  shape.flags = local.flags & kVolumeSphere;
+  if (local.inner_r > 0.f && double(local.inner_r) - slack > 0) {
+    shape.inner_r = static_cast<float>(double(local.inner_r) - slack);
+    shape.inner_z = local.inner_z;
   }
   const float rf = static_cast<float>(r + slack);
   // Out of float's range: no volumes (r stays negative).
@@ -258,37 +294,48 @@ void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeS
     sphere.r = rf;
 }
 
-namespace {
-
-// The transform as VolumeSource keeps it.
 template <typename S>
-void sourceOf(const fcl::CollisionObject<S>& o, S (&v)[12]) {
-  const S* m = o.getTransform().matrix().data();  // 4x4, by columns
-  for (int k = 0; k < 3; ++k) {
-    v[k] = m[k];
-    v[3 + k] = m[4 + k];
-    v[6 + k] = m[8 + k];
-    v[9 + k] = m[12 + k];
+void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape) {
+  VolumeSource local;
+  rebuildVolume(o, local, sphere, shape);
+}
+
+template <typename S>
+void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSphere& sphere,
+                   VolumeShape& shape) {
+  localVolume(o.collisionGeometry().get(), local);
+  placeVolume(o, local, sphere, shape);
+}
+
+template <typename S>
+void moveVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSphere& sphere,
+                VolumeShape& shape) {
+  // A moved object's geometry may have been resized in place too (then its box changed): its
+  // local AABB, rounded as localVolume keeps it, says so for a few loads.
+  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
+  bool same = g != nullptr && (local.flags & kVolumeNone) == 0;
+  for (int k = 0; k < 3 && same; ++k) {
+    const double lo = g->aabb_local.min_[k], hi = g->aabb_local.max_[k];
+    same =
+        static_cast<float>((hi - lo) * 0.5) == local.e[k] &&
+        ((local.flags & kVolumeSphere) != 0 || static_cast<float>((hi + lo) * 0.5) == local.mid[k]);
   }
-}
-
-}  // namespace
-
-template <typename S>
-void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
-                   VolumeShape& shape) {
-  sourceOf(o, source.v);
-  buildVolume(o, sphere, shape);
+  if (!same) localVolume(g, local);
+  placeVolume(o, local, sphere, shape);
 }
 
 template <typename S>
-bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSphere& sphere,
                    VolumeShape& shape) {
-  S now[12];
-  sourceOf(o, now);
-  if (std::memcmp(now, source.v, sizeof now) == 0) return false;
-  std::memcpy(source.v, now, sizeof now);
-  buildVolume(o, sphere, shape);
+  const S* m = o.getTransform().matrix().data();
+  float R[9], t[3];
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < 3; ++j) R[3 * k + j] = static_cast<float>(m[4 * j + k]);
+    t[k] = static_cast<float>(m[12 + k]);
+  }
+  if (std::memcmp(R, shape.R, sizeof R) == 0 && std::memcmp(t, local.t, sizeof t) == 0)
+    return false;
+  placeVolume(o, local, sphere, shape);
   return true;
 }
 
@@ -349,14 +396,18 @@ Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>&
 
 template void buildVolume<double>(const fcl::CollisionObject<double>&, VolumeSphere&, VolumeShape&);
 template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&, VolumeShape&);
-template void rebuildVolume<double>(const fcl::CollisionObject<double>&, VolumeSource<double>&,
+template void moveVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&, VolumeSphere&,
+                                 VolumeShape&);
+template void moveVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&, VolumeSphere&,
+                                VolumeShape&);
+template void rebuildVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&,
                                     VolumeSphere&, VolumeShape&);
-template void rebuildVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
-                                   VolumeSphere&, VolumeShape&);
-template bool refreshVolume<double>(const fcl::CollisionObject<double>&, VolumeSource<double>&,
+template void rebuildVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&, VolumeSphere&,
+                                   VolumeShape&);
+template bool refreshVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&,
                                     VolumeSphere&, VolumeShape&);
-template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
-                                   VolumeSphere&, VolumeShape&);
+template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&, VolumeSphere&,
+                                   VolumeShape&);
 template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
                                                const fcl::CollisionObject<double>&, double, double);
 template Separation<float> separation<float>(const fcl::CollisionObject<float>&,

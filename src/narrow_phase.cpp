@@ -548,13 +548,12 @@ template <typename S>
 typename CollideStream<S>::Volumes CollideStream<S>::volumesOf(int side,
                                                                const fcl::CollisionObject<S>* o,
                                                                ObjectId id) {
-  if (id != kNone && spheres_[side] != nullptr) return {spheres_[side] + id, shapes_[side] + id};
-  // The query object comes with every pair of its query: built once.
-  if (memo_obj_[side] != o) {
-    buildVolume(*o, memo_sphere_[side], memo_shape_[side]);
-    memo_obj_[side] = o;
+  if (id == kNone) {
+    const typename VolumeMemo<S>::Entry& e = memo_.of(side, o);
+    return {&e.sphere, &e.shape};
   }
-  return {&memo_sphere_[side], &memo_shape_[side]};
+  if (spheres_[side] == nullptr) return {nullptr, nullptr};
+  return {spheres_[side] + id, shapes_[side] + id};
 }
 
 template <typename S>
@@ -568,6 +567,7 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
   if (done_) return true;
   if (!plain_) return pushJudged(a, b, nullptr, nullptr);
   const Volumes va = volumesOf(0, a, ia), vb = volumesOf(1, b, ib);
+  if (va.sphere == nullptr || vb.sphere == nullptr) return pushJudged(a, b, nullptr, nullptr);
   return pushJudged(a, b, &va, &vb);
 }
 
@@ -841,6 +841,9 @@ void DistanceSearch<S>::useVolumes(const VolumeSphere* spheres_a, const VolumeSh
 template <typename S>
 bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
                              ObjectId ib, S& dist) {
+  // A table without volumes (a manager below kVolumeMinObjects): the bound from the objects.
+  if ((ia != kNone && spheres_[0] == nullptr) || (ib != kNone && spheres_[1] == nullptr))
+    return push(a, b, dist);
   ++stats_.candidate_pairs;
   if (result_.min_distance > 0) {
     const VolumeSphere* sphere[2];
@@ -848,17 +851,14 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Colli
     const fcl::CollisionObject<S>* objs[2] = {a, b};
     const ObjectId ids[2] = {ia, ib};
     for (int k = 0; k < 2; ++k) {
-      if (ids[k] != kNone && spheres_[k] != nullptr) {
+      if (ids[k] == kNone) {
+        const typename VolumeMemo<S>::Entry& e = memo_.of(k, objs[k]);
+        sphere[k] = &e.sphere;
+        shape[k] = &e.shape;
+      } else {
         sphere[k] = spheres_[k] + ids[k];
         shape[k] = shapes_[k] + ids[k];
-        continue;
       }
-      if (memo_obj_[k] != objs[k]) {  // the query object: built once
-        buildVolume(*objs[k], memo_sphere_[k], memo_shape_[k]);
-        memo_obj_[k] = objs[k];
-      }
-      sphere[k] = &memo_sphere_[k];
-      shape[k] = &memo_shape_[k];
     }
     const double best = double(result_.min_distance);
     const float enough =

@@ -16,6 +16,30 @@
 namespace cube {
 namespace detail {
 
+/// Volumes built during one query for an object of no table (id kNone: the query object, or
+/// the objects of another kind of manager, whose pairs come one object at a time): the last
+/// one of each side of the pairs, so that the two never share an entry.
+template <typename S>
+class VolumeMemo {
+ public:
+  struct Entry {
+    const fcl::CollisionObject<S>* obj = nullptr;
+    VolumeSphere sphere;
+    VolumeShape shape;
+  };
+  const Entry& of(int side, const fcl::CollisionObject<S>* o) {
+    Entry& e = entries_[side];
+    if (e.obj != o) {
+      buildVolume(*o, e.sphere, e.shape);
+      e.obj = o;
+    }
+    return e;
+  }
+
+ private:
+  Entry entries_[2];
+};
+
 /// How a pair was answered: proved apart or touching by the tight volumes (cull.h), found in
 /// the cache, or by FCL.
 enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
@@ -59,7 +83,9 @@ class CollideStream {
 
  private:
   struct Slot;
-  // An object's volumes: its table's (side 0: a, 1: b) or, for kNone, built into a memo.
+  // An object's volumes: its table's (side 0: a, 1: b), or for kNone the memo's; null sphere:
+  // its table keeps none (a manager below kVolumeMinObjects), so the pair is culled from the
+  // objects.
   struct Volumes {
     const VolumeSphere* sphere;
     const VolumeShape* shape;
@@ -93,9 +119,7 @@ class CollideStream {
   // The cull on volumes: the tables, the memo of objects without an id, the margin's rate.
   const VolumeSphere* spheres_[2] = {nullptr, nullptr};
   const VolumeShape* shapes_[2] = {nullptr, nullptr};
-  const fcl::CollisionObject<S>* memo_obj_[2] = {nullptr, nullptr};
-  VolumeSphere memo_sphere_[2];
-  VolumeShape memo_shape_[2];
+  VolumeMemo<S> memo_;
   float rate_;
   bool plain_;  // a request the cull may answer (not with costs or a cached GJK guess)
   bool prove_;  // and whose touching pairs it may prove
@@ -152,9 +176,7 @@ class DistanceSearch {
   fcl::DistanceResult<S> result_;
   const VolumeSphere* spheres_[2] = {nullptr, nullptr};
   const VolumeShape* shapes_[2] = {nullptr, nullptr};
-  const fcl::CollisionObject<S>* memo_obj_[2] = {nullptr, nullptr};
-  VolumeSphere memo_sphere_[2];
-  VolumeShape memo_shape_[2];
+  VolumeMemo<S> memo_;
   float rate_;
 };
 

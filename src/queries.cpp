@@ -95,7 +95,9 @@ bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
   const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(&manager);
   if (cube == nullptr) return false;
   const auto& mine = detail::coreOf(*cube).table();
-  if (mine.spheres() == nullptr) return false;
+  // Without volumes kept (Config::tight_volumes off): the cull from the objects, as for any
+  // manager. A manager too small to keep them (kVolumeMinObjects) gets them built per query.
+  if (!detail::coreOf(*cube).config().tight_volumes) return false;
   const auto* theirs =
       other == &manager ? cube : dynamic_cast<const CubeCollisionManager<S>*>(other);
   if (other == nullptr) {

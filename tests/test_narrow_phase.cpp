@@ -376,6 +376,16 @@ TYPED_TEST(NarrowPhase, VolumesFollowWhatUpdateSees) {
       rod.computeAABB();
       probe.computeAABB();
       m.registerObjects({&rod, &probe});
+      // Far away, so that the manager holds enough objects to keep volumes per object
+      // (kVolumeMinObjects); the ids of the test's objects then index its records.
+      std::vector<std::unique_ptr<fcl::CollisionObject<S>>> fillers;
+      for (int i = 0; i < 300; ++i) {
+        fillers.push_back(std::make_unique<fcl::CollisionObject<S>>(
+            std::make_shared<fcl::Sphere<S>>(S(0.1)), fcl::Matrix3<S>::Identity(),
+            fcl::Vector3<S>(S(100 + i), S(100), S(100))));
+        fillers.back()->computeAABB();
+        m.registerObject(fillers.back().get());
+      }
       m.setup();
       ASSERT_FALSE(fclSays(&rod, &probe));
       EXPECT_FALSE(collides()) << what;

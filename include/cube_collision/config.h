@@ -95,20 +95,21 @@ struct Config {
   bool cull_pairs = false;
 
   /// Keeps each object's tight volumes (bounding sphere, oriented box of its local AABB, a ball
-  /// inside primitives) in float records per object, so that the pipeline of queries.h
-  /// (collideAll, minimumDistance) bounds a candidate pair by reading two records instead of two
-  /// FCL objects and their geometries. They are built at registration, by update(obj) and
-  /// update(objects) for the objects named, and by update() for each object whose box changed
-  /// or whose transform changed (bit for bit: a rotation may leave FCL's box as it was). So move
-  /// objects, update, then query, as for the boxes; and after changing a geometry in place
-  /// (resized, then computeLocalAABB() and computeAABB()), name its object to update(obj):
-  /// update() does not read geometries. Trade-off, measured on this project's 2-core machine at
-  /// 10,000 objects: update() with nothing moved reads each object's transform, about 8 ns an
-  /// object; registration builds the records, about 40 ns an object; 224 bytes an object.
-  /// Against that, the pipeline's cull costs about 19 ns a candidate pair (uniform scene; 30
-  /// clustered) instead of 85 to 200. Off: the pipeline culls from the objects, with the same
-  /// answers. The callbacks given to collide() never see it (Config::cull_pairs culls from the
-  /// objects).
+  /// inside primitives) in float records per object, once the manager holds 256 objects (a
+  /// smaller one, such as a robot's links, which move at every step, gets them built during each
+  /// query instead, each object at most once), so that the pipeline of queries.h (collideAll,
+  /// minimumDistance) bounds a candidate pair by reading two records instead of two FCL objects
+  /// and their geometries. Registration and update(obj) / update(objects) build them from the
+  /// geometry and the transform; update() places them anew for each object whose box changed
+  /// (reading its geometry again only if its local AABB changed) or whose transform no longer
+  /// rounds to the same floats (a rotation may leave FCL's box as it was). So move objects,
+  /// update, then query, as for the boxes; and after changing a geometry in place in a way that
+  /// leaves its local AABB as it was (another radius of a capsule of the same box, the cost
+  /// density), name its object to update(obj). Trade-off: see the README's "Measured" under
+  /// the pipeline (update() reads every object's transform; registration builds the records;
+  /// 136 bytes an object), against a cull of about 19 ns a candidate pair instead of 85 to 200.
+  /// Off: the pipeline culls from the objects, with the same answers. The callbacks given to
+  /// collide() never see it (Config::cull_pairs culls from the objects).
   bool tight_volumes = true;
 
   /// Hands every pair over in an order that does not depend on the tree: in self queries as

@@ -223,7 +223,7 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
         table_.refreshVolume(it.id);  // but a rotation may keep the box
         continue;
       }
-      table_.rebuildVolume(it.id);
+      table_.moveVolume(it.id);
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {
         it.box = b;

@@ -54,6 +54,16 @@ void ObjectTable<S>::renumber() {
 }
 
 template <typename S>
+void ObjectTable<S>::startKeeping() {
+  sphere_.assign(obj_.size(), kNoVolume);
+  shape_.assign(obj_.size(), VolumeShape{});
+  source_.assign(obj_.size(), VolumeSource{});
+  keeping_ = true;
+  for (ObjectId id = 0; id < obj_.size(); ++id)
+    if (obj_[id] != nullptr) rebuildVolume(id);
+}
+
+template <typename S>
 ObjectId ObjectTable<S>::add(Object* obj) {
   assert(obj != nullptr && find(obj) == kNone);
   const ObjectId id = take(obj);
@@ -71,7 +81,7 @@ void ObjectTable<S>::reserve(std::size_t n) {
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
-  if (volumes_) {
+  if (keeping_) {
     sphere_.reserve(sphere_.size() + fresh);
     shape_.reserve(shape_.size() + fresh);
     source_.reserve(source_.size() + fresh);
@@ -187,6 +197,7 @@ void ObjectTable<S>::clear() {
   obj_ = {};
   seq_ = {};
   loc_ = {};
+  keeping_ = false;
   sphere_ = {};
   shape_ = {};
   source_ = {};
@@ -221,7 +232,7 @@ std::size_t ObjectTable<S>::bytes() const {
          (filter_.capacity() + group_filter_.capacity()) * sizeof(Filter) +
          group_.capacity() * sizeof(Group) + group_users_.capacity() * sizeof(std::uint32_t) +
          margin_.capacity() * sizeof(S) + sphere_.capacity() * sizeof(VolumeSphere) +
-         shape_.capacity() * sizeof(VolumeShape) + source_.capacity() * sizeof(VolumeSource<S>);
+         shape_.capacity() * sizeof(VolumeShape) + source_.capacity() * sizeof(VolumeSource);
 }
 
 template <typename S>
@@ -233,9 +244,9 @@ bool ObjectTable<S>::validate(std::string* why) const {
   };
   const bool filters = !filter_.empty(), margins = !margin_.empty();
   if (seq_.size() != obj_.size() || loc_.size() != obj_.size() ||
-      (volumes_ && (sphere_.size() != obj_.size() || shape_.size() != obj_.size() ||
+      (keeping_ && (!volumes_ || sphere_.size() != obj_.size() || shape_.size() != obj_.size() ||
                     source_.size() != obj_.size())) ||
-      (!volumes_ && !(sphere_.empty() && shape_.empty() && source_.empty())) ||
+      (!keeping_ && !(sphere_.empty() && shape_.empty() && source_.empty())) ||
       (filters && (filter_.size() != obj_.size() || group_.size() != obj_.size())) ||
       (!filters && (!group_.empty() || !group_filter_.empty())) ||
       (margins && margin_.size() != obj_.size()) || group_users_.size() != group_filter_.size() ||

@@ -48,36 +48,61 @@ inline constexpr std::uint32_t kVolumeSphere = 1u;
 template <typename S>
 void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape);
 
-/// The transform an object's records were built from, bit for bit: the rotation by columns,
-/// then the translation.
-template <typename S>
+/// What an object's records are built from: its geometry's part (the local AABB's centre and
+/// half extents, the bounding radius, the inscribed ball, the kind), read from the geometry at
+/// registration and by rebuildVolume only, and the translation of the last transform placed,
+/// rounded to floats (its rotation is VolumeShape::R). Records are kept while the object's
+/// transform rounds to the same floats: the slack of placeVolume covers what such a transform
+/// moves them by.
 struct VolumeSource {
-  S v[12];
+  float mid[3];
+  float e[3];
+  float r;
+  float inner_r;  ///< 0: none
+  float inner_z;
+  std::uint32_t flags;  ///< kVolumeSphere, kVolumeNone
+  float t[3];
+  float unused = 0.f;
 };
+static_assert(sizeof(VolumeSource) == 56, "14 floats");
 
-/// Builds the records (buildVolume) and notes the transform in `source`.
+/// The geometry has no volumes the cull may use.
+inline constexpr std::uint32_t kVolumeNone = 2u;
+
+/// The records from the object's geometry and transform (both read).
 template <typename S>
-void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource& source, VolumeSphere& sphere,
                    VolumeShape& shape);
 
-/// rebuildVolume if `o`'s transform differs from `source`; returns whether it rebuilt. For an
+/// The records for an object that moved: the geometry's part in `source` (read again from the
+/// geometry only if its local AABB no longer rounds to it) and the object's transform.
+template <typename S>
+void moveVolume(const fcl::CollisionObject<S>& o, VolumeSource& source, VolumeSphere& sphere,
+                VolumeShape& shape);
+
+/// moveVolume unless `o`'s transform rounds to the floats the records were built from;
+/// returns whether it moved them. For an
 /// object whose box did not change: a rotation may leave FCL's box of an object as it was. Reads
 /// the object only, not its geometry, so that an update() of a still world costs a compare.
 template <typename S>
-bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource<S>& source, VolumeSphere& sphere,
+bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource& source, VolumeSphere& sphere,
                    VolumeShape& shape);
 
 extern template void buildVolume<double>(const fcl::CollisionObject<double>&, VolumeSphere&,
                                          VolumeShape&);
 extern template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&,
                                         VolumeShape&);
-extern template void rebuildVolume<double>(const fcl::CollisionObject<double>&,
-                                           VolumeSource<double>&, VolumeSphere&, VolumeShape&);
-extern template void rebuildVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
+extern template void moveVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&,
+                                        VolumeSphere&, VolumeShape&);
+extern template void moveVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&,
+                                       VolumeSphere&, VolumeShape&);
+extern template void rebuildVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&,
+                                           VolumeSphere&, VolumeShape&);
+extern template void rebuildVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&,
                                           VolumeSphere&, VolumeShape&);
-extern template bool refreshVolume<double>(const fcl::CollisionObject<double>&,
-                                           VolumeSource<double>&, VolumeSphere&, VolumeShape&);
-extern template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource<float>&,
+extern template bool refreshVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&,
+                                           VolumeSphere&, VolumeShape&);
+extern template bool refreshVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&,
                                           VolumeSphere&, VolumeShape&);
 
 }  // namespace detail
