@@ -55,6 +55,11 @@ void ObjectTable<S>::renumber() {
 
 template <typename S>
 void ObjectTable<S>::startKeeping() {
+  // Room for what the ids already have room for (a batch reserved it): growing by doubling
+  // from here left the arrays up to twice their size.
+  sphere_.reserve(obj_.capacity());
+  shape_.reserve(obj_.capacity());
+  source_.reserve(obj_.capacity());
   sphere_.assign(obj_.size(), kNoVolume);
   shape_.assign(obj_.size(), VolumeShape{});
   source_.assign(obj_.size(), VolumeSource{});
