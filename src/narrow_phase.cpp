@@ -412,13 +412,9 @@ using CollideEntry = typename CollideCache<S>::template Entry<std::vector<fcl::C
 template <typename S>
 using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResult<S>>;
 
-// The tight volumes' verdict: kApart, kProved, or kComputed for a pair FCL must answer. Safe
-// on several threads at once.
-template <typename S>
-Answer judge(const fcl::CollisionRequest<S>& request, const fcl::CollisionObject<S>* a,
-             const fcl::CollisionObject<S>* b) {
-  if (!plainRequest(request)) return Answer::kComputed;
-  switch (verdict(*a, *b, S(request.gjk_tolerance), provable(request))) {
+// A verdict of the tight volumes as an answer: kComputed for a pair FCL must answer.
+inline Answer answerOf(Verdict v) {
+  switch (v) {
     case Verdict::kApart:
       return Answer::kApart;
     case Verdict::kTouching:
@@ -427,6 +423,14 @@ Answer judge(const fcl::CollisionRequest<S>& request, const fcl::CollisionObject
       break;
   }
   return Answer::kComputed;
+}
+
+// The tight volumes' verdict from the two objects. Safe on several threads at once.
+template <typename S>
+Answer judge(const fcl::CollisionRequest<S>& request, const fcl::CollisionObject<S>* a,
+             const fcl::CollisionObject<S>* b) {
+  if (!plainRequest(request)) return Answer::kComputed;
+  return answerOf(verdict(*a, *b, S(request.gjk_tolerance), provable(request)));
 }
 
 // The cache, then the tight volumes: kCached with the entry, or judge's verdict. On the calling
@@ -540,27 +544,6 @@ template <typename S>
 CollideStream<S>::~CollideStream() = default;
 
 template <typename S>
-void CollideStream<S>::useVolumes(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
-                                  const VolumeSphere* spheres_b, const VolumeShape* shapes_b) {
-  spheres_[0] = spheres_a;
-  shapes_[0] = shapes_a;
-  spheres_[1] = spheres_b;
-  shapes_[1] = shapes_b;
-}
-
-template <typename S>
-typename CollideStream<S>::Volumes CollideStream<S>::volumesOf(int side,
-                                                               const fcl::CollisionObject<S>* o,
-                                                               ObjectId id) {
-  if (id == kNone) {
-    const typename VolumeMemo<S>::Entry& e = memo_.of(side, o);
-    return {&e.sphere, &e.shape};
-  }
-  if (spheres_[side] == nullptr) return {nullptr, nullptr};
-  return {spheres_[side] + id, shapes_[side] + id};
-}
-
-template <typename S>
 bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
   return pushJudged(a, b, nullptr, nullptr);
 }
@@ -570,27 +553,12 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
                             ObjectId ib) {
   if (done_) return true;
   if (!plain_) return pushJudged(a, b, nullptr, nullptr);
-  const Volumes va = volumesOf(0, a, ia), vb = volumesOf(1, b, ib);
-  if (va.sphere == nullptr || vb.sphere == nullptr) return pushJudged(a, b, nullptr, nullptr);
+  Volumes va, vb;
+  if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape))
+    return pushJudged(a, b, nullptr, nullptr);
   return pushJudged(a, b, &va, &vb);
 }
 
-namespace {
-
-template <typename S>
-Answer answerOf(Verdict v) {
-  switch (v) {
-    case Verdict::kApart:
-      return Answer::kApart;
-    case Verdict::kTouching:
-      return Answer::kProved;
-    case Verdict::kUnknown:
-      break;
-  }
-  return Answer::kComputed;
-}
-
-}  // namespace
 
 template <typename S>
 bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
@@ -599,7 +567,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   ++stats_.candidate_pairs;
   // With volumes the cull runs here, before the cache (it costs less than a lookup).
   const auto cull = [&] {
-    return answerOf<S>(verdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
+    return answerOf(verdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
   };
   if (serial_) {
     // Work that threads could share: with the cull on records it runs here, at about 20 ns a
@@ -844,40 +812,17 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>
 }
 
 template <typename S>
-void DistanceSearch<S>::useVolumes(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
-                                   const VolumeSphere* spheres_b, const VolumeShape* shapes_b) {
-  spheres_[0] = spheres_a;
-  shapes_[0] = shapes_a;
-  spheres_[1] = spheres_b;
-  shapes_[1] = shapes_b;
-}
-
-template <typename S>
 bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
                              ObjectId ib, S& dist) {
-  // A table without volumes (a manager below kVolumeMinObjects): the bound from the objects.
-  if ((ia != kNone && spheres_[0] == nullptr) || (ib != kNone && spheres_[1] == nullptr))
-    return push(a, b, dist);
+  const VolumeSphere *sa, *sb;
+  const VolumeShape *ha, *hb;
+  if (!volumes_.of(a, ia, b, ib, sa, ha, sb, hb)) return push(a, b, dist);
   ++stats_.candidate_pairs;
   if (result_.min_distance > 0) {
-    const VolumeSphere* sphere[2];
-    const VolumeShape* shape[2];
-    const fcl::CollisionObject<S>* objs[2] = {a, b};
-    const ObjectId ids[2] = {ia, ib};
-    for (int k = 0; k < 2; ++k) {
-      if (ids[k] == kNone) {
-        const typename VolumeMemo<S>::Entry& e = memo_.of(k, objs[k]);
-        sphere[k] = &e.sphere;
-        shape[k] = &e.shape;
-      } else {
-        sphere[k] = spheres_[k] + ids[k];
-        shape[k] = shapes_[k] + ids[k];
-      }
-    }
     const double best = double(result_.min_distance);
     const float enough =
         best >= double(FLT_MAX) ? std::numeric_limits<float>::infinity() : float(best);
-    const VolumeGap g = separationOf(*sphere[0], *shape[0], *sphere[1], *shape[1], rate_, enough);
+    const VolumeGap g = separationOf(*sa, *ha, *sb, *hb, rate_, enough);
     if (double(g.lower_bound) - double(g.margin) > best)
       ++stats_.culled;
     else

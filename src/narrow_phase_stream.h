@@ -16,28 +16,56 @@
 namespace cube {
 namespace detail {
 
-/// Volumes built during one query for an object of no table (id kNone: the query object, or
-/// the objects of another kind of manager, whose pairs come one object at a time): the last
-/// one of each side of the pairs, so that the two never share an entry.
+/// Where a stream finds the volumes of a pair's objects: the object tables whose ids the walk
+/// gives (side a, the first id; side b), and, for an object of no table (id kNone: the query
+/// object, or the objects of another kind of manager, whose pairs come one object at a time),
+/// volumes built during the query, the last one of each side kept.
 template <typename S>
-class VolumeMemo {
+class PairVolumes {
  public:
-  struct Entry {
+  /// The tables' records (ObjectTable::spheres(), shapes()); null: that table keeps none.
+  void use(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
+           const VolumeSphere* spheres_b, const VolumeShape* shapes_b) {
+    spheres_[0] = spheres_a;
+    shapes_[0] = shapes_a;
+    spheres_[1] = spheres_b;
+    shapes_[1] = shapes_b;
+  }
+  /// The records of objects a (id ia) and b (id ib), into the four pointers; false if a table
+  /// keeps none (a manager below kVolumeMinObjects): the pair is culled from the objects.
+  bool of(const fcl::CollisionObject<S>* a, ObjectId ia, const fcl::CollisionObject<S>* b,
+          ObjectId ib, const VolumeSphere*& sa, const VolumeShape*& ha, const VolumeSphere*& sb,
+          const VolumeShape*& hb) {
+    return side(0, a, ia, sa, ha) && side(1, b, ib, sb, hb);
+  }
+
+ private:
+  struct Built {
     const fcl::CollisionObject<S>* obj = nullptr;
     VolumeSphere sphere;
     VolumeShape shape;
   };
-  const Entry& of(int side, const fcl::CollisionObject<S>* o) {
-    Entry& e = entries_[side];
+  bool side(int k, const fcl::CollisionObject<S>* o, ObjectId id, const VolumeSphere*& sphere,
+            const VolumeShape*& shape) {
+    if (id != kNone) {
+      if (spheres_[k] == nullptr) return false;
+      sphere = spheres_[k] + id;
+      shape = shapes_[k] + id;
+      return true;
+    }
+    Built& e = built_[k];
     if (e.obj != o) {
       buildVolume(*o, e.sphere, e.shape);
       e.obj = o;
     }
-    return e;
+    sphere = &e.sphere;
+    shape = &e.shape;
+    return true;
   }
 
- private:
-  Entry entries_[2];
+  const VolumeSphere* spheres_[2] = {nullptr, nullptr};
+  const VolumeShape* shapes_[2] = {nullptr, nullptr};
+  Built built_[2];
 };
 
 /// How a pair was answered: proved apart or touching by the tight volumes (cull.h), found in
@@ -60,10 +88,8 @@ class CollideStream {
 
   /// Adds one candidate pair. True once the result is complete: the walk may stop.
   bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
-  /// The per-id volumes (ObjectTable::spheres(), shapes()) of the tables the ids of
-  /// push(a, ia, b, ib) index: side a's and side b's. Null: none (the volumes are built here).
-  void useVolumes(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
-                  const VolumeSphere* spheres_b, const VolumeShape* shapes_b);
+  /// Where push(a, ia, b, ib) finds the pair's volumes.
+  PairVolumes<S>& volumes() { return volumes_; }
   /// push, with the objects' ids (kNone: an object of no table): the cull reads the tables'
   /// volumes instead of the objects, on this thread (about 20 ns a pair).
   bool push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b, ObjectId ib);
@@ -83,14 +109,11 @@ class CollideStream {
 
  private:
   struct Slot;
-  // An object's volumes: its table's (side 0: a, 1: b), or for kNone the memo's; null sphere:
-  // its table keeps none (a manager below kVolumeMinObjects), so the pair is culled from the
-  // objects.
+  // The records of a pair, for pushJudged (null: cull from the objects).
   struct Volumes {
     const VolumeSphere* sphere;
     const VolumeShape* shape;
   };
-  Volumes volumesOf(int side, const fcl::CollisionObject<S>* o, ObjectId id);
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
                   const Volumes* vb);
   static bool kept(const Slot& s);
@@ -117,9 +140,7 @@ class CollideStream {
   fcl::CollisionResult<S> empty_;
   fcl::CollisionResult<S> result_;
   // The cull on volumes: the tables, the memo of objects without an id, the margin's rate.
-  const VolumeSphere* spheres_[2] = {nullptr, nullptr};
-  const VolumeShape* shapes_[2] = {nullptr, nullptr};
-  VolumeMemo<S> memo_;
+  PairVolumes<S> volumes_;
   float rate_;
   bool plain_;  // a request the cull may answer (not with costs or a cached GJK guess)
   bool prove_;  // and whose touching pairs it may prove
@@ -143,9 +164,8 @@ class DistanceSearch {
 
   /// Adds one candidate pair; `dist` gets the best distance so far. True once objects touch.
   bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist);
-  /// As CollideStream's: the tables the ids of push(a, ia, b, ib, dist) index.
-  void useVolumes(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
-                  const VolumeSphere* spheres_b, const VolumeShape* shapes_b);
+  /// Where push(a, ia, b, ib, dist) finds the pair's volumes.
+  PairVolumes<S>& volumes() { return volumes_; }
   /// push, with the objects' ids (kNone: an object of no table): the bound comes from the
   /// tables' volumes.
   bool push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b, ObjectId ib,
@@ -174,9 +194,7 @@ class DistanceSearch {
   std::vector<ObjectPair<S>> batch_;
   std::vector<Slot> slots_;
   fcl::DistanceResult<S> result_;
-  const VolumeSphere* spheres_[2] = {nullptr, nullptr};
-  const VolumeShape* shapes_[2] = {nullptr, nullptr};
-  VolumeMemo<S> memo_;
+  PairVolumes<S> volumes_;
   float rate_;
 };
 

@@ -101,12 +101,12 @@ bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
   const auto* theirs =
       other == &manager ? cube : dynamic_cast<const CubeCollisionManager<S>*>(other);
   if (other == nullptr) {
-    stream.useVolumes(mine.spheres(), mine.shapes(), nullptr, nullptr);
+    stream.volumes().use(mine.spheres(), mine.shapes(), nullptr, nullptr);
   } else if (theirs != nullptr) {
     const auto& table = detail::coreOf(*theirs).table();
-    stream.useVolumes(mine.spheres(), mine.shapes(), table.spheres(), table.shapes());
+    stream.volumes().use(mine.spheres(), mine.shapes(), table.spheres(), table.shapes());
   } else {
-    stream.useVolumes(mine.spheres(), mine.shapes(), nullptr, nullptr);
+    stream.volumes().use(mine.spheres(), mine.shapes(), nullptr, nullptr);
   }
   run(*cube, static_cast<void*>(&stream), fn);
   return true;
