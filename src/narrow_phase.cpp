@@ -559,7 +559,6 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
   return pushJudged(a, b, &va, &vb);
 }
 
-
 template <typename S>
 bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
                                   const Volumes* va, const Volumes* vb) {
@@ -600,20 +599,18 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   }
   // In chunks: the cache is looked up here (and the cull on volumes runs here), the rest of the
   // cull and FCL run in the chunk, on the threads.
-  if (va != nullptr) {
-    const Answer kind = cull();
-    // Proved apart by the volumes: nothing to merge, nothing to store, so no place in a chunk.
-    if (kind == Answer::kApart) {
-      count(stats_, kind);
-      return done_;
-    }
+  const Answer judged = va != nullptr ? cull() : Answer::kComputed;
+  // Proved apart by the volumes: nothing to merge, nothing to store, so no place in a chunk.
+  if (judged == Answer::kApart) {
+    count(stats_, judged);
+    return done_;
   }
   const std::size_t i = chunk_.size();
   chunk_.emplace_back(a, b);
   if (slots_.size() <= i) slots_.resize(i + 1);
   Slot& s = slots_[i];
   s.judged = va != nullptr;
-  s.kind = s.judged ? cull() : Answer::kComputed;
+  s.kind = judged;
   s.cached = cache_ != nullptr && s.kind == Answer::kComputed ? cache_->collide.find(*cache_, a, b)
                                                               : nullptr;
   if (s.cached != nullptr) s.kind = Answer::kCached;

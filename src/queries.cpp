@@ -73,12 +73,7 @@ struct CountedCollide {
   }
 };
 
-// Requests whose costs or cached GJK guess travel from pair to pair through the one result run
-// the default callback, which accumulates as FCL does. Others run the pipeline, with the same
-// answer.
-// The stream's walk through a cube manager: with ids, so that the cull reads the object tables'
-// volumes. False (nothing done) for any other kind of manager, or one without volumes
-// (Config::tight_volumes off).
+// The stream's callbacks for walks that give ids.
 template <typename S>
 detail::CollideFn<S> collideIds() {
   return detail::CollideFn<S>(&detail::CollideStream<S>::callbackWithIds);
@@ -88,30 +83,32 @@ detail::DistanceFn<S> distanceIds() {
   return detail::DistanceFn<S>(&detail::DistanceSearch<S>::callbackWithIds);
 }
 
+// The stream's walk through a cube manager: with ids, so that the cull reads the object tables'
+// volumes (a table too small to keep them, kVolumeMinObjects, leaves its pairs to the cull from
+// the objects). False (nothing done) for any other kind of manager, or with
+// Config::tight_volumes off.
 template <typename S, class Stream, class Fn, class Run>
 bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
                  const fcl::BroadPhaseCollisionManager<S>* other, Stream& stream, Fn fn,
                  Run&& run) {
   const auto* cube = dynamic_cast<const CubeCollisionManager<S>*>(&manager);
   if (cube == nullptr) return false;
-  const auto& mine = detail::coreOf(*cube).table();
-  // Without volumes kept (Config::tight_volumes off): the cull from the objects, as for any
-  // manager. A manager too small to keep them (kVolumeMinObjects) gets them built per query.
   if (!detail::coreOf(*cube).config().tight_volumes) return false;
+  const auto& mine = detail::coreOf(*cube).table();
+  // Side b: the same table (self), another cube manager's, or objects of no table (ids kNone).
   const auto* theirs =
       other == &manager ? cube : dynamic_cast<const CubeCollisionManager<S>*>(other);
-  if (other == nullptr) {
-    stream.volumes().use(mine.spheres(), mine.shapes(), nullptr, nullptr);
-  } else if (theirs != nullptr) {
-    const auto& table = detail::coreOf(*theirs).table();
-    stream.volumes().use(mine.spheres(), mine.shapes(), table.spheres(), table.shapes());
-  } else {
-    stream.volumes().use(mine.spheres(), mine.shapes(), nullptr, nullptr);
-  }
+  const auto* table_b = theirs != nullptr ? &detail::coreOf(*theirs).table() : nullptr;
+  stream.volumes().use(mine.spheres(), mine.shapes(),
+                       table_b != nullptr ? table_b->spheres() : nullptr,
+                       table_b != nullptr ? table_b->shapes() : nullptr);
   run(*cube, static_cast<void*>(&stream), fn);
   return true;
 }
 
+// Requests whose costs or cached GJK guess travel from pair to pair through the one result run
+// the default callback, which accumulates as FCL does. Others run the pipeline, with the same
+// answer: through id_walk where it walks (a cube manager), else through walk.
 template <typename S, class Walk, class IdWalk>
 fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
                                     const NarrowPhaseOptions<S>& options, const Walk& walk,
