@@ -87,7 +87,10 @@ struct NarrowPhaseOptions {
   /// answers its pairs on the calling thread until it has seen 1,024 candidate pairs (an FCL
   /// call on a mesh or an octree counts 64 more), then hands the cull and FCL's calls to the
   /// threads in chunks of at least 128 pairs (a pair with a mesh or an octree counts 64); the
-  /// cache is always looked up on the calling thread. So a small query (most object queries, a
+  /// cache is always looked up on the calling thread. On a CubeCollisionManager that keeps
+  /// per-object volumes (Config::tight_volumes, 256 objects or more) the cull runs on the
+  /// calling thread and only FCL's calls on meshes or octrees count towards the 1,024, so a
+  /// collide among shapes there runs on the calling thread whatever the count. So a small query (most object queries, a
   /// robot against its surroundings) runs on the calling thread as with 1. A collide that stops at
   /// its first contact (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any
   /// count, never more often than on one thread; minimumDistance without a cache runs on the

@@ -43,7 +43,9 @@ std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManage
 /// callback), whatever options.threads is. Stops once the result holds
 /// request.num_max_contacts contacts (unless request.enable_cost): the default request answers
 /// "does anything collide?"; raise num_max_contacts to collect every contact. Requests with
-/// costs or a cached GJK guess run on this thread, without culling or cache.
+/// costs or a cached GJK guess run on this thread, without culling or cache. The cull reads the
+/// per-object volumes of a CubeCollisionManager that keeps them (Config::tight_volumes: as of
+/// its registration or last update()) and builds them from the objects otherwise.
 template <typename S>
 fcl::CollisionResult<S> collideAll(
     const fcl::BroadPhaseCollisionManager<S>& manager,
