@@ -248,9 +248,9 @@ int main(int argc, char** argv) {
       "pipeline: cube::collideAll / cube::minimumDistance (queries.h) on the cube manager: the "
       "same\n"
       "  contacts and distances, with pairs proved apart (or, without contact geometry, touching)\n"
-      "  by tight volumes before FCL, and the hardware's threads for large queries. Use it for\n"
-      "  FCL's default callbacks' answers. Ratios: fcl ms / ms; one run, timings move between "
-      "runs.\n");
+      "  by tight volumes kept per object before FCL, and the hardware's threads where FCL's\n"
+      "  calls on meshes pay for them. Use it for FCL's default callbacks' answers.\n"
+      "  Ratios: fcl ms / ms; one run, timings move between runs.\n");
   std::printf("\n%s\n", all_same ? "All results identical to FCL's."
                                  : "MISMATCH: the cube manager disagrees with FCL.");
   return all_same ? 0 : 1;
