@@ -16,6 +16,7 @@
 #include "cull.h"
 #include "manager_access.h"
 #include "manager_walks.h"
+#include "narrow_phase_stream.h"
 #include "query_guard.h"
 
 namespace cube {
@@ -63,23 +64,38 @@ Box<S> checkedQueryBox(const fcl::CollisionObject<S>* obj, const char* where) {
 using detail::QueryScope;
 using detail::refuseInsideQuery;
 
-// Config::cull_pairs: the user's callback behind the test of the tight volumes. The margin is
-// sized for FCL's default GJK tolerance, the one the user's fcl::collide most likely runs with.
+// Config::cull_pairs: the user's callback behind the test of the tight volumes, read from the
+// object tables where they keep them (Config::tight_volumes), else built from the objects. The
+// margin is sized for FCL's default GJK tolerance, the one the user's fcl::collide most likely
+// runs with.
 template <typename S>
 struct CulledCallback {
   void* data;
   fcl::CollisionCallBack<S> fn;
-  static bool call(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* self) {
-    const auto& c = *static_cast<const CulledCallback*>(self);
-    if (detail::surelyApart(*a, *b, S(1e-6))) return false;
-    return c.fn(a, b, c.data);
+  detail::PairVolumes<S> volumes{};
+  float rate = detail::volumeMarginRate(S(1e-6));
+
+  static bool call(fcl::CollisionObject<S>* a, detail::ObjectId ia, fcl::CollisionObject<S>* b,
+                   detail::ObjectId ib, void* self) {
+    auto& c = *static_cast<CulledCallback*>(self);
+    const detail::VolumeSphere *sa, *sb;
+    const detail::VolumeShape *ha, *hb;
+    const bool apart =
+        c.volumes.of(a, ia, b, ib, sa, ha, sb, hb)
+            ? detail::verdictOf(*sa, *ha, *sb, *hb, c.rate, false) == detail::Verdict::kApart
+            : detail::surelyApart(*a, *b, S(1e-6));
+    return !apart && c.fn(a, b, c.data);
   }
-  // Swaps (cdata, callback) for this wrapper when culling is on (a null callback stays null,
-  // for the query's check).
-  void install(bool on, void*& cdata, fcl::CollisionCallBack<S>& callback) {
-    if (!on || callback == nullptr) return;
+  // The walk's callback: this wrapper, on the tables whose ids the walk gives (side b null:
+  // objects of no table), when culling is on; else the user's (a null one stays null, for the
+  // query's check).
+  detail::CollideFn<S> install(bool on, void*& cdata, const detail::ObjectTable<S>& a,
+                               const detail::ObjectTable<S>* b) {
+    if (!on || fn == nullptr) return detail::CollideFn<S>(fn);
+    volumes.use(a.spheres(), a.shapes(), b != nullptr ? b->spheres() : nullptr,
+                b != nullptr ? b->shapes() : nullptr);
     cdata = this;
-    callback = &CulledCallback::call;
+    return detail::CollideFn<S>(&CulledCallback::call);
   }
 };
 
@@ -268,8 +284,8 @@ template <typename S>
 void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   CulledCallback<S> culled{cdata, callback};
-  culled.install(core_->config().cull_pairs, cdata, callback);
-  runObjectCollide(*core_, obj, cdata, detail::CollideFn<S>(callback), stats);
+  const auto fn = culled.install(core_->config().cull_pairs, cdata, core_->table(), nullptr);
+  runObjectCollide(*core_, obj, cdata, fn, stats);
 }
 
 namespace {
@@ -312,8 +328,9 @@ template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
   CulledCallback<S> culled{cdata, callback};
-  culled.install(core_->config().cull_pairs, cdata, callback);
-  runSelfCollide(*core_, cdata, detail::CollideFn<S>(callback), stats);
+  const auto fn =
+      culled.install(core_->config().cull_pairs, cdata, core_->table(), &core_->table());
+  runSelfCollide(*core_, cdata, fn, stats);
 }
 
 template <typename S>
@@ -375,9 +392,13 @@ void runManagerCollide(const CubeCollisionManager<S>& manager,
 template <typename S>
 void CubeCollisionManager<S>::collide(Base* other_manager, void* cdata,
                                       fcl::CollisionCallBack<S> callback, QueryStats* stats) const {
+  // Side b's ids: this manager's (itself), another cube manager's, or none.
+  const auto* cube =
+      other_manager == this ? this : dynamic_cast<const CubeCollisionManager<S>*>(other_manager);
   CulledCallback<S> culled{cdata, callback};
-  culled.install(core_->config().cull_pairs, cdata, callback);
-  runManagerCollide(*this, other_manager, cdata, detail::CollideFn<S>(callback), stats);
+  const auto fn = culled.install(core_->config().cull_pairs, cdata, core_->table(),
+                                 cube != nullptr ? &detail::coreOf(*cube).table() : nullptr);
+  runManagerCollide(*this, other_manager, cdata, fn, stats);
 }
 
 namespace {
@@ -507,9 +528,10 @@ void collideSelfOnThreadsWithIds(const CubeCollisionManager<S>& manager, void* c
 template <typename S>
 void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
                           fcl::CollisionCallBack<S> callback, int threads) {
+  const Broadphase<S>& core = detail::coreOf(manager);
   CulledCallback<S> culled{cdata, callback};
-  culled.install(detail::coreOf(manager).config().cull_pairs, cdata, callback);
-  collideSelfOnThreadsWithIds(manager, cdata, CollideFn<S>(callback), threads);
+  const auto fn = culled.install(core.config().cull_pairs, cdata, core.table(), &core.table());
+  collideSelfOnThreadsWithIds(manager, cdata, fn, threads);
 }
 
 template <typename S>

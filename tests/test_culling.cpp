@@ -447,11 +447,9 @@ struct UserNarrow {
   }
 };
 
-// Config::cull_pairs: self, object and manager-against-manager collides give a user callback
-// that runs fcl::collide the same contacts as without the knob and as fcl::NaiveCollisionManager,
-// in fewer calls; without it the callback sees every pair whose boxes overlap.
-TYPED_TEST(Culling, CullPairsKnobKeepsANarrowPhaseCallbacksContacts) {
-  using S = TypeParam;
+template <typename S>
+void cullPairsKnob(std::size_t mine_n, std::size_t n) {
+  SCOPED_TRACE(std::to_string(n) + " objects");
   auto kinds = allKinds<S>();
   kinds.erase(std::remove_if(kinds.begin(), kinds.end(),
                              [](const auto& k) {
@@ -460,16 +458,19 @@ TYPED_TEST(Culling, CullPairsKnobKeepsANarrowPhaseCallbacksContacts) {
                              }),
               kinds.end());  // never culled, they would only dilute the count
   std::mt19937 rng(21);
-  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  // The density of 200 objects in a cube of side 6.
+  const double half = 3.0 * std::cbrt(double(n) / 200.0);
+  std::uniform_real_distribution<double> u(-half, half);
   std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
-  for (int i = 0; i < 200; ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
-        kinds[std::size_t(i) % kinds.size()].second, randomRotation<S>(rng),
+        kinds[i % kinds.size()].second, randomRotation<S>(rng),
         fcl::Vector3<S>(u(rng), u(rng), u(rng))));
     objs.back()->computeAABB();
   }
   std::vector<fcl::CollisionObject<S>*> mine, theirs;
-  for (std::size_t i = 0; i < objs.size(); ++i) (i < 170 ? mine : theirs).push_back(objs[i].get());
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    (i < mine_n ? mine : theirs).push_back(objs[i].get());
   fcl::CollisionObject<S>* query = theirs.back();
   theirs.pop_back();
   cube::Config on;
@@ -503,6 +504,16 @@ TYPED_TEST(Culling, CullPairsKnobKeepsANarrowPhaseCallbacksContacts) {
   on_m.collide(&other, &mb, &UserNarrow<S>::fn);
   EXPECT_EQ(mb.result.numContacts(), ma.result.numContacts());
   EXPECT_LT(mb.calls, ma.calls);
+}
+
+// Config::cull_pairs: self, object and manager-against-manager collides give a user callback
+// that runs fcl::collide the same contacts as without the knob and as fcl::NaiveCollisionManager,
+// in fewer calls; without it the callback sees every pair whose boxes overlap. Managers of 170
+// and 30 objects (volumes built from the objects) and of 350 and 350 (read from the tables,
+// kVolumeMinObjects).
+TYPED_TEST(Culling, CullPairsKnobKeepsANarrowPhaseCallbacksContacts) {
+  for (const std::size_t mine_n : {std::size_t(170), std::size_t(350)})
+    cullPairsKnob<TypeParam>(mine_n, mine_n == 170 ? 200 : 700);
 }
 
 }  // namespace

@@ -88,28 +88,28 @@ struct Config {
   /// fcl::collide with gjk_tolerance <= 1e-6 and keeps only what collides: its results stay the
   /// same and it runs for fewer pairs. Leave it off if your callback counts or records
   /// broadphase pairs, grows the AABBs for a contact margin (pairs near but not touching would
-  /// be lost) or asks for costs. Planes, halfspaces and octrees are never left out. Trade-off:
+  /// be lost) or asks for costs. Planes, halfspaces and octrees are never left out. The volumes
+  /// come from the per-object records where the manager keeps them (tight_volumes). Trade-off:
   /// a few dozen flops per pair whose boxes overlap, against a narrow-phase call of about a
   /// microsecond or more for each pair proved apart (three in four of the boxes' pairs in the
   /// benchmark's scenes). Distance queries are not affected.
   bool cull_pairs = false;
 
   /// Keeps each object's tight volumes (bounding sphere, oriented box of its local AABB, a ball
-  /// inside primitives) in float records per object, once the manager holds 256 objects (a
-  /// smaller one, such as a robot's links, which move at every step, gets them built during each
-  /// query instead, each object at most once), so that the pipeline of queries.h (collideAll,
-  /// minimumDistance) bounds a candidate pair by reading two records instead of two FCL objects
-  /// and their geometries. Registration and update(obj) / update(objects) build them from the
-  /// geometry and the transform; update() places them anew for each object whose box changed
-  /// (reading its geometry again only if its local AABB changed) or whose transform no longer
-  /// rounds to the same floats (a rotation may leave FCL's box as it was). So move objects,
-  /// update, then query, as for the boxes; and after changing a geometry in place in a way that
-  /// leaves its local AABB as it was (another radius of a capsule of the same box, the cost
-  /// density), name its object to update(obj). Trade-off: see the README's "Measured" under
-  /// the pipeline (update() reads every object's transform; registration builds the records;
+  /// inside primitives) in float records per object, once the manager holds 256 objects (the
+  /// pairs of a smaller one, such as a robot's links, which move at every step, are culled from
+  /// the objects, as with this off), so that the pipeline of queries.h (collideAll,
+  /// minimumDistance) and Config::cull_pairs bound a candidate pair by reading two records
+  /// instead of two FCL objects and their geometries. Registration and update(obj) /
+  /// update(objects) build them from the geometry and the transform; update() places them anew for
+  /// each object whose box changed (reading its geometry again only if its local AABB changed) or
+  /// whose transform no longer rounds to the same floats (a rotation may leave FCL's box as it
+  /// was). So move objects, update, then query, as for the boxes; and after changing a geometry in
+  /// place in a way that leaves its local AABB as it was (another radius of a capsule of the same
+  /// box, the cost density), name its object to update(obj). Trade-off: see the README's "Measured"
+  /// under the pipeline (update() reads every object's transform; registration builds the records;
   /// 136 bytes an object), against a cull of about 19 ns a candidate pair instead of 85 to 200.
-  /// Off: the pipeline culls from the objects, with the same answers. The callbacks given to
-  /// collide() never see it (Config::cull_pairs culls from the objects).
+  /// Off: the pipeline (and Config::cull_pairs) culls from the objects, with the same answers.
   bool tight_volumes = true;
 
   /// Hands every pair over in an order that does not depend on the tree: in self queries as
