@@ -205,8 +205,7 @@ bool localInscribedBall(const fcl::CollisionGeometry<S>& g, double& z, double& r
   return std::isfinite(r) && r > 0;
 }
 
-}  // namespace
-
+// The geometry's part of an object's records (VolumeSource).
 template <typename S>
 void localVolume(const fcl::CollisionGeometry<S>* g, VolumeSource& local) {
   local = VolumeSource{};
@@ -241,6 +240,7 @@ void localVolume(const fcl::CollisionGeometry<S>* g, VolumeSource& local) {
   }
 }
 
+// The records from the geometry's part and the object's transform.
 template <typename S>
 void placeVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSphere& sphere,
                  VolumeShape& shape) {
@@ -293,6 +293,8 @@ void placeVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSp
       std::isfinite(shape.e[1]) && std::isfinite(shape.e[2]))
     sphere.r = rf;
 }
+
+}  // namespace
 
 template <typename S>
 void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape) {

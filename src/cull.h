@@ -177,34 +177,15 @@ inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, con
 }
 
 /// verdict() from two objects' records (buildVolume), for a request whose tolerance gives
-/// `rate` (volumeMarginRate): kApart when the spheres' gap, a sphere's gap to the other's box or
-/// the boxes' separating-axis gap beats rate x (1 + the larger scale); kTouching, with `prove`,
-/// when the inscribed balls overlap by more than rate x (1 + scale + both inner radii); else
-/// kUnknown, and always kUnknown for a record without volumes. Inline: the stream calls it for
-/// every candidate pair.
+/// `rate` (volumeMarginRate): kApart when separationOf's bound (enough 0) beats its margin;
+/// kTouching, with `prove`, when the inscribed balls overlap by more than rate x (1 + scale + both
+/// inner radii); else kUnknown, and always kUnknown for a record without volumes. Inline: the
+/// stream calls it for every candidate pair.
 inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
                          const VolumeShape& hb, float rate, bool prove) {
-  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;
-  const float dx = sb.c[0] - sa.c[0], dy = sb.c[1] - sa.c[1], dz = sb.c[2] - sa.c[2];
-  const float d2 = dx * dx + dy * dy + dz * dz;
-  const float scale = std::max(ha.scale, hb.scale);
-  const float margin = rate * (1.f + scale);
-  const float reach = sa.r + sb.r + margin;
-  if (d2 > reach * reach) return Verdict::kApart;
-  const bool sphere_a = (ha.flags & kVolumeSphere) != 0, sphere_b = (hb.flags & kVolumeSphere) != 0;
-  if (!(sphere_a && sphere_b)) {
-    // Each box holds the ball of its smallest half extent: while those balls overlap beyond the
-    // margin, no separating axis can beat it.
-    const float d = std::sqrt(d2);
-    const float ia = sphere_a ? sa.r : std::min({ha.e[0], ha.e[1], ha.e[2]});
-    const float ib = sphere_b ? sb.r : std::min({hb.e[0], hb.e[1], hb.e[2]});
-    if (d - ia - ib > margin) {
-      const float gap = sphere_a   ? volume_detail::pointBox(sa.c, sb, hb) - sa.r
-                        : sphere_b ? volume_detail::pointBox(sb.c, sa, ha) - sb.r
-                                   : volume_detail::boxGap(sa, ha, sb, hb, margin);
-      if (gap > margin) return Verdict::kApart;
-    }
-  }
+  const VolumeGap gap = separationOf(sa, ha, sb, hb, rate, 0.f);
+  if (gap.lower_bound > gap.margin) return Verdict::kApart;
+  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;  // no volumes: no proof
   if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f) {
     float gap2 = 0.f;
     for (int k = 0; k < 3; ++k) {
@@ -212,6 +193,7 @@ inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const Vo
           (sb.c[k] + hb.inner_z * hb.R[3 * k + 2]) - (sa.c[k] + ha.inner_z * ha.R[3 * k + 2]);
       gap2 += g * g;
     }
+    const float scale = std::max(ha.scale, hb.scale);
     const float reach_in = ha.inner_r + hb.inner_r - rate * (1.f + scale + ha.inner_r + hb.inner_r);
     if (reach_in > 0.f && gap2 < reach_in * reach_in) return Verdict::kTouching;
   }
