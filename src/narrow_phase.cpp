@@ -16,6 +16,7 @@
 #include "cull.h"
 #include "fcl_narrow.h"
 #include "narrow_phase_stream.h"
+#include "pipeline/parallel_for.h"
 
 namespace cube {
 
@@ -52,38 +53,6 @@ constexpr std::size_t kFirstChunkWork = 256;
 constexpr std::size_t kMaxChunkWork = 4096;
 // forEachPair runs a caller's function of unknown cost: threads from this many pairs on.
 constexpr std::size_t kParallelMinPairs = 4;
-
-// Runs body(i) for every i in [0, n) on `threads` threads. An exception stops nothing: the
-// first one by index is rethrown once every call has run.
-template <class Body>
-void parallelFor(std::size_t n, int threads, const Body& body) {
-  std::vector<std::exception_ptr> errors;
-  const auto guarded = [&](std::size_t i) {
-    try {
-      body(i);
-    } catch (...) {
-#pragma omp critical(cube_parallel_for_errors)
-      {
-        if (errors.empty()) errors.resize(n);
-        errors[i] = std::current_exception();
-      }
-    }
-  };
-  if (threads <= 1 || n < 2) {
-    for (std::size_t i = 0; i < n; ++i) guarded(i);
-  } else {
-    // Dynamic chunks: narrow-phase costs differ by orders of magnitude between pairs. About 8
-    // chunks a thread, at most 32 items each: a chunk of 2 cost about as much to hand out as
-    // culling its pairs (clustered 10,000-object self-collide: 1.17x on two threads).
-    const int grain = static_cast<int>(
-        std::clamp<std::size_t>(n / (8 * static_cast<std::size_t>(threads)), 1, 32));
-#pragma omp parallel for schedule(dynamic, grain) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-      guarded(static_cast<std::size_t>(i));
-  }
-  for (const std::exception_ptr& e : errors)
-    if (e) std::rethrow_exception(e);
-}
 
 // A pair list from the caller: a null object would crash inside FCL, so it is refused first.
 template <typename S>
@@ -739,7 +708,7 @@ void CollideStream<S>::flush() {
     };
     // Threads only for work that pays for waking them (a region costs about 1 us here when
     // the other core is idle, tens of us when it is busy).
-    parallelFor(pending_.size(), pending_work_ >= kParallelMinWork ? threads_ : 1, run);
+    detail::parallelFor(pending_.size(), pending_work_ >= kParallelMinWork ? threads_ : 1, run);
     for (std::size_t i = 0; i < n; ++i) {
       Slot& s = slots_[i];
       count(stats_, s.kind);
@@ -868,7 +837,7 @@ void DistanceSearch<S>::flush() {
         cache_ ? cache_->distance.find(*cache_, batch_[i].first, batch_[i].second) : nullptr;
     if (slots_[i].cached == nullptr) work += workOf(batch_[i]);
   }
-  parallelFor(n, work >= kParallelMinWork ? threads_ : 1, [&](std::size_t i) {
+  detail::parallelFor(n, work >= kParallelMinWork ? threads_ : 1, [&](std::size_t i) {
     Slot& s = slots_[i];
     const auto [a, b] = batch_[i];
     if (s.cached == nullptr) {
@@ -944,7 +913,7 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
     work += detail::workOf(pairs[i]);
   }
   const int threads = work >= kParallelMinWork ? resolveThreads(options.threads) : 1;
-  parallelFor(rest.size(), threads, [&](std::size_t k) {
+  detail::parallelFor(rest.size(), threads, [&](std::size_t k) {
     const std::size_t i = rest[k];
     kind[i] = detail::judge(request, pairs[i].first, pairs[i].second);
     if (kind[i] == detail::Answer::kComputed)
@@ -996,7 +965,7 @@ void forEachPair(
     int threads) {
   checkPairs(pairs, "forEachPair");
   if (!fn) throw std::invalid_argument("cube::forEachPair: empty function");
-  parallelFor(pairs.size(), pairs.size() >= kParallelMinPairs ? resolveThreads(threads) : 1,
+  detail::parallelFor(pairs.size(), pairs.size() >= kParallelMinPairs ? resolveThreads(threads) : 1,
               [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
 }
 

@@ -338,21 +338,48 @@ PairGate<S> Broadphase<S>::crossGate(const Broadphase* other, const Object* obj)
 // calls back in the order of registration numbers.
 
 template <typename S>
+PairGate<S> Broadphase<S>::probeGate(const Filter& bits) const {
+  PairGate<S> g;
+  g.filters_a = table_.filters();
+  g.groups_a = table_.groupFilters();
+  g.query = bits;
+  g.keep = keep_ ? &keep_ : nullptr;
+  return g;
+}
+
+template <typename S>
 bool Broadphase<S>::collide(Object* obj, const Box<S>& box, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
-  const SingleView<S> query(obj, queryBox(obj, box));
+  if (!gated()) return collideQuery(obj, queryBox(obj, box), nullptr, data, fn, stats);
+  const PairGate<S> gate = crossGate(nullptr, obj);
+  return collideQuery(obj, queryBox(obj, box), &gate, data, fn, stats);
+}
+
+template <typename S>
+bool Broadphase<S>::collide(const Probe& probe, void* data, CollideFn<S> fn,
+                            QueryStats* stats) const {
+  const Box<S> box = grownBy(probe.box, probe.margin);
+  if (!gated() && probe.bits.isDefault())
+    return collideQuery(probe.obj, box, nullptr, data, fn, stats);
+  const PairGate<S> gate = probeGate(probe.bits);
+  return collideQuery(probe.obj, box, &gate, data, fn, stats);
+}
+
+template <typename S>
+bool Broadphase<S>::collideQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate,
+                                 void* data, CollideFn<S> fn, QueryStats* stats) const {
+  const SingleView<S> query(obj, box);
   // forObjectViews' order by hand: building the Scene costs a measurable share of a short query.
-  if (!gated())
+  if (gate == nullptr)
     return collideObject(tree_.view(), query, data, fn, stats) ||
            (!unbounded_.empty() && collideObject(unboundedView(), query, data, fn, stats));
-  const PairGate<S> gate = crossGate(nullptr, obj);
   if (!config_.canonical_pairs)
     return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
-      return collidePairs(a, b, false, data, fn, stats, &gate);
+      return collidePairs(a, b, false, data, fn, stats, gate);
     });
   std::vector<std::uint64_t> found;
   forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
-    collectPairs(a, b, false, 0, found, &gate);
+    collectPairs(a, b, false, 0, found, gate);
     return false;
   });
   const std::uint32_t* seq = table_.seqs();
@@ -474,11 +501,25 @@ bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn
 template <typename S>
 bool Broadphase<S>::distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
-  const SingleView<S> query(obj, queryBox(obj, box));
   const PairGate<S> gate = crossGate(nullptr, obj);
-  const PairGate<S>* g = gated() ? &gate : nullptr;
+  return distanceQuery(obj, queryBox(obj, box), gated() ? &gate : nullptr, data, fn, best, stats);
+}
+
+template <typename S>
+bool Broadphase<S>::distance(const Probe& probe, void* data, DistanceFn<S> fn, S& best,
+                             QueryStats* stats) const {
+  const PairGate<S> gate = probeGate(probe.bits);
+  const bool gate_on = gated() || !probe.bits.isDefault();
+  return distanceQuery(probe.obj, grownBy(probe.box, probe.margin), gate_on ? &gate : nullptr,
+                       data, fn, best, stats);
+}
+
+template <typename S>
+bool Broadphase<S>::distanceQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate,
+                                  void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const {
+  const SingleView<S> query(obj, box);
   return forObjectViews(scene(), query.view(), [&](const View<S>& a, const View<S>& b, bool) {
-    return distancePairs(a, b, false, data, fn, best, stats, g);
+    return distancePairs(a, b, false, data, fn, best, stats, gate);
   });
 }
 

@@ -81,12 +81,29 @@ class Broadphase {
   /// objects not registered here, such as query objects).
   S margin(const Object* obj) const;
   S defaultMargin() const { return default_margin_; }
+  /// The margin of a registered id (its own, else the manager-wide one): no lookup.
+  S marginOf(ObjectId id) const {
+    const S own = table_.ownMargin(id);
+    return own < S(0) ? default_margin_ : own;
+  }
 
   // Queries: const, no state touched, safe from any number of threads at once.
 
+  /// A query by an object of no table (a planner's link): the object handed to callbacks and to
+  /// the pair predicate, its box (FCL's, or any box that holds it), the margin the core grows it
+  /// by, and its filter bits.
+  struct Probe {
+    Object* obj;
+    Box<S> box;
+    S margin;
+    Filter bits;
+  };
   /// Objects whose box overlaps `box`: fn(managed, obj, data).
   bool collide(Object* obj, const Box<S>& box, void* data, CollideFn<S> fn,
                QueryStats* stats) const;
+  /// Managed objects whose box overlaps the probe's grown box and whose bits and the predicate
+  /// let them meet it: fn(managed, probe.obj, data), the probe's id kNone.
+  bool collide(const Probe& probe, void* data, CollideFn<S> fn, QueryStats* stats) const;
   /// Every overlapping pair of managed objects; from the pair list when it is valid.
   bool collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) const;
   /// collideSelf with the walk of a large scene cut into tasks (SplitWalk) that `threads` OpenMP
@@ -105,6 +122,9 @@ class Broadphase {
   bool collide(const Broadphase& other, void* data, CollideFn<S> fn, QueryStats* stats) const;
   /// Branch and bound from `best` (lowered by fn) over the objects near `box`.
   bool distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
+                QueryStats* stats) const;
+  /// The same from a probe (its grown box, its bits).
+  bool distance(const Probe& probe, void* data, DistanceFn<S> fn, S& best,
                 QueryStats* stats) const;
   bool distanceSelf(void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const;
   bool distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
@@ -159,7 +179,9 @@ class Broadphase {
   /// for every object.
   Box<S> grown(const Box<S>& box, ObjectId id) const {
     const S own = id == kNone ? S(-1) : table_.ownMargin(id);
-    const S m = own < S(0) ? default_margin_ : own;
+    return grownBy(box, own < S(0) ? default_margin_ : own);
+  }
+  static Box<S> grownBy(const Box<S>& box, S m) {
     if (m == S(0)) return box;
     Box<S> g;
     for (int k = 0; k < 3; ++k) {
@@ -179,6 +201,13 @@ class Broadphase {
   /// The gate of a query of this manager's objects (side a) against those of `other` (null: an
   /// object query, whose object `obj` is looked up here for its bits).
   PairGate<S> crossGate(const Broadphase* other, const Object* obj) const;
+  /// The gate of a query by an object with filter bits `bits`.
+  PairGate<S> probeGate(const Filter& bits) const;
+  /// An object query from its grown box and its gate (null: none).
+  bool collideQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate, void* data,
+                    CollideFn<S> fn, QueryStats* stats) const;
+  bool distanceQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate, void* data,
+                     DistanceFn<S> fn, S& best, QueryStats* stats) const;
   /// After motions: rebuild if due, then, with `keep`, keep the pair list (moved_ holds the ids
   /// whose box changed; `was_valid` whether the list was valid before).
   void afterMotion(bool keep, bool was_valid);

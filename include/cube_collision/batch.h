@@ -1,0 +1,155 @@
+#pragma once
+
+// Batched checks for sampling planners: many states of one robot (a BodySet of links) against a
+// static world held by a CubeCollisionManager, in one call, on several threads. Each state is
+// given as the links' world poses, as forward kinematics produces them: no fcl::CollisionObject
+// per state, no computeAABB() and no update() by the caller. Every contact is decided by FCL's
+// narrow phase (fcl::collide, and fcl::distance for margins and clearance), after the broadphase
+// of the world's cubes and the cull of the pipeline (callbacks.h): the answers are those of
+// checking every link against every world object and every non-allowed pair of links with FCL.
+
+#include <fcl/geometry/collision_geometry.h>
+#include <fcl/common/types.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "cube_collision/cube_collision_manager.h"
+
+namespace cube {
+namespace detail {
+struct BodyAccess;
+}
+
+/// "No such state, link or object".
+inline constexpr std::size_t kNoIndex = std::numeric_limits<std::size_t>::max();
+
+/// The moving bodies of the checks: a robot's links, or any group of objects that move together.
+/// Built once per robot; per link it keeps the geometry and what every check needs from it (the
+/// local box, the cull's volumes). Not changed by the checks: any number of threads may check
+/// with one BodySet at once. Copying shares the geometries.
+template <typename S>
+class BodySet {
+ public:
+  BodySet();
+  ~BodySet();
+  BodySet(const BodySet& other);
+  BodySet& operator=(const BodySet& other);
+  BodySet(BodySet&&) noexcept;
+  BodySet& operator=(BodySet&&) noexcept;
+
+  /// Adds a link and returns its index (0, 1, ... in the order of the calls). `margin` (>= 0):
+  /// the link counts as touching whatever lies within margin + that object's margin
+  /// (CubeCollisionManager::setMargin; a link's for two links). `category` / `mask`: filter bits
+  /// against the world's objects, as CubeCollisionManager::setFilter. Throws
+  /// std::invalid_argument, adding nothing, for a null geometry, a plane or halfspace (a link
+  /// must be bounded), a geometry whose local AABB is not finite (computeLocalAABB() is called
+  /// here), or a negative or non-finite margin.
+  std::size_t addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geometry, S margin = 0,
+                      std::uint64_t category = 1, std::uint64_t mask = ~std::uint64_t(0));
+  /// Links i and j are never checked against each other (adjacent links, say). Throws
+  /// std::invalid_argument, changing nothing, for an unknown index or i == j.
+  void allowPair(std::size_t i, std::size_t j);
+  /// Whether links i and j are checked against each other (i != j, both known).
+  bool checked(std::size_t i, std::size_t j) const;
+  /// The number of links.
+  std::size_t size() const;
+  /// Link i's geometry and margin (i < size()).
+  const std::shared_ptr<fcl::CollisionGeometry<S>>& geometry(std::size_t i) const;
+  S margin(std::size_t i) const;
+
+  struct Links;  ///< the data, private to the library
+
+ private:
+  friend struct detail::BodyAccess;
+  std::unique_ptr<Links> links_;
+};
+
+/// What checkStates and checkMotion compute, beyond "colliding or not".
+struct BatchOptions {
+  /// Also check the links against each other (pairs not allowed by BodySet::allowPair).
+  bool self_collision = false;
+  /// Report each colliding state's first pair (StateResult): the pair whose lower link index is
+  /// smallest; for that link, world objects (lowest registration number first) before links
+  /// (lowest index first). Costs the narrow phase of every candidate of that link.
+  bool first_pair = false;
+  /// Report each free state's clearance (StateResult::clearance).
+  bool clearance = false;
+  /// Threads (OpenMP) across states; 0: the hardware's (OMP_NUM_THREADS). Answers do not depend
+  /// on it. A call with one state runs on the calling thread.
+  int threads = 0;
+};
+
+/// One state's answer.
+template <typename S>
+struct StateResult {
+  bool colliding = false;
+  /// With BatchOptions::first_pair and a colliding state: the pair's lower link, and its other
+  /// side: a world object (`object`, with other_link == kNoIndex) or a link (`other_link`,
+  /// with object == nullptr). Otherwise kNoIndex, nullptr, kNoIndex.
+  std::size_t link = kNoIndex;
+  fcl::CollisionObject<S>* object = nullptr;
+  std::size_t other_link = kNoIndex;
+  /// With BatchOptions::clearance: for a free state, the smallest fcl::distance between a link
+  /// and a world object it may meet (filter bits) or between two checked links (with
+  /// self_collision); a pair with a plane, halfspace or octree, whose distance FCL 0.7 does not
+  /// answer, counts the distance between the two AABBs (the link's exact box of its local AABB
+  /// posed, the object's getAABB()). Margins do not lower it. 0 for a colliding state; the
+  /// largest value of S when nothing can be met. Without the option: the largest value of S.
+  S clearance = std::numeric_limits<S>::max();
+};
+
+/// Checks `states` states of `body` against the objects of `world`: pose k * body.size() + l
+/// is link l's world pose in state k (a contiguous array of states, each the links' poses in
+/// link order). A state collides when FCL reports a contact between one of its links and a world
+/// object whose filter bits and the world's pair predicate (setPairFilter, asked as
+/// (world object, link object)) let them meet, or (self_collision) between two checked links,
+/// margins included. Returns one StateResult per state, in state order. `world` is only read:
+/// other threads may query it meanwhile (not mutate it); a pair predicate that mutates it gets
+/// std::logic_error, as from its other queries. Throws std::invalid_argument, before any work, for
+/// an empty body set, a pose array of the wrong size (poses.size() != states * body.size()) or a
+/// pose with a NaN or infinite entry.
+template <typename S>
+std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
+                                        const BodySet<S>& body,
+                                        const std::vector<fcl::Transform3<S>>& poses,
+                                        const BatchOptions& options = BatchOptions());
+
+/// The order in which checkMotion visits an edge's states.
+enum class MotionOrder {
+  /// State 0, 1, 2, ...: the answer is the first colliding state along the path.
+  path,
+  /// OMPL's DiscreteMotionValidator::checkMotion(s1, s2) order: the last state, then the middle of
+  /// each interval left, widest first (ties to the earlier interval). Finds a collision after
+  /// fewer checks on average when obstacles lie inside an edge rather than near its start (the
+  /// common case for a planner's long edges); for an edge that starts inside an obstacle `path`
+  /// finds it first. The answer is the first colliding state in this order.
+  bisection,
+};
+
+/// Checks the states of edges: edge e holds states edge_starts[e] .. edge_starts[e + 1] - 1
+/// (the last edge up to the last state) of `poses` (laid out as for checkStates). Returns, per
+/// edge, the index within the edge of its first colliding state in `order`, or kNoIndex if all
+/// are free: what checking the edge's states one by one in that order and stopping at the first
+/// collision gives, whatever the thread count. Once an edge's colliding state is known, its
+/// states after it in that order are not started. Only self_collision and threads of `options`
+/// apply. Throws std::invalid_argument as checkStates, and for edge_starts that do not start at
+/// 0 or do not increase strictly within the states.
+template <typename S>
+std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                                      const std::vector<fcl::Transform3<S>>& poses,
+                                      const std::vector<std::size_t>& edge_starts,
+                                      MotionOrder order = MotionOrder::path,
+                                      const BatchOptions& options = BatchOptions());
+
+/// checkMotions for one edge made of all the states of `poses`.
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        const std::vector<fcl::Transform3<S>>& poses,
+                        MotionOrder order = MotionOrder::path,
+                        const BatchOptions& options = BatchOptions());
+
+}  // namespace cube

@@ -1,0 +1,584 @@
+// Batched state and motion checks (include/cube_collision/batch.h): a visitor of the world's
+// core through its probe queries (Broadphase::collide / distance with a Probe), the pipeline's
+// cull on the per-object records, then FCL's narrow phase per pair.
+
+#include "cube_collision/batch.h"
+
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/collision_result.h>
+#include <fcl/narrowphase/distance_request.h>
+#include <fcl/narrowphase/distance_result.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <deque>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "cube_collision/narrow_phase.h"
+#include "cull.h"
+#include "fcl_narrow.h"
+#include "manager_access.h"
+#include "pipeline/parallel_for.h"
+#include "query_guard.h"
+
+namespace cube {
+
+template <typename S>
+struct BodySet<S>::Links {
+  std::vector<std::shared_ptr<fcl::CollisionGeometry<S>>> geometry;
+  std::vector<S> margin;
+  std::vector<detail::Filter> bits;
+  std::vector<fcl::Vector3<S>> mid, half;     // the local AABB: centre, half extents
+  std::vector<detail::VolumeSource> source;   // the cull's records' geometry part
+  std::vector<std::uint8_t> allowed;          // size() x size(): 1 = never checked
+  std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
+                                               // [after_at[i], after_at[i + 1]), ascending
+  bool any_margin = false;
+
+  std::size_t size() const { return geometry.size(); }
+  void listPairs() {
+    const std::size_t n = size();
+    after.clear();
+    after_at.assign(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      after_at[i] = std::uint32_t(after.size());
+      for (std::size_t j = i + 1; j < n; ++j)
+        if (!allowed[i * n + j]) after.push_back(std::uint32_t(j));
+    }
+    after_at[n] = std::uint32_t(after.size());
+  }
+};
+
+namespace detail {
+
+struct BodyAccess {
+  template <typename S>
+  static const typename BodySet<S>::Links& links(const BodySet<S>& body) {
+    return *body.links_;
+  }
+};
+
+}  // namespace detail
+
+namespace {
+
+[[noreturn]] void fail(const char* where, const std::string& what) {
+  throw std::invalid_argument(std::string("cube::") + where + ": " + what);
+}
+
+}  // namespace
+
+template <typename S>
+BodySet<S>::BodySet() : links_(std::make_unique<Links>()) {
+  links_->listPairs();
+}
+template <typename S>
+BodySet<S>::~BodySet() = default;
+template <typename S>
+BodySet<S>::BodySet(const BodySet& other) : links_(std::make_unique<Links>(*other.links_)) {}
+template <typename S>
+BodySet<S>& BodySet<S>::operator=(const BodySet& other) {
+  if (this != &other) links_ = std::make_unique<Links>(*other.links_);
+  return *this;
+}
+template <typename S>
+BodySet<S>::BodySet(BodySet&& other) noexcept : links_(std::move(other.links_)) {
+  other.links_ = nullptr;
+}
+template <typename S>
+BodySet<S>& BodySet<S>::operator=(BodySet&& other) noexcept {
+  std::swap(links_, other.links_);
+  return *this;
+}
+
+template <typename S>
+std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geometry, S margin,
+                                std::uint64_t category, std::uint64_t mask) {
+  if (links_ == nullptr) links_ = std::make_unique<Links>();  // a moved-from set
+  const char* where = "BodySet::addLink";
+  if (geometry == nullptr) fail(where, "null geometry");
+  const fcl::NODE_TYPE type = geometry->getNodeType();
+  if (type == fcl::GEOM_PLANE || type == fcl::GEOM_HALFSPACE)
+    fail(where, "a plane or halfspace cannot be a link (unbounded)");
+  if (!(margin >= S(0)) || !std::isfinite(margin))
+    fail(where, "the margin must be finite and >= 0");
+  geometry->computeLocalAABB();
+  const fcl::AABB<S>& local = geometry->aabb_local;
+  if (!local.min_.allFinite() || !local.max_.allFinite() || !(local.min_.array() <= local.max_.array()).all())
+    fail(where, "the geometry's local AABB is not finite");
+  Links& l = *links_;
+  const std::size_t n = l.size();
+  detail::VolumeSource source;
+  detail::VolumeSphere sphere;
+  detail::VolumeShape shape;
+  const fcl::CollisionObject<S> at_origin(geometry);
+  detail::rebuildVolume(at_origin, source, sphere, shape);
+  std::vector<std::uint8_t> allowed((n + 1) * (n + 1), 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) allowed[i * (n + 1) + j] = l.allowed[i * n + j];
+  // Nothing can throw from here on but allocation, before any member changes.
+  l.geometry.reserve(n + 1);
+  l.margin.reserve(n + 1);
+  l.bits.reserve(n + 1);
+  l.mid.reserve(n + 1);
+  l.half.reserve(n + 1);
+  l.source.reserve(n + 1);
+  l.geometry.push_back(std::move(geometry));
+  l.margin.push_back(margin);
+  l.bits.push_back(detail::Filter{category, mask});
+  l.mid.push_back(local.center());
+  l.half.push_back((local.max_ - local.min_) / S(2));
+  l.source.push_back(source);
+  l.allowed = std::move(allowed);
+  l.any_margin = l.any_margin || margin > S(0);
+  l.listPairs();
+  return n;
+}
+
+template <typename S>
+void BodySet<S>::allowPair(std::size_t i, std::size_t j) {
+  const std::size_t n = size();
+  if (i >= n || j >= n) fail("BodySet::allowPair", "unknown link index");
+  if (i == j) fail("BodySet::allowPair", "a link is never checked against itself");
+  links_->allowed[i * n + j] = links_->allowed[j * n + i] = 1;
+  links_->listPairs();
+}
+
+template <typename S>
+bool BodySet<S>::checked(std::size_t i, std::size_t j) const {
+  const std::size_t n = size();
+  return i < n && j < n && i != j && !links_->allowed[i * n + j];
+}
+
+template <typename S>
+std::size_t BodySet<S>::size() const {
+  return links_ == nullptr ? 0 : links_->size();
+}
+
+template <typename S>
+const std::shared_ptr<fcl::CollisionGeometry<S>>& BodySet<S>::geometry(std::size_t i) const {
+  return links_->geometry.at(i);
+}
+
+template <typename S>
+S BodySet<S>::margin(std::size_t i) const {
+  return links_->margin.at(i);
+}
+
+namespace detail {
+namespace {
+
+// A link's object in one thread's scratch: shares the link's geometry without the
+// computeLocalAABB() that FCL's constructors call (writing to a geometry other threads read).
+template <typename S>
+class LinkObject final : public fcl::CollisionObject<S> {
+ public:
+  explicit LinkObject(const std::shared_ptr<fcl::CollisionGeometry<S>>& geometry)
+      : fcl::CollisionObject<S>(nullptr) {
+    this->cgeom = geometry;
+    this->cgeom_const = geometry;
+  }
+  /// The state's pose, and its AABB (what a predicate's getAABB() reads).
+  void place(const fcl::Transform3<S>& pose, const fcl::Vector3<S>& lo, const fcl::Vector3<S>& hi) {
+    this->setTransform(pose);
+    this->aabb.min_ = lo;
+    this->aabb.max_ = hi;
+  }
+};
+
+template <typename S>
+bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
+  const fcl::NODE_TYPE t = o.getNodeType();
+  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
+}
+
+template <typename S>
+using Links = typename BodySet<S>::Links;
+
+// One thread's checker: the links' objects, boxes and records for the state at hand, and the
+// walks of the world. Made once per thread and call; no allocation per state.
+template <typename S>
+class StateChecker {
+ public:
+  using Object = fcl::CollisionObject<S>;
+
+  StateChecker(const Broadphase<S>& world, const Links<S>& links)
+      : scope_(&world),
+        world_(world),
+        links_(links),
+        world_spheres_(world.table().spheres()),
+        world_shapes_(world.table().shapes()),
+        rate_(volumeMarginRate(request_.gjk_tolerance)),
+        distance_rate_(volumeMarginRate(distance_request_.distance_tolerance)) {
+    const std::size_t n = links.size();
+    objects_.reserve(n);
+    for (std::size_t l = 0; l < n; ++l) objects_.emplace_back(links.geometry[l]);
+    source_ = links.source;
+    spheres_.resize(n);
+    shapes_.resize(n);
+    boxes_.resize(n);
+  }
+
+  /// Whether the state collides; the first pair and the clearance into `out` as asked.
+  bool check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
+             StateResult<S>* out) {
+    place(poses);
+    const std::size_t n = links_.size();
+    for (std::size_t l = 0; l < n; ++l) {
+      WorldHit hit{this, std::uint32_t(l), first_pair};
+      if (world_.size() != 0) {
+        world_.collide(probe(l), &hit, CollideFn<S>(&StateChecker::onWorld), nullptr);
+        if (hit.found != kNone) {
+          if (out != nullptr && first_pair) {
+            out->link = l;
+            out->object = world_.table().object(hit.found);
+          }
+          return true;
+        }
+      }
+      if (!self) continue;
+      for (std::uint32_t k = links_.after_at[l]; k < links_.after_at[l + 1]; ++k) {
+        const std::uint32_t j = links_.after[k];
+        if (linksTouch(std::uint32_t(l), j)) {
+          if (out != nullptr && first_pair) {
+            out->link = l;
+            out->other_link = j;
+          }
+          return true;
+        }
+      }
+    }
+    if (out != nullptr && clearance) out->clearance = clearanceOf(self);
+    return false;
+  }
+
+ private:
+  struct WorldHit {
+    StateChecker* checker;
+    std::uint32_t link;
+    bool all;  // every candidate: the lowest registration number that touches
+    ObjectId found = kNone;
+    std::uint32_t found_seq = kNone;
+  };
+  struct WorldNear {
+    StateChecker* checker;
+    std::uint32_t link;
+  };
+
+  typename Broadphase<S>::Probe probe(std::size_t l) {
+    return typename Broadphase<S>::Probe{&objects_[l], boxes_[l], links_.margin[l],
+                                         links_.bits[l]};
+  }
+
+  // Poses the links: the object (transform, exact AABB), the box the walks test (grown by the
+  // cull's rate, so that pairs FCL counts as touching within its tolerance are met) and the
+  // records.
+  void place(const fcl::Transform3<S>* poses) {
+    for (std::size_t l = 0; l < links_.size(); ++l) {
+      const fcl::Transform3<S>& pose = poses[l];
+      const fcl::Matrix3<S> R = pose.linear();
+      const fcl::Vector3<S> c = R * links_.mid[l] + pose.translation();
+      const fcl::Vector3<S> h = R.cwiseAbs() * links_.half[l];
+      objects_[l].place(pose, c - h, c + h);
+      const S grow = S(rate_) * (S(1) + c.cwiseAbs().maxCoeff() + h.maxCoeff());
+      Box<S>& b = boxes_[l];
+      for (int k = 0; k < 3; ++k) {
+        b.lo[k] = c[k] - h[k] - grow;
+        b.hi[k] = c[k] + h[k] + grow;
+      }
+      moveVolume(objects_[l], source_[l], spheres_[l], shapes_[l]);
+    }
+  }
+
+  static bool onWorld(Object* w, ObjectId iw, Object*, ObjectId, void* data) {
+    WorldHit& hit = *static_cast<WorldHit*>(data);
+    StateChecker& c = *hit.checker;
+    if (hit.all) {
+      const std::uint32_t seq = c.world_.table().seq(iw);
+      if (seq >= hit.found_seq || !c.worldTouch(*w, iw, hit.link)) return false;
+      hit.found = iw;
+      hit.found_seq = seq;
+      return false;
+    }
+    if (!c.worldTouch(*w, iw, hit.link)) return false;
+    hit.found = iw;
+    return true;
+  }
+
+  // The world object's records: the table's, or built here (a world that keeps none).
+  void worldRecords(const Object& w, ObjectId iw, const VolumeSphere*& s, const VolumeShape*& h) {
+    if (world_spheres_ != nullptr) {
+      s = world_spheres_ + iw;
+      h = world_shapes_ + iw;
+      return;
+    }
+    buildVolume(w, built_sphere_, built_shape_);
+    s = &built_sphere_;
+    h = &built_shape_;
+  }
+
+  bool worldTouch(const Object& w, ObjectId iw, std::uint32_t l) {
+    const VolumeSphere* s;
+    const VolumeShape* h;
+    worldRecords(w, iw, s, h);
+    return touch(objects_[l], spheres_[l], shapes_[l], w, *s, *h,
+                 links_.margin[l] + world_.marginOf(iw));
+  }
+
+  bool linksTouch(std::uint32_t i, std::uint32_t j) {
+    const S m = links_.margin[i] + links_.margin[j];
+    const Box<S>& a = boxes_[i];
+    const Box<S>& b = boxes_[j];
+    for (int k = 0; k < 3; ++k)
+      if (a.lo[k] > b.hi[k] + m || b.lo[k] > a.hi[k] + m) return false;
+    return touch(objects_[i], spheres_[i], shapes_[i], objects_[j], spheres_[j], shapes_[j], m);
+  }
+
+  // Whether a (a link) and b touch within margin m: the records first, then FCL.
+  bool touch(const Object& a, const VolumeSphere& sa, const VolumeShape& ha, const Object& b,
+             const VolumeSphere& sb, const VolumeShape& hb, S m) {
+    if (m == S(0)) {
+      switch (verdictOf(sa, ha, sb, hb, rate_, true)) {
+        case Verdict::kApart:
+          return false;
+        case Verdict::kTouching:
+          return true;
+        case Verdict::kUnknown:
+          break;
+      }
+      fcl::CollisionResult<S> result;
+      return fclCollide(&a, &b, request_, result) > 0;
+    }
+    // Within a margin: the bound must beat it, with room for rounding m to a float.
+    const float within = float(m);
+    const VolumeGap gap = separationOf(sa, ha, sb, hb, rate_, within);
+    if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return false;
+    if (verdictOf(sa, ha, sb, hb, rate_, true) == Verdict::kTouching) return true;
+    fcl::CollisionResult<S> result;
+    if (fclCollide(&a, &b, request_, result) > 0) return true;
+    return pairDistance(a, b) <= m;
+  }
+
+  S pairDistance(const Object& a, const Object& b) {
+    if (distanceUnanswered(a) || distanceUnanswered(b)) return a.getAABB().distance(b.getAABB());
+    fcl::DistanceResult<S> result;
+    return fclDistance(&a, &b, distance_request_, result);
+  }
+
+  static bool onWorldNear(Object* w, ObjectId iw, Object*, ObjectId, void* data, S& best) {
+    WorldNear& near = *static_cast<WorldNear*>(data);
+    StateChecker& c = *near.checker;
+    const VolumeSphere* s;
+    const VolumeShape* h;
+    c.worldRecords(*w, iw, s, h);
+    return c.lower(c.objects_[near.link], c.spheres_[near.link], c.shapes_[near.link], *w, *s, *h,
+                   best);
+  }
+
+  // Lowers best to the distance of a and b unless their records prove it is not below best;
+  // true (stop) once best <= 0.
+  bool lower(const Object& a, const VolumeSphere& sa, const VolumeShape& ha, const Object& b,
+             const VolumeSphere& sb, const VolumeShape& hb, S& best) {
+    const float enough = best < S(std::numeric_limits<float>::max())
+                             ? float(best)
+                             : std::numeric_limits<float>::infinity();
+    const VolumeGap gap = separationOf(sa, ha, sb, hb, distance_rate_, enough);
+    if (gap.lower_bound - gap.margin > enough + 4.f * FLT_EPSILON * std::fabs(enough))
+      return false;
+    best = std::min(best, pairDistance(a, b));
+    return best <= S(0);
+  }
+
+  S clearanceOf(bool self) {
+    S best = std::numeric_limits<S>::max();
+    const std::size_t n = links_.size();
+    for (std::size_t l = 0; l < n && best > S(0); ++l) {
+      if (world_.size() == 0) break;
+      typename Broadphase<S>::Probe p = probe(l);
+      p.margin = S(0);
+      WorldNear near{this, std::uint32_t(l)};
+      world_.distance(p, &near, DistanceFn<S>(&StateChecker::onWorldNear), best, nullptr);
+    }
+    for (std::size_t i = 0; self && i < n && best > S(0); ++i)
+      for (std::uint32_t k = links_.after_at[i]; k < links_.after_at[i + 1] && best > S(0); ++k) {
+        const std::uint32_t j = links_.after[k];
+        S gap2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const S g = std::max({boxes_[i].lo[a] - boxes_[j].hi[a], boxes_[j].lo[a] - boxes_[i].hi[a],
+                                S(0)});
+          gap2 += g * g;
+        }
+        if (std::sqrt(gap2) >= best) continue;
+        lower(objects_[i], spheres_[i], shapes_[i], objects_[j], spheres_[j], shapes_[j], best);
+      }
+    return best;
+  }
+
+  const QueryScope scope_;  // a pair predicate that mutates the world is refused
+  const Broadphase<S>& world_;
+  const Links<S>& links_;
+  const VolumeSphere* world_spheres_;
+  const VolumeShape* world_shapes_;
+  const fcl::CollisionRequest<S> request_{};
+  const fcl::DistanceRequest<S> distance_request_{};
+  const float rate_;
+  const float distance_rate_;
+  std::vector<LinkObject<S>> objects_;
+  std::vector<VolumeSource> source_;
+  std::vector<VolumeSphere> spheres_;
+  std::vector<VolumeShape> shapes_;
+  std::vector<Box<S>> boxes_;
+  VolumeSphere built_sphere_{};
+  VolumeShape built_shape_{};
+};
+
+int resolveThreads(int threads) {
+  return threads > 0 ? threads : hardwareThreads();
+}
+
+// The number of states in `poses`, after checking it as the header says.
+template <typename S>
+std::size_t checkedStates(const Links<S>& links, const std::vector<fcl::Transform3<S>>& poses,
+                          const char* where) {
+  if (links.size() == 0) fail(where, "the body set has no link");
+  if (poses.size() % links.size() != 0)
+    fail(where, "the pose array's size (" + std::to_string(poses.size()) +
+                    ") is not a multiple of the number of links (" +
+                    std::to_string(links.size()) + ")");
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    if (!poses[i].linear().allFinite() || !poses[i].translation().allFinite())
+      fail(where, "pose " + std::to_string(i) + " has a NaN or infinite entry");
+  return poses.size() / links.size();
+}
+
+// The states of an edge of n states in `order`: rank r visits state visit[r].
+void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visit) {
+  visit.clear();
+  if (order == MotionOrder::path || n < 2) {
+    for (std::size_t i = 0; i < n; ++i) visit.push_back(i);
+    return;
+  }
+  visit.push_back(n - 1);
+  std::deque<std::pair<std::size_t, std::size_t>> open{{0, n - 2}};  // closed intervals
+  while (!open.empty()) {
+    const auto [lo, hi] = open.front();
+    open.pop_front();
+    const std::size_t mid = lo + (hi - lo) / 2;
+    visit.push_back(mid);
+    if (mid > lo) open.emplace_back(lo, mid - 1);
+    if (mid < hi) open.emplace_back(mid + 1, hi);
+  }
+}
+
+}  // namespace
+}  // namespace detail
+
+template <typename S>
+std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
+                                        const BodySet<S>& body,
+                                        const std::vector<fcl::Transform3<S>>& poses,
+                                        const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedStates(links, poses, "checkStates");
+  std::vector<StateResult<S>> out(states);
+  const detail::Broadphase<S>& core = detail::coreOf(world);
+  const int threads = states < 2 ? 1 : detail::resolveThreads(options.threads);
+  const std::size_t n = links.size();
+  detail::parallelForWith(
+      states, threads, 4,
+      [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
+      [&](auto& checker, std::size_t k) {
+        out[k].colliding = checker->check(poses.data() + k * n, options.self_collision,
+                                          options.first_pair, options.clearance, &out[k]);
+        if (out[k].colliding && options.clearance) out[k].clearance = S(0);
+      });
+  return out;
+}
+
+template <typename S>
+std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                                      const std::vector<fcl::Transform3<S>>& poses,
+                                      const std::vector<std::size_t>& edge_starts,
+                                      MotionOrder order, const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
+  for (std::size_t e = 0; e < edge_starts.size(); ++e)
+    if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
+        edge_starts[e] >= states)
+      fail("checkMotions", "edge_starts must start at 0 and increase strictly within the states");
+  const std::size_t edges = edge_starts.size();
+  std::vector<std::size_t> first(edges, kNoIndex);
+  if (edges == 0) return first;
+  // Items in edge order, each edge's states in visiting order; the visit orders of edges of
+  // the same length are the same, kept per length.
+  std::vector<std::size_t> edge_of(states), rank_of(states), state_of(states);
+  std::vector<std::size_t> visit;
+  for (std::size_t e = 0, item = 0; e < edges; ++e) {
+    const std::size_t begin = edge_starts[e];
+    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+    detail::visitOrder(end - begin, order, visit);
+    for (std::size_t r = 0; r < visit.size(); ++r, ++item) {
+      edge_of[item] = e;
+      rank_of[item] = r;
+      state_of[item] = begin + visit[r];
+    }
+  }
+  std::vector<std::atomic<std::size_t>> best(edges);
+  for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
+  const detail::Broadphase<S>& core = detail::coreOf(world);
+  const int threads = states < 2 ? 1 : detail::resolveThreads(options.threads);
+  const std::size_t n = links.size();
+  detail::parallelForWith(
+      states, threads, 4,
+      [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
+      [&](auto& checker, std::size_t item) {
+        std::atomic<std::size_t>& b = best[edge_of[item]];
+        const std::size_t rank = rank_of[item];
+        if (rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
+        if (!checker->check(poses.data() + state_of[item] * n, options.self_collision, false,
+                            false, nullptr))
+          return;
+        std::size_t seen = b.load(std::memory_order_relaxed);
+        while (rank < seen && !b.compare_exchange_weak(seen, rank, std::memory_order_relaxed)) {
+        }
+      });
+  for (std::size_t e = 0; e < edges; ++e) {
+    const std::size_t r = best[e].load(std::memory_order_relaxed);
+    if (r == kNoIndex) continue;
+    const std::size_t begin = edge_starts[e];
+    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+    detail::visitOrder(end - begin, order, visit);
+    first[e] = visit[r];
+  }
+  return first;
+}
+
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        const std::vector<fcl::Transform3<S>>& poses, MotionOrder order,
+                        const BatchOptions& options) {
+  const std::vector<std::size_t> starts =
+      poses.empty() ? std::vector<std::size_t>{} : std::vector<std::size_t>{0};
+  const std::vector<std::size_t> first = checkMotions(world, body, poses, starts, order, options);
+  return first.empty() ? kNoIndex : first[0];
+}
+
+#define CUBE_INSTANTIATE_BATCH(S)                                                             \
+  template class BodySet<S>;                                                                  \
+  template std::vector<StateResult<S>> checkStates<S>(                                        \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
+      const BatchOptions&);                                                                   \
+  template std::vector<std::size_t> checkMotions<S>(                                          \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
+      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                     \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,      \
+                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,    \
+                                      const BatchOptions&);
+CUBE_INSTANTIATE_BATCH(double)
+CUBE_INSTANTIATE_BATCH(float)
+#undef CUBE_INSTANTIATE_BATCH
+
+}  // namespace cube

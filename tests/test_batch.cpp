@@ -1,0 +1,497 @@
+// Batched state and motion checks (cube_collision/batch.h) against brute force: every link
+// against every world object and every checked pair of links, with FCL's narrow phase.
+
+#include <fcl/broadphase/default_broadphase_callbacks.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/halfspace.h>
+#include <fcl/geometry/shape/plane.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "cube_collision/batch.h"
+
+namespace {
+
+using S = double;
+using Object = fcl::CollisionObjectd;
+using Geometry = std::shared_ptr<fcl::CollisionGeometryd>;
+
+Geometry meshBox(double sx, double sy, double sz) {
+  auto m = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+  std::vector<fcl::Vector3d> v;
+  for (int i = 0; i < 8; ++i)
+    v.emplace_back((i & 1 ? 0.5 : -0.5) * sx, (i & 2 ? 0.5 : -0.5) * sy, (i & 4 ? 0.5 : -0.5) * sz);
+  const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
+                        {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
+  std::vector<fcl::Triangle> t;
+  for (const auto& x : f) t.emplace_back(x[0], x[1], x[2]);
+  m->beginModel();
+  m->addSubModel(v, t);
+  m->endModel();
+  return m;
+}
+
+Geometry randomShape(std::mt19937& rng, double size, bool meshes) {
+  std::uniform_real_distribution<double> u(0.3, 1.0);
+  switch (std::uniform_int_distribution<int>(0, meshes ? 4 : 3)(rng)) {
+    case 0:
+      return std::make_shared<fcl::Boxd>(size * u(rng), size * u(rng), size * u(rng));
+    case 1:
+      return std::make_shared<fcl::Sphered>(0.5 * size * u(rng));
+    case 2:
+      return std::make_shared<fcl::Cylinderd>(0.3 * size * u(rng), size * u(rng));
+    case 3:
+      return std::make_shared<fcl::Capsuled>(0.25 * size * u(rng), size * u(rng));
+    default:
+      return meshBox(size * u(rng), size * u(rng), size * u(rng));
+  }
+}
+
+fcl::Transform3d randomPose(std::mt19937& rng, double half) {
+  std::uniform_real_distribution<double> p(-half, half);
+  std::normal_distribution<double> g;
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  tf.linear() = fcl::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+  tf.translation() = fcl::Vector3d(p(rng), p(rng), p(rng));
+  return tf;
+}
+
+struct World {
+  std::vector<std::unique_ptr<Object>> objects;
+  cube::CubeCollisionManagerd manager;
+  std::vector<Object*> pointers() const {
+    std::vector<Object*> out;
+    for (const auto& o : objects) out.push_back(o.get());
+    return out;
+  }
+};
+
+// n shapes (and meshes) in a cube of half-size 10, plus, with `planes`, a floor halfspace and a
+// tilted plane.
+void fillWorld(World& w, std::size_t n, std::uint32_t seed, bool meshes, bool planes) {
+  std::mt19937 rng(seed);
+  for (std::size_t i = 0; i < n; ++i) {
+    w.objects.push_back(std::make_unique<Object>(randomShape(rng, 1.2, meshes), randomPose(rng, 10)));
+    w.objects.back()->computeAABB();
+  }
+  if (planes) {
+    w.objects.push_back(std::make_unique<Object>(
+        std::make_shared<fcl::Halfspaced>(fcl::Vector3d(0, 0, 1), -9.0), fcl::Transform3d::Identity()));
+    w.objects.push_back(std::make_unique<Object>(
+        std::make_shared<fcl::Planed>(fcl::Vector3d(1, 1, 0).normalized(), 8.0),
+        fcl::Transform3d::Identity()));
+    for (std::size_t i = n; i < w.objects.size(); ++i) w.objects[i]->computeAABB();
+  }
+  w.manager.registerObjects(w.pointers());
+  w.manager.setup();
+}
+
+// A chain of `links` links with random shapes (meshes among them with `meshes`).
+cube::BodySet<S> randomBody(std::size_t links, std::uint32_t seed, bool meshes, S margin = 0) {
+  std::mt19937 rng(seed);
+  cube::BodySet<S> body;
+  for (std::size_t l = 0; l < links; ++l) body.addLink(randomShape(rng, 1.0, meshes), margin);
+  for (std::size_t l = 0; l + 1 < links; ++l) body.allowPair(l, l + 1);
+  return body;
+}
+
+// States: each link placed near a random centre (a robot folded in a ball of radius 3).
+std::vector<fcl::Transform3d> randomStates(std::size_t states, std::size_t links,
+                                           std::uint32_t seed, double spread = 9) {
+  std::mt19937 rng(seed);
+  std::vector<fcl::Transform3d> poses;
+  for (std::size_t k = 0; k < states; ++k) {
+    const fcl::Transform3d centre = randomPose(rng, spread);
+    for (std::size_t l = 0; l < links; ++l) {
+      fcl::Transform3d tf = randomPose(rng, 3);
+      tf.translation() += centre.translation();
+      poses.push_back(tf);
+    }
+  }
+  return poses;
+}
+
+// The link's box as batch.h says: the exact box of its local AABB posed.
+fcl::AABBd linkBox(const fcl::CollisionGeometryd& g, const fcl::Transform3d& tf) {
+  const fcl::Vector3d c = tf * g.aabb_local.center();
+  const fcl::Vector3d h = tf.linear().cwiseAbs() * ((g.aabb_local.max_ - g.aabb_local.min_) / 2);
+  return fcl::AABBd(c - h, c + h);
+}
+
+bool unanswered(const Object& o) {
+  const auto t = o.getNodeType();
+  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
+}
+
+S bruteDistance(const Object& a, const Object& b);
+
+// Brute force for one pair (link first): touching within margin m.
+bool bruteTouch(const Object& a, const fcl::AABBd& a_box, const Object& b, S m) {
+  fcl::CollisionRequestd req;
+  fcl::CollisionResultd res;
+  if (fcl::collide(&a, &b, req, res) > 0) return true;
+  if (m == 0) return false;
+  if (unanswered(b)) return a_box.distance(b.getAABB()) <= m;
+  return bruteDistance(a, b) <= m;
+}
+
+struct Brute {
+  bool colliding = false;
+  std::size_t link = cube::kNoIndex, other_link = cube::kNoIndex;
+  Object* object = nullptr;
+  S clearance = std::numeric_limits<S>::max();
+};
+
+// The oracle: every link against every world object (filter bits, predicate), every checked
+// link pair, in batch.h's documented order for the first pair.
+Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d* poses, bool self,
+            const std::function<bool(Object*, Object*)>& keep = nullptr,
+            const std::vector<std::pair<std::uint64_t, std::uint64_t>>& bits = {}) {
+  std::vector<std::unique_ptr<Object>> links;
+  for (std::size_t l = 0; l < body.size(); ++l) {
+    links.push_back(std::make_unique<Object>(body.geometry(l), poses[l]));
+  }
+  const auto meets = [&](std::size_t l, Object* o) {
+    if (!bits.empty()) {
+      const auto [cat, mask] = w.manager.filter(o);
+      if (!((cat & bits[l].second) && (bits[l].first & mask))) return false;
+    }
+    return !keep || keep(o, links[l].get());
+  };
+  Brute out;
+  for (std::size_t l = 0; l < body.size() && !out.colliding; ++l) {
+    for (const auto& o : w.objects) {  // registration order
+      if (!meets(l, o.get())) continue;
+      if (bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]), *o, body.margin(l) + w.manager.margin(o.get()))) {
+        out = {true, l, cube::kNoIndex, o.get()};
+        break;
+      }
+    }
+    for (std::size_t j = l + 1; self && !out.colliding && j < body.size(); ++j)
+      if (body.checked(l, j) && bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]), *links[j], body.margin(l) + body.margin(j)))
+        out = {true, l, j, nullptr};
+  }
+  if (out.colliding) return out;
+  for (std::size_t l = 0; l < body.size(); ++l) {
+    for (const auto& o : w.objects)
+      if (meets(l, o.get())) {
+        const S d = unanswered(*o) ? linkBox(*body.geometry(l), poses[l]).distance(o->getAABB())
+                                   : bruteDistance(*links[l], *o);
+        out.clearance = std::min(out.clearance, d);
+      }
+    for (std::size_t j = l + 1; self && j < body.size(); ++j)
+      if (body.checked(l, j)) out.clearance = std::min(out.clearance, bruteDistance(*links[l], *links[j]));
+  }
+  return out;
+}
+
+S bruteDistance(const Object& a, const Object& b) {
+  if (unanswered(a) || unanswered(b)) {
+    ADD_FAILURE() << "no distance for planes here";
+    return 0;
+  }
+  fcl::DistanceRequestd req;
+  fcl::DistanceResultd res;
+  return fcl::distance(&a, &b, req, res);
+}
+
+void expectSame(const std::vector<cube::StateResult<S>>& got, const World& w,
+                const cube::BodySet<S>& body, const std::vector<fcl::Transform3d>& poses,
+                const cube::BatchOptions& o, std::size_t* colliding = nullptr,
+                const std::function<bool(Object*, Object*)>& keep = nullptr,
+                const std::vector<std::pair<std::uint64_t, std::uint64_t>>& bits = {}) {
+  ASSERT_EQ(got.size(), poses.size() / body.size());
+  std::size_t hits = 0;
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    const Brute b = brute(w, body, poses.data() + k * body.size(), o.self_collision, keep, bits);
+    hits += b.colliding;
+    ASSERT_EQ(got[k].colliding, b.colliding) << "state " << k;
+    if (o.first_pair && b.colliding) {
+      EXPECT_EQ(got[k].link, b.link) << "state " << k;
+      EXPECT_EQ(got[k].object, b.object) << "state " << k;
+      EXPECT_EQ(got[k].other_link, b.other_link) << "state " << k;
+    } else {
+      EXPECT_EQ(got[k].link, cube::kNoIndex);
+      EXPECT_EQ(got[k].object, nullptr);
+    }
+    if (o.clearance)
+      EXPECT_EQ(got[k].clearance, b.colliding ? S(0) : b.clearance) << "state " << k;
+    else
+      EXPECT_EQ(got[k].clearance, std::numeric_limits<S>::max());
+  }
+  if (colliding != nullptr) *colliding = hits;
+}
+
+// Worlds of 60 objects (no per-object records: below kVolumeMinObjects) and 400 (records), with
+// and without meshes, planes in the small one (clearance then reads AABB gaps).
+class BatchWorlds : public ::testing::TestWithParam<std::tuple<std::size_t, bool>> {};
+
+TEST_P(BatchWorlds, StatesEqualBruteForce) {
+  const auto [n, meshes] = GetParam();
+  World w;
+  fillWorld(w, n, 7 + std::uint32_t(n), meshes, n < 100);
+  const cube::BodySet<S> body = randomBody(8, 3, meshes);
+  const auto poses = randomStates(60, body.size(), 11);
+  std::size_t free_states = 0;
+  for (const bool self : {false, true})
+    for (const bool first : {false, true}) {
+      cube::BatchOptions o;
+      o.self_collision = self;
+      o.first_pair = first;
+      o.clearance = !first;
+      o.threads = 1;
+      std::size_t hits = 0;
+      expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, &hits);
+      free_states = poses.size() / body.size() - hits;
+      // The scene must exercise both answers.
+      EXPECT_GT(hits, 5u);
+      EXPECT_GT(free_states, 5u);
+    }
+}
+
+TEST_P(BatchWorlds, ThreadCountsGiveTheSameAnswers) {
+  const auto [n, meshes] = GetParam();
+  World w;
+  fillWorld(w, n, 5, meshes, false);
+  const cube::BodySet<S> body = randomBody(6, 9, meshes);
+  const auto poses = randomStates(80, body.size(), 13);
+  cube::BatchOptions o;
+  o.self_collision = true;
+  o.first_pair = true;
+  o.threads = 1;
+  const auto one = cube::checkStates(w.manager, body, poses, o);
+  for (const int t : {2, 3, 8}) {
+    o.threads = t;
+    const auto many = cube::checkStates(w.manager, body, poses, o);
+    ASSERT_EQ(many.size(), one.size());
+    for (std::size_t k = 0; k < one.size(); ++k) {
+      EXPECT_EQ(many[k].colliding, one[k].colliding);
+      EXPECT_EQ(many[k].link, one[k].link);
+      EXPECT_EQ(many[k].object, one[k].object);
+      EXPECT_EQ(many[k].other_link, one[k].other_link);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Batch, BatchWorlds,
+                         ::testing::Combine(::testing::Values(std::size_t(60), std::size_t(400)),
+                                            ::testing::Bool()));
+
+TEST(Batch, MarginsFilterBitsAndThePredicate) {
+  World w;
+  fillWorld(w, 300, 21, false, false);
+  // World margins: one object of three has its own, the rest the manager-wide one.
+  w.manager.setMargin(0.05);
+  for (std::size_t i = 0; i < w.objects.size(); i += 3) w.manager.setMargin(w.objects[i].get(), 0.2);
+  for (std::size_t i = 0; i < w.objects.size(); i += 4) w.manager.setFilter(w.objects[i].get(), 2, ~0ull);
+  std::mt19937 rng(4);
+  cube::BodySet<S> body;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> bits;
+  for (std::size_t l = 0; l < 6; ++l) {
+    const std::uint64_t mask = l % 2 ? ~std::uint64_t(2) : ~std::uint64_t(0);  // odd links skip group 2
+    body.addLink(randomShape(rng, 1.0, false), l % 3 == 0 ? 0.3 : 0.0, 1, mask);
+    bits.emplace_back(1, mask);
+  }
+  // The predicate drops objects whose x is negative, seen as (world object, link object).
+  const std::function<bool(Object*, Object*)> keep = [](Object* a, Object* b) {
+    return a->getTranslation()[0] >= 0 && b->collisionGeometry() != nullptr;
+  };
+  w.manager.setPairFilter(keep);
+  const auto poses = randomStates(80, body.size(), 5);
+  cube::BatchOptions o;
+  o.self_collision = true;
+  o.first_pair = true;
+  o.threads = 2;
+  std::size_t hits = 0;
+  expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, &hits, keep, bits);
+  EXPECT_GT(hits, 5u);
+  EXPECT_LT(hits, 75u);
+  o.first_pair = false;
+  o.clearance = true;
+  expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, nullptr, keep, bits);
+}
+
+// The serial scan of an edge in an order, from per-state answers.
+std::size_t serialScan(const std::vector<cube::StateResult<S>>& states, std::size_t begin,
+                       std::size_t end, cube::MotionOrder order) {
+  std::vector<std::size_t> visit;
+  const std::size_t n = end - begin;
+  if (order == cube::MotionOrder::path || n < 2) {
+    for (std::size_t i = 0; i < n; ++i) visit.push_back(i);
+  } else {  // OMPL's: the last state, then midpoints breadth first
+    visit.push_back(n - 1);
+    std::vector<std::pair<std::size_t, std::size_t>> q{{0, n - 2}};
+    for (std::size_t h = 0; h < q.size(); ++h) {
+      const auto [lo, hi] = q[h];
+      const std::size_t mid = (lo + hi) / 2;
+      visit.push_back(mid);
+      if (mid > lo) q.emplace_back(lo, mid - 1);
+      if (mid < hi) q.emplace_back(mid + 1, hi);
+    }
+  }
+  for (const std::size_t i : visit)
+    if (states[begin + i].colliding) return i;
+  return cube::kNoIndex;
+}
+
+TEST(Batch, MotionsGiveTheSerialScansAnswer) {
+  World w;
+  fillWorld(w, 400, 31, false, true);
+  const cube::BodySet<S> body = randomBody(5, 17, false);
+  // Edges of 1 to 40 states: a straight sweep of the robot's rigid pose across the world.
+  std::mt19937 rng(2);
+  std::vector<fcl::Transform3d> poses;
+  std::vector<std::size_t> starts;
+  std::vector<fcl::Transform3d> shape;
+  for (std::size_t l = 0; l < body.size(); ++l) shape.push_back(randomPose(rng, 1.5));
+  for (int e = 0; e < 30; ++e) {
+    starts.push_back(poses.size() / body.size());
+    const fcl::Vector3d from = randomPose(rng, 9).translation(), to = randomPose(rng, 9).translation();
+    const std::size_t n = 1 + std::size_t(e * 13 % 40);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double t = n == 1 ? 0 : double(k) / double(n - 1);
+      for (const auto& s : shape) {
+        fcl::Transform3d tf = s;
+        tf.translation() += from + t * (to - from);
+        poses.push_back(tf);
+      }
+    }
+  }
+  cube::BatchOptions o;
+  o.self_collision = true;
+  o.threads = 1;
+  const auto states = cube::checkStates(w.manager, body, poses, o);
+  expectSame(states, w, body, poses, o);
+  std::size_t edges_hit = 0;
+  for (const auto order : {cube::MotionOrder::path, cube::MotionOrder::bisection})
+    for (const int t : {1, 2, 3, 8}) {
+      o.threads = t;
+      const auto first = cube::checkMotions(w.manager, body, poses, starts, order, o);
+      ASSERT_EQ(first.size(), starts.size());
+      edges_hit = 0;
+      for (std::size_t e = 0; e < starts.size(); ++e) {
+        const std::size_t end = e + 1 < starts.size() ? starts[e + 1] : states.size();
+        EXPECT_EQ(first[e], serialScan(states, starts[e], end, order)) << "edge " << e;
+        edges_hit += first[e] != cube::kNoIndex;
+      }
+      // One edge alone.
+      const std::vector<fcl::Transform3d> edge(poses.begin() + starts[3] * body.size(),
+                                               poses.begin() + starts[4] * body.size());
+      EXPECT_EQ(cube::checkMotion(w.manager, body, edge, order, o),
+                serialScan(states, starts[3], starts[4], order));
+    }
+  EXPECT_GT(edges_hit, 3u);
+  EXPECT_LT(edges_hit, 27u);
+}
+
+TEST(Batch, BadInputChangesNothing) {
+  World w;
+  fillWorld(w, 50, 3, false, false);
+  cube::BodySet<S> body = randomBody(3, 1, false);
+  const auto poses = randomStates(4, 3, 1);
+  EXPECT_THROW(body.addLink(nullptr), std::invalid_argument);
+  EXPECT_THROW(body.addLink(std::make_shared<fcl::Planed>(fcl::Vector3d(0, 0, 1), 0)),
+               std::invalid_argument);
+  EXPECT_THROW(body.addLink(std::make_shared<fcl::Halfspaced>(fcl::Vector3d(0, 0, 1), 0)),
+               std::invalid_argument);
+  EXPECT_THROW(body.addLink(std::make_shared<fcl::Sphered>(1), -1.0), std::invalid_argument);
+  EXPECT_THROW(body.addLink(std::make_shared<fcl::Sphered>(1), std::nan("")), std::invalid_argument);
+  EXPECT_THROW(body.allowPair(0, 3), std::invalid_argument);
+  EXPECT_THROW(body.allowPair(1, 1), std::invalid_argument);
+  EXPECT_EQ(body.size(), 3u);
+  EXPECT_TRUE(body.checked(0, 2));
+  EXPECT_FALSE(body.checked(0, 1));
+  auto wrong = poses;
+  wrong.pop_back();
+  EXPECT_THROW(cube::checkStates(w.manager, body, wrong), std::invalid_argument);
+  for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+    auto nan = poses;
+    nan[5].translation()[1] = bad;
+    EXPECT_THROW(cube::checkStates(w.manager, body, nan), std::invalid_argument);
+    nan = poses;
+    nan[2].linear()(1, 2) = bad;
+    EXPECT_THROW(cube::checkMotion(w.manager, body, nan), std::invalid_argument);
+  }
+  EXPECT_THROW(cube::checkStates(w.manager, cube::BodySet<S>(), poses), std::invalid_argument);
+  EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {1, 2}), std::invalid_argument);
+  EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {0, 2, 2}), std::invalid_argument);
+  EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {0, 4}), std::invalid_argument);
+  // Still usable, same answers as before the errors.
+  cube::BatchOptions o;
+  o.first_pair = true;
+  expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o);
+  EXPECT_TRUE(cube::checkStates(w.manager, body, {}).empty());
+  EXPECT_EQ(cube::checkMotion(w.manager, body, {}), cube::kNoIndex);
+}
+
+TEST(Batch, APredicateThatMutatesTheWorldIsRefused) {
+  World w;
+  fillWorld(w, 300, 8, false, false);
+  const cube::BodySet<S> body = randomBody(4, 2, false);
+  const auto poses = randomStates(40, 4, 3);
+  Object extra(std::make_shared<fcl::Sphered>(1));
+  extra.computeAABB();
+  w.manager.setPairFilter([&](Object*, Object*) {
+    w.manager.registerObject(&extra);
+    return true;
+  });
+  for (const int t : {1, 2}) {
+    cube::BatchOptions o;
+    o.threads = t;
+    EXPECT_THROW(cube::checkStates(w.manager, body, poses, o), std::logic_error);
+  }
+  w.manager.setPairFilter(nullptr);
+  EXPECT_EQ(w.manager.size(), 300u);
+  std::string why;
+  EXPECT_TRUE(w.manager.validate(&why)) << why;
+}
+
+// ThreadSanitizer runs this one (.ci/run): batches on two threads while other threads query the
+// same world.
+TEST(Batch, ThreadsWithConcurrentReadersOfTheWorld) {
+  World w;
+  fillWorld(w, 500, 12, false, true);
+  const cube::BodySet<S> body = randomBody(6, 4, false);
+  const auto poses = randomStates(64, body.size(), 6);
+  cube::BatchOptions o;
+  o.self_collision = true;
+  o.threads = 1;
+  const auto expected = cube::checkStates(w.manager, body, poses, o);
+  o.threads = 2;
+  std::atomic<bool> stop{false};
+  std::atomic<std::size_t> reads{0};
+  std::thread reader([&] {
+    Object q(std::make_shared<fcl::Sphered>(2));
+    q.computeAABB();
+    while (!stop.load()) {
+      fcl::DefaultCollisionData<S> d;
+      w.manager.collide(&q, &d, fcl::DefaultCollisionFunction<S>);
+      reads.fetch_add(1);
+    }
+  });
+  // Until the reader has queried during several batches.
+  for (int round = 0; round < 3 || (reads.load() < 20 && round < 100000); ++round) {
+    const auto got = cube::checkStates(w.manager, body, poses, o);
+    for (std::size_t k = 0; k < got.size(); ++k) EXPECT_EQ(got[k].colliding, expected[k].colliding);
+  }
+  stop.store(true);
+  reader.join();
+  EXPECT_GT(reads.load(), 0u);
+}
+
+}  // namespace
