@@ -223,6 +223,7 @@ struct Setup {
   std::unique_ptr<cube::CubeCollisionManager<S>> world;
   std::unique_ptr<Robot> robot;
   Poses free_mix, hit_mix, self_mix;  // kStates states each
+  Poses one;                          // the first state of free_mix
   Poses edge_poses;
   std::vector<std::size_t> edge_starts;
   std::map<std::string, std::unique_ptr<Manager>> fcl;
@@ -297,6 +298,7 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
       take(s.hit_mix, 0.3);
     }
   }
+  s.one.assign(s.free_mix.begin(), s.free_mix.begin() + kLinks);
   // Edges: 20 edges of 20 to 100 states, straight lines in configuration space.
   for (std::size_t e = 0; e < 20; ++e) {
     s.edge_starts.push_back(s.edge_poses.size() / kLinks);
@@ -369,8 +371,7 @@ std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
                               cube::MotionOrder::path, o);
   std::vector<std::size_t> out;
   if (k == Kind::single) {
-    const Poses one(poses.begin(), poses.begin() + kLinks);
-    out.push_back(cube::checkStates(*s.world, s.robot->body, one, o)[0].colliding);
+    out.push_back(cube::checkStates(*s.world, s.robot->body, s.one, o)[0].colliding);
     return out;
   }
   for (const auto& r : cube::checkStates(*s.world, s.robot->body, poses, o))

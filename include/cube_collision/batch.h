@@ -107,11 +107,16 @@ struct StateResult {
 /// link order). A state collides when FCL reports a contact between one of its links and a world
 /// object whose filter bits and the world's pair predicate (setPairFilter, asked as
 /// (world object, link object)) let them meet, or (self_collision) between two checked links,
-/// margins included. Returns one StateResult per state, in state order. `world` is only read:
-/// other threads may query it meanwhile (not mutate it); a pair predicate that mutates it gets
-/// std::logic_error, as from its other queries. Throws std::invalid_argument, before any work, for
-/// an empty body set, a pose array of the wrong size (poses.size() != states * body.size()) or a
-/// pose with a NaN or infinite entry.
+/// margins included: fcl::collide(link, other) with FCL's default request, then, within a
+/// margin, fcl::distance(link, other) <= the margin. Returns one StateResult per state, in state
+/// order. `world` is only read: other threads may query it meanwhile (not mutate it); a pair
+/// predicate that mutates it gets std::logic_error, as from its other queries. The objects a
+/// predicate is given for a link share its geometry and hold the state's pose, and their
+/// getAABB() is the link's box (the exact box of its local AABB posed). Throws
+/// std::invalid_argument for an empty body set or a pose array whose size is not a multiple of
+/// body.size() (before any work), or for a pose (rotation or translation) with a NaN or infinite
+/// entry, naming the first one (each state's poses are read once, as its links are placed; the
+/// call returns nothing then, and changes nothing).
 template <typename S>
 std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
                                         const BodySet<S>& body,
@@ -135,9 +140,13 @@ enum class MotionOrder {
 /// edge, the index within the edge of its first colliding state in `order`, or kNoIndex if all
 /// are free: what checking the edge's states one by one in that order and stopping at the first
 /// collision gives, whatever the thread count. Once an edge's colliding state is known, its
-/// states after it in that order are not started. Only self_collision and threads of `options`
-/// apply. Throws std::invalid_argument as checkStates, and for edge_starts that do not start at
-/// 0 or do not increase strictly within the states.
+/// states after it in that order are not started, nor read. Only self_collision and threads of
+/// `options` apply. Throws std::invalid_argument as checkStates, and for edge_starts that do not
+/// start at 0 or do not increase strictly within the states (before any work); a pose with a NaN
+/// or infinite entry throws if its state comes before its edge's first colliding state in the
+/// order (where the serial scan would meet it): states after that are not read. Validating every
+/// pose first would read the whole batch, which for edges that collide early cost more than
+/// their checks.
 template <typename S>
 std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                                       const std::vector<fcl::Transform3<S>>& poses,

@@ -366,6 +366,18 @@ bool Broadphase<S>::collide(const Probe& probe, void* data, CollideFn<S> fn,
 }
 
 template <typename S>
+bool Broadphase<S>::collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
+                            QueryStats* stats) const {
+  const bool gate_on = gated() || bits != nullptr;
+  PairGate<S> gate = gate_on ? probeGate(Filter{}) : PairGate<S>{};
+  gate.filters_b = bits;
+  const PairGate<S>* g = gate_on ? &gate : nullptr;
+  return forObjectViews(scene(), body, [&](const View<S>& x, const View<S>& y, bool) {
+    return collideViews(config_.all_pairs_limit, x, y, false, data, fn, stats, g);
+  });
+}
+
+template <typename S>
 bool Broadphase<S>::collideQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate,
                                  void* data, CollideFn<S> fn, QueryStats* stats) const {
   const SingleView<S> query(obj, box);

@@ -118,6 +118,12 @@ class Broadphase {
   static constexpr std::size_t kSplitMin = 4096;
   /// The tasks a split self walk is cut into (at least; fewer in a tree of fewer leaves).
   static constexpr std::size_t kSplitTasks = 64;
+  /// Pairs (managed object, object of `body`) whose boxes overlap and that pass the filter bits
+  /// (the body's per id, null: all default) and the predicate: one walk of the cubes, then of
+  /// the unbounded list, against the body's view (BodyView), in walk order whatever
+  /// canonical_pairs says; fn gets the body's ids.
+  bool collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
+               QueryStats* stats) const;
   /// Pairs (object of this, object of other) whose boxes overlap.
   bool collide(const Broadphase& other, void* data, CollideFn<S> fn, QueryStats* stats) const;
   /// Branch and bound from `best` (lowered by fn) over the objects near `box`.

@@ -12,12 +12,15 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 #include <deque>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "cube_collision/narrow_phase.h"
+#include "core/body_view.h"
 #include "cull.h"
 #include "fcl_narrow.h"
 #include "manager_access.h"
@@ -37,6 +40,7 @@ struct BodySet<S>::Links {
   std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
                                                // [after_at[i], after_at[i + 1]), ascending
   bool any_margin = false;
+  bool any_bits = false;  // a link has filter bits other than the default
 
   std::size_t size() const { return geometry.size(); }
   void listPairs() {
@@ -134,6 +138,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   l.source.push_back(source);
   l.allowed = std::move(allowed);
   l.any_margin = l.any_margin || margin > S(0);
+  l.any_bits = l.any_bits || !l.bits.back().isDefault();
   l.listPairs();
   return n;
 }
@@ -198,6 +203,17 @@ bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
 template <typename S>
 using Links = typename BodySet<S>::Links;
 
+template <typename S>
+Box<S> grownBy(const Box<S>& b, S m) {
+  if (m == S(0)) return b;
+  Box<S> g;
+  for (int k = 0; k < 3; ++k) {
+    g.lo[k] = b.lo[k] - m;
+    g.hi[k] = b.hi[k] + m;
+  }
+  return g;
+}
+
 // One thread's checker: the links' objects, boxes and records for the state at hand, and the
 // walks of the world. Made once per thread and call; no allocation per state.
 template <typename S>
@@ -211,101 +227,210 @@ class StateChecker {
         links_(links),
         world_spheres_(world.table().spheres()),
         world_shapes_(world.table().shapes()),
+        body_(std::uint32_t(links.size())),
         rate_(volumeMarginRate(request_.gjk_tolerance)),
         distance_rate_(volumeMarginRate(distance_request_.distance_tolerance)) {
-    const std::size_t n = links.size();
-    objects_.reserve(n);
-    for (std::size_t l = 0; l < n; ++l) objects_.emplace_back(links.geometry[l]);
-    source_ = links.source;
-    spheres_.resize(n);
-    shapes_.resize(n);
-    boxes_.resize(n);
+    slots_.resize(links.size());
+    for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
+    objects_ = std::make_unique<ObjectStorage[]>(links.size());
+    // A predicate sees the link objects of every pair the walk offers: all are made now.
+    if (world.keep())
+      for (std::size_t l = 0; l < links.size(); ++l) construct(std::uint32_t(l));
   }
+  ~StateChecker() {
+    for (std::size_t l = 0; l < slots_.size(); ++l)
+      if (slots_[l].made) objectAt(std::uint32_t(l))->~LinkObject<S>();
+  }
+  StateChecker(const StateChecker&) = delete;
+  StateChecker& operator=(const StateChecker&) = delete;
 
   /// Whether the state collides; the first pair and the clearance into `out` as asked.
-  bool check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
-             StateResult<S>* out) {
-    place(poses);
-    const std::size_t n = links_.size();
-    for (std::size_t l = 0; l < n; ++l) {
-      WorldHit hit{this, std::uint32_t(l), first_pair};
-      if (world_.size() != 0) {
-        world_.collide(probe(l), &hit, CollideFn<S>(&StateChecker::onWorld), nullptr);
-        if (hit.found != kNone) {
-          if (out != nullptr && first_pair) {
-            out->link = l;
-            out->object = world_.table().object(hit.found);
-          }
-          return true;
-        }
+  /// Two passes: the walks and the records settle what they can (most pairs apart, many in
+  /// contact proved by inscribed balls), then FCL answers the rest, so that a colliding state
+  /// proved on the records makes no FCL call.
+  /// kBadPose (and the link in bad_link()) if a pose has a NaN or infinite entry, found while
+  /// placing the links: the state's poses are read once.
+  static constexpr int kBadPose = -1;
+  int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
+            StateResult<S>* out) {
+    if (!place(poses)) return kBadPose;
+    first_pair_ = first_pair;
+    best_ = Candidate{kNone, kNone, kNone, false};
+    pending_.clear();
+    if (world_.size() != 0) {
+      world_.collide(body_.view(), links_.any_bits ? links_.bits.data() : nullptr, this,
+                     CollideFn<S>(&StateChecker::onWorld), nullptr);
+      if (found() && !first_pair) return true;
+      if (decidePending()) return true;
+    }
+    if (self) {
+      pending_.clear();
+      collidePairs(body_.view(), body_.view(), true, this, CollideFn<S>(&StateChecker::onLinks));
+      if (found() && !first_pair) return true;
+      decidePending();
+    }
+    if (found()) {
+      if (out != nullptr && first_pair) {
+        out->link = best_.link;
+        if (best_.is_link)
+          out->other_link = best_.other;
+        else
+          out->object = world_.table().object(best_.other);
       }
-      if (!self) continue;
-      for (std::uint32_t k = links_.after_at[l]; k < links_.after_at[l + 1]; ++k) {
-        const std::uint32_t j = links_.after[k];
-        if (linksTouch(std::uint32_t(l), j)) {
-          if (out != nullptr && first_pair) {
-            out->link = l;
-            out->other_link = j;
-          }
-          return true;
-        }
-      }
+      return true;
     }
     if (out != nullptr && clearance) out->clearance = clearanceOf(self);
     return false;
   }
 
  private:
-  struct WorldHit {
-    StateChecker* checker;
-    std::uint32_t link;
-    bool all;  // every candidate: the lowest registration number that touches
-    ObjectId found = kNone;
-    std::uint32_t found_seq = kNone;
+  // Per link: the state's boxes and pose, the cull's records (placed on first use).
+  struct Slot {
+    Box<S> box;                     // the walk's: the exact box grown by the cull's rate
+    fcl::Vector3<S> lo, hi;         // the exact box of the posed local AABB
+    const fcl::Transform3<S>* pose = nullptr;
+    VolumeSource source;
+    VolumeSphere sphere;
+    VolumeShape shape;
+    std::uint64_t placed = 0;  // the state the records were placed for
+    bool made = false;         // its LinkObject is constructed
   };
+  // A pair the records did not settle, or the best contact so far: (link, key) ordered, key the
+  // world object's registration number or the other link's index (links after the world).
+  struct Candidate {
+    std::uint32_t link;
+    std::uint32_t key;
+    std::uint32_t other;  // world id or link index
+    bool is_link;
+    bool operator<(const Candidate& c) const {
+      if (link != c.link) return link < c.link;
+      if (is_link != c.is_link) return !is_link;
+      return key < c.key;
+    }
+  };
+  bool found() const { return best_.link != kNone; }
   struct WorldNear {
     StateChecker* checker;
     std::uint32_t link;
   };
 
   typename Broadphase<S>::Probe probe(std::size_t l) {
-    return typename Broadphase<S>::Probe{&objects_[l], boxes_[l], links_.margin[l],
+    return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), slots_[l].box, links_.margin[l],
                                          links_.bits[l]};
   }
 
   // Poses the links: the object (transform, exact AABB), the box the walks test (grown by the
   // cull's rate, so that pairs FCL counts as touching within its tolerance are met) and the
   // records.
-  void place(const fcl::Transform3<S>* poses) {
+  bool place(const fcl::Transform3<S>* poses) {
+    ++state_;
     for (std::size_t l = 0; l < links_.size(); ++l) {
+      Slot& slot = slots_[l];
       const fcl::Transform3<S>& pose = poses[l];
       const fcl::Matrix3<S> R = pose.linear();
       const fcl::Vector3<S> c = R * links_.mid[l] + pose.translation();
       const fcl::Vector3<S> h = R.cwiseAbs() * links_.half[l];
-      objects_[l].place(pose, c - h, c + h);
+      // Every entry of R and t reaches c or h (an infinite one times a zero extent is NaN).
+      if (!std::isfinite(c.sum() + h.sum())) {
+        bad_link_ = l;
+        return false;
+      }
+      slot.pose = &pose;
+      slot.lo = c - h;
+      slot.hi = c + h;
       const S grow = S(rate_) * (S(1) + c.cwiseAbs().maxCoeff() + h.maxCoeff());
-      Box<S>& b = boxes_[l];
+      Box<S>& b = slot.box;
       for (int k = 0; k < 3; ++k) {
         b.lo[k] = c[k] - h[k] - grow;
         b.hi[k] = c[k] + h[k] + grow;
       }
-      moveVolume(objects_[l], source_[l], spheres_[l], shapes_[l]);
+      body_.set(std::uint32_t(l), objectAt(std::uint32_t(l)), grownBy(b, links_.margin[l]));
+      if (slot.made) objectAt(std::uint32_t(l))->place(pose, slot.lo, slot.hi);  // for a predicate
     }
+    body_.refit();
+    return true;
   }
 
-  static bool onWorld(Object* w, ObjectId iw, Object*, ObjectId, void* data) {
-    WorldHit& hit = *static_cast<WorldHit*>(data);
-    StateChecker& c = *hit.checker;
-    if (hit.all) {
-      const std::uint32_t seq = c.world_.table().seq(iw);
-      if (seq >= hit.found_seq || !c.worldTouch(*w, iw, hit.link)) return false;
-      hit.found = iw;
-      hit.found_seq = seq;
-      return false;
+ public:
+  std::size_t badLink() const { return bad_link_; }
+
+ private:
+
+  // Link l's object, made on first use and placed for the state (most links meet no
+  // candidate: their objects are never touched).
+  LinkObject<S>* objectAt(std::uint32_t l) {
+    return reinterpret_cast<LinkObject<S>*>(&objects_[l]);
+  }
+  void construct(std::uint32_t l) {
+    new (&objects_[l]) LinkObject<S>(links_.geometry[l]);
+    slots_[l].made = true;
+  }
+  LinkObject<S>& object(std::uint32_t l) {
+    Slot& slot = slots_[l];
+    if (!slot.made) {
+      construct(l);
+      objectAt(l)->place(*slot.pose, slot.lo, slot.hi);
     }
-    if (!c.worldTouch(*w, iw, hit.link)) return false;
-    hit.found = iw;
-    return true;
+    return *objectAt(l);
+  }
+
+  // A pair offered by a walk: settled on the records if they can (a contact recorded, true to
+  // stop the walk when any contact will do), else kept for FCL.
+  bool offer(const Candidate& c, const VolumeSphere& sa, const VolumeShape& ha,
+             const VolumeSphere& sb, const VolumeShape& hb, S m) {
+    if (first_pair_ && found() && !(c < best_)) return false;  // cannot come first
+    switch (cull(sa, ha, sb, hb, m)) {
+      case Verdict::kApart:
+        return false;
+      case Verdict::kTouching:
+        best_ = c;
+        return !first_pair_;
+      case Verdict::kUnknown:
+        pending_.push_back(c);
+        return false;
+    }
+    return false;
+  }
+
+  static bool onWorld(Object* w, ObjectId iw, Object*, ObjectId link, void* data) {
+    StateChecker& c = *static_cast<StateChecker*>(data);
+    const VolumeSphere* s;
+    const VolumeShape* h;
+    c.worldRecords(*w, iw, s, h);
+    const Slot& slot = c.linkRecords(link);
+    const Candidate cand{link, c.world_.table().seq(iw), iw, false};
+    return c.offer(cand, slot.sphere, slot.shape, *s, *h,
+                   c.links_.margin[link] + c.world_.marginOf(iw));
+  }
+
+  static bool onLinks(Object*, ObjectId x, Object*, ObjectId y, void* data) {
+    StateChecker& c = *static_cast<StateChecker*>(data);
+    const std::uint32_t i = std::min(x, y), j = std::max(x, y);
+    const std::size_t n = c.links_.size();
+    if (c.links_.allowed[i * n + j]) return false;
+    const Slot& a = c.linkRecords(i);
+    const Slot& b = c.linkRecords(j);
+    return c.offer(Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
+                   c.links_.margin[i] + c.links_.margin[j]);
+  }
+
+  // FCL on the pairs kept, in walk order (the first pair: in the order of Candidate, up to the
+  // best proved on the records). True once a contact is known.
+  bool decidePending() {
+    if (first_pair_) std::sort(pending_.begin(), pending_.end());
+    for (const Candidate& c : pending_) {
+      if (found() && !(c < best_)) break;  // sorted (first pair), or found (any)
+      const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
+                            : links_.margin[c.link] + world_.marginOf(c.other);
+      const Object& b =
+          c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
+      if (narrow(object(c.link), b, m)) {
+        best_ = c;
+        if (!first_pair_) return true;
+        break;
+      }
+    }
+    return found() && !first_pair_;
   }
 
   // The world object's records: the table's, or built here (a world that keeps none).
@@ -320,46 +445,33 @@ class StateChecker {
     h = &built_shape_;
   }
 
-  bool worldTouch(const Object& w, ObjectId iw, std::uint32_t l) {
-    const VolumeSphere* s;
-    const VolumeShape* h;
-    worldRecords(w, iw, s, h);
-    return touch(objects_[l], spheres_[l], shapes_[l], w, *s, *h,
-                 links_.margin[l] + world_.marginOf(iw));
-  }
-
-  bool linksTouch(std::uint32_t i, std::uint32_t j) {
-    const S m = links_.margin[i] + links_.margin[j];
-    const Box<S>& a = boxes_[i];
-    const Box<S>& b = boxes_[j];
-    for (int k = 0; k < 3; ++k)
-      if (a.lo[k] > b.hi[k] + m || b.lo[k] > a.hi[k] + m) return false;
-    return touch(objects_[i], spheres_[i], shapes_[i], objects_[j], spheres_[j], shapes_[j], m);
-  }
-
-  // Whether a (a link) and b touch within margin m: the records first, then FCL.
-  bool touch(const Object& a, const VolumeSphere& sa, const VolumeShape& ha, const Object& b,
-             const VolumeSphere& sb, const VolumeShape& hb, S m) {
-    if (m == S(0)) {
-      switch (verdictOf(sa, ha, sb, hb, rate_, true)) {
-        case Verdict::kApart:
-          return false;
-        case Verdict::kTouching:
-          return true;
-        case Verdict::kUnknown:
-          break;
-      }
-      fcl::CollisionResult<S> result;
-      return fclCollide(&a, &b, request_, result) > 0;
+  // Link l's records, placed on first use in a state.
+  Slot& linkRecords(std::uint32_t l) {
+    Slot& slot = slots_[l];
+    if (slot.placed != state_) {
+      slot.placed = state_;
+      moveVolume(object(l), slot.source, slot.sphere, slot.shape);
     }
+    return slot;
+  }
+
+  // What the records say about a pair within margin m (0: plain contact).
+  Verdict cull(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+               const VolumeShape& hb, S m) const {
+    if (m == S(0)) return verdictOf(sa, ha, sb, hb, rate_, true);
     // Within a margin: the bound must beat it, with room for rounding m to a float.
     const float within = float(m);
     const VolumeGap gap = separationOf(sa, ha, sb, hb, rate_, within);
-    if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return false;
-    if (verdictOf(sa, ha, sb, hb, rate_, true) == Verdict::kTouching) return true;
+    if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return Verdict::kApart;
+    return verdictOf(sa, ha, sb, hb, rate_, true) == Verdict::kTouching ? Verdict::kTouching
+                                                                         : Verdict::kUnknown;
+  }
+
+  // FCL's answer: contact, or (margin m > 0) a distance of at most m.
+  bool narrow(const Object& a, const Object& b, S m) {
     fcl::CollisionResult<S> result;
     if (fclCollide(&a, &b, request_, result) > 0) return true;
-    return pairDistance(a, b) <= m;
+    return m > S(0) && pairDistance(a, b) <= m;
   }
 
   S pairDistance(const Object& a, const Object& b) {
@@ -374,8 +486,8 @@ class StateChecker {
     const VolumeSphere* s;
     const VolumeShape* h;
     c.worldRecords(*w, iw, s, h);
-    return c.lower(c.objects_[near.link], c.spheres_[near.link], c.shapes_[near.link], *w, *s, *h,
-                   best);
+    const Slot& slot = c.linkRecords(near.link);
+    return c.lower(c.object(near.link), slot.sphere, slot.shape, *w, *s, *h, best);
   }
 
   // Lowers best to the distance of a and b unless their records prove it is not below best;
@@ -407,12 +519,14 @@ class StateChecker {
         const std::uint32_t j = links_.after[k];
         S gap2 = 0;
         for (int a = 0; a < 3; ++a) {
-          const S g = std::max({boxes_[i].lo[a] - boxes_[j].hi[a], boxes_[j].lo[a] - boxes_[i].hi[a],
-                                S(0)});
+          const S g = std::max({slots_[i].box.lo[a] - slots_[j].box.hi[a],
+                                slots_[j].box.lo[a] - slots_[i].box.hi[a], S(0)});
           gap2 += g * g;
         }
         if (std::sqrt(gap2) >= best) continue;
-        lower(objects_[i], spheres_[i], shapes_[i], objects_[j], spheres_[j], shapes_[j], best);
+        const Slot& x = linkRecords(std::uint32_t(i));
+        const Slot& y = linkRecords(j);
+        lower(object(std::uint32_t(i)), x.sphere, x.shape, object(j), y.sphere, y.shape, best);
       }
     return best;
   }
@@ -422,17 +536,23 @@ class StateChecker {
   const Links<S>& links_;
   const VolumeSphere* world_spheres_;
   const VolumeShape* world_shapes_;
+  BodyView<S> body_;  // the links' boxes (grown by their margins) for the walk
   const fcl::CollisionRequest<S> request_{};
   const fcl::DistanceRequest<S> distance_request_{};
   const float rate_;
   const float distance_rate_;
-  std::vector<LinkObject<S>> objects_;
-  std::vector<VolumeSource> source_;
-  std::vector<VolumeSphere> spheres_;
-  std::vector<VolumeShape> shapes_;
-  std::vector<Box<S>> boxes_;
+  std::uint64_t state_ = 0;
+  std::vector<Slot> slots_;
+  struct alignas(LinkObject<S>) ObjectStorage {
+    unsigned char bytes[sizeof(LinkObject<S>)];
+  };
+  std::unique_ptr<ObjectStorage[]> objects_;  // LinkObjects, constructed on first use
   VolumeSphere built_sphere_{};
   VolumeShape built_shape_{};
+  bool first_pair_ = false;
+  std::size_t bad_link_ = 0;
+  Candidate best_{kNone, kNone, kNone, false};  // the contact found (link kNone: none)
+  std::vector<Candidate> pending_;               // pairs for FCL; its room kept between states
 };
 
 int resolveThreads(int threads) {
@@ -448,10 +568,11 @@ std::size_t checkedStates(const Links<S>& links, const std::vector<fcl::Transfor
     fail(where, "the pose array's size (" + std::to_string(poses.size()) +
                     ") is not a multiple of the number of links (" +
                     std::to_string(links.size()) + ")");
-  for (std::size_t i = 0; i < poses.size(); ++i)
-    if (!poses[i].linear().allFinite() || !poses[i].translation().allFinite())
-      fail(where, "pose " + std::to_string(i) + " has a NaN or infinite entry");
   return poses.size() / links.size();
+}
+
+[[noreturn]] void badPose(const char* where, std::size_t index) {
+  fail(where, "pose " + std::to_string(index) + " has a NaN or infinite entry");
 }
 
 // The states of an edge of n states in `order`: rank r visits state visit[r].
@@ -491,8 +612,10 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
       states, threads, 4,
       [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
       [&](auto& checker, std::size_t k) {
-        out[k].colliding = checker->check(poses.data() + k * n, options.self_collision,
+        const int answer = checker->check(poses.data() + k * n, options.self_collision,
                                           options.first_pair, options.clearance, &out[k]);
+        if (answer == detail::StateChecker<S>::kBadPose) detail::badPose("checkStates", k * n + checker->badLink());
+        out[k].colliding = answer != 0;
         if (out[k].colliding && options.clearance) out[k].clearance = S(0);
       });
   return out;
@@ -527,6 +650,8 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
     }
   }
   std::vector<std::atomic<std::size_t>> best(edges);
+  std::vector<std::uint8_t> bad(states, 0);  // per item: its state has a bad pose
+  std::vector<std::size_t> bad_pose(states, 0);
   for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
   const detail::Broadphase<S>& core = detail::coreOf(world);
   const int threads = states < 2 ? 1 : detail::resolveThreads(options.threads);
@@ -538,13 +663,29 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
         std::atomic<std::size_t>& b = best[edge_of[item]];
         const std::size_t rank = rank_of[item];
         if (rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
-        if (!checker->check(poses.data() + state_of[item] * n, options.self_collision, false,
-                            false, nullptr))
-          return;
+        const int answer = checker->check(poses.data() + state_of[item] * n,
+                                          options.self_collision, false, false, nullptr);
+        if (answer == 0) return;
+        if (answer == detail::StateChecker<S>::kBadPose) {
+          // As a contact: no state after it in the order is started, and the serial scan's
+          // first event decides (a pose error before any contact throws).
+          bad[item] = 1;
+          bad_pose[item] = state_of[item] * n + checker->badLink();
+        }
         std::size_t seen = b.load(std::memory_order_relaxed);
         while (rank < seen && !b.compare_exchange_weak(seen, rank, std::memory_order_relaxed)) {
         }
       });
+  // The earliest event of each edge in its order: a pose error throws, edge by edge.
+  std::vector<std::size_t> first_item(edges);
+  for (std::size_t e = 0, item = 0; e < edges; ++e) {
+    first_item[e] = item;
+    item += (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e];
+  }
+  for (std::size_t e = 0; e < edges; ++e) {
+    const std::size_t r = best[e].load(std::memory_order_relaxed);
+    if (r != kNoIndex && bad[first_item[e] + r]) detail::badPose("checkMotions", bad_pose[first_item[e] + r]);
+  }
   for (std::size_t e = 0; e < edges; ++e) {
     const std::size_t r = best[e].load(std::memory_order_relaxed);
     if (r == kNoIndex) continue;

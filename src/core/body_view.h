@@ -1,0 +1,92 @@
+#pragma once
+
+// A body of objects that belong to no table (a planner's links, posed anew for every state) as a
+// view the walks take: its items and a small tree of cubes over them, so that one walk of a
+// world's cubes against the body replaces one object query per link. The tree's shape depends
+// on the number of objects only: built once, its bounds refitted per state.
+
+#include <algorithm>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/kernels/box_ops.h"
+#include "core/kernels/pair_kernels.h"
+
+namespace cube {
+namespace detail {
+
+template <typename S>
+class BodyView {
+ public:
+  /// n objects, ids 0 .. n-1: leaves of at most kMaskLeaf consecutive ids (neighbours in a
+  /// chain of links lie near one another), halved top-down into a binary tree.
+  explicit BodyView(std::uint32_t n) : items_(n) {
+    if (n == 0) return;
+    const std::uint32_t leaves = (n + kMaskLeaf - 1) / kMaskLeaf;
+    struct Open {
+      std::uint32_t node, first_leaf, leaf_count;
+    };
+    nodes_.push_back(Node{});
+    std::vector<Open> open{{0, 0, leaves}};
+    for (std::size_t k = 0; k < open.size(); ++k) {  // breadth first: children after parents
+      const Open o = open[k];
+      if (o.leaf_count == 1) {
+        const std::uint32_t first = o.first_leaf * n / leaves;
+        const std::uint32_t end = (o.first_leaf + 1) * n / leaves;
+        nodes_[o.node].first = first;
+        nodes_[o.node].count = end - first;
+        for (std::uint32_t i = first; i < end; ++i) items_[i] = Item<S>{Box<S>{}, nullptr, o.node, i};
+        continue;
+      }
+      const std::uint32_t child = std::uint32_t(nodes_.size());
+      nodes_[o.node].first = child;
+      nodes_[o.node].count = 0;
+      nodes_.push_back(Node{});
+      nodes_.push_back(Node{});
+      const std::uint32_t half = o.leaf_count / 2;
+      open.push_back({child, o.first_leaf, half});
+      open.push_back({child + 1, o.first_leaf + half, o.leaf_count - half});
+    }
+  }
+
+  /// Object i and the box the walks test for it (grown by whatever margin it has).
+  void set(std::uint32_t i, fcl::CollisionObject<S>* obj, const Box<S>& box) {
+    items_[i].obj = obj;
+    items_[i].box = box;
+  }
+  /// The cubes' bounds from the boxes set: call after the last set() of a state.
+  void refit() {
+    for (std::size_t k = nodes_.size(); k-- > 0;) {
+      Node& node = nodes_[k];
+      if (node.isLeaf()) {
+        Box<S> u = items_[node.first].box;
+        for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i)
+          for (int d = 0; d < 3; ++d) {
+            u.lo[d] = std::min(u.lo[d], items_[i].box.lo[d]);
+            u.hi[d] = std::max(u.hi[d], items_[i].box.hi[d]);
+          }
+        roundOut(u, node.lo, node.hi);
+      } else {
+        const Node& x = nodes_[node.first];
+        const Node& y = nodes_[node.first + 1];
+        for (int d = 0; d < 3; ++d) {
+          node.lo[d] = std::min(x.lo[d], y.lo[d]);
+          node.hi[d] = std::max(x.hi[d], y.hi[d]);
+        }
+      }
+    }
+  }
+  View<S> view() const {
+    return View<S>{nodes_.data(), items_.data(), nodes_.empty() ? kNone : 0u,
+                   std::uint32_t(items_.size())};
+  }
+
+ private:
+  NodeArray nodes_;
+  std::vector<Item<S>> items_;
+};
+
+}  // namespace detail
+}  // namespace cube
