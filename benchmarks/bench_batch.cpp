@@ -8,7 +8,8 @@
 //
 // Names: batch_<kind>/<scene>/<n>/<manager>; kind states_free (70% of the states free),
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
-// 100 states, self-collision off), single (one state per call). Managers: the FCL managers
+// 100 states, self-collision off), single (the states of states_free, one per call: against
+// FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL managers
 // first, then cube (one thread) and cube_t2 (two threads), which report vs_best_fcl = the best
 // FCL manager's time in this run / cube's, and us_per_state. Each case first checks, outside the
 // timed part, that its answers equal the per-link check with FCL's dynamic tree (state by state,
@@ -223,7 +224,7 @@ struct Setup {
   std::unique_ptr<cube::CubeCollisionManager<S>> world;
   std::unique_ptr<Robot> robot;
   Poses free_mix, hit_mix, self_mix;  // kStates states each
-  Poses one;                          // the first state of free_mix
+  std::vector<Poses> singles;         // the states of free_mix, one vector each
   Poses edge_poses;
   std::vector<std::size_t> edge_starts;
   std::map<std::string, std::unique_ptr<Manager>> fcl;
@@ -298,7 +299,8 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
       take(s.hit_mix, 0.3);
     }
   }
-  s.one.assign(s.free_mix.begin(), s.free_mix.begin() + kLinks);
+  for (std::size_t k = 0; k < kStates; ++k)
+    s.singles.emplace_back(s.free_mix.begin() + k * kLinks, s.free_mix.begin() + (k + 1) * kLinks);
   // Edges: 20 edges of 20 to 100 states, straight lines in configuration space.
   for (std::size_t e = 0; e < 20; ++e) {
     s.edge_starts.push_back(s.edge_poses.size() / kLinks);
@@ -333,7 +335,7 @@ const Poses& posesOf(const Setup& s, Kind k) {
 }
 
 std::size_t statesIn(const Setup& s, Kind k) {
-  return k == Kind::single ? 1 : posesOf(s, k).size() / kLinks;
+  return posesOf(s, k).size() / kLinks;
 }
 
 // FCL's answers: per state (colliding or not), or per edge (first colliding state, or none).
@@ -370,8 +372,9 @@ std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
     return cube::checkMotions(*s.world, s.robot->body, poses, s.edge_starts,
                               cube::MotionOrder::path, o);
   std::vector<std::size_t> out;
-  if (k == Kind::single) {
-    out.push_back(cube::checkStates(*s.world, s.robot->body, s.one, o)[0].colliding);
+  if (k == Kind::single) {  // the states of states_free, one call each
+    for (const Poses& one : s.singles)
+      out.push_back(cube::checkStates(*s.world, s.robot->body, one, o)[0].colliding);
     return out;
   }
   for (const auto& r : cube::checkStates(*s.world, s.robot->body, poses, o))

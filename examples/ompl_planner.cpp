@@ -1,0 +1,362 @@
+// A real planner on the batched checks: OMPL's RRTConnect plans a 7-joint arm through a world of
+// obstacles, once with a StateValidityChecker and a MotionValidator built on cube::checkStates /
+// cube::checkMotion, once the way FCL users write them today (each link's setTransform and
+// computeAABB, world->collide(link) link by link on FCL's DynamicAABBTreeCollisionManager, a
+// robot manager's self-collide, OMPL's DiscreteMotionValidator over that checker). Same
+// problems, same seeds: identical answers give identical exploration, so the example checks that
+// both found the very same paths, and prints the planning times.
+//
+// Usage: ompl_planner [world objects] [problems] [threads]   (default 10000 5 1)
+
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/broadphase/default_broadphase_callbacks.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <ompl/base/DiscreteMotionValidator.h>
+#include <ompl/base/MotionValidator.h>
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/StateValidityChecker.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/util/Console.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "cube_collision/batch.h"
+#include "cube_collision/cube_collision_manager.h"
+#include "scenes.h"
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+namespace {
+
+using S = double;
+using Object = fcl::CollisionObjectd;
+using Poses = std::vector<fcl::Transform3d>;
+constexpr int kJoints = 7;
+constexpr double kLength = 1.0;  // each link
+
+// ---- The arm ----------------------------------------------------------------------------------
+
+std::vector<std::shared_ptr<fcl::CollisionGeometryd>> armGeometry() {
+  std::vector<std::shared_ptr<fcl::CollisionGeometryd>> g;
+  for (int i = 0; i < kJoints; ++i) {
+    if (i % 2 == 0)
+      g.push_back(std::make_shared<fcl::Boxd>(0.16, 0.16, kLength));
+    else
+      g.push_back(std::make_shared<fcl::Capsuled>(0.08, kLength - 0.16));
+  }
+  return g;
+}
+
+// Forward kinematics: a yaw joint at the base (the origin), then pitch and roll joints in turn;
+// each link's pose is the middle of its segment. One sine and cosine per joint and a rotation
+// about a frame axis applied to the columns (what a planner's own kinematics does): checks cost
+// a few microseconds, so a general 4x4 product per joint would be a large share of each.
+void forwardKinematics(const double* q, fcl::Transform3d* out) {
+  fcl::Matrix3d R = fcl::Matrix3d::Identity();
+  fcl::Vector3d p = fcl::Vector3d::Zero();
+  for (int i = 0; i < kJoints; ++i) {
+    const double c = std::cos(q[i]), s = std::sin(q[i]);
+    // R * rotation about local axis k (z for the base, then y and x in turn): two columns mix.
+    const int k = i == 0 ? 2 : (i % 2 ? 1 : 0);
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const fcl::Vector3d ca = R.col(a), cb = R.col(b);
+    R.col(a) = c * ca + s * cb;
+    R.col(b) = c * cb - s * ca;
+    out[i].linear() = R;
+    out[i].translation() = p + (kLength / 2) * R.col(2);
+    out[i].makeAffine();
+    p += kLength * R.col(2);
+  }
+}
+
+const double* jointsOf(const ob::State* s) {
+  return s->as<ob::RealVectorStateSpace::StateType>()->values;
+}
+
+// ---- Checkers built on the batched checks ------------------------------------------------------
+
+class CubeValidity final : public ob::StateValidityChecker {
+ public:
+  CubeValidity(const ob::SpaceInformationPtr& si, const cube::CubeCollisionManagerd& world,
+               const cube::BodySet<S>& body, int threads)
+      : ob::StateValidityChecker(si), world_(world), body_(body) {
+    options_.self_collision = true;
+    options_.threads = threads;
+  }
+  bool isValid(const ob::State* s) const override {
+    Poses poses(kJoints);  // const and thread-safe, as OMPL asks: no member is written
+    forwardKinematics(jointsOf(s), poses.data());
+    return !cube::checkStates(world_, body_, poses, options_)[0].colliding;
+  }
+
+ private:
+  const cube::CubeCollisionManagerd& world_;
+  const cube::BodySet<S>& body_;
+  cube::BatchOptions options_;
+};
+
+// The states DiscreteMotionValidator checks (j / nd for j = 1 .. nd), in one call, in its order
+// (the last state, then midpoints breadth first): the same answer, from one batch.
+class CubeMotion final : public ob::MotionValidator {
+ public:
+  CubeMotion(const ob::SpaceInformationPtr& si, const cube::CubeCollisionManagerd& world,
+             const cube::BodySet<S>& body, int threads)
+      : ob::MotionValidator(si), world_(world), body_(body) {
+    options_.self_collision = true;
+    options_.threads = threads;
+  }
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    const auto& space = si_->getStateSpace();
+    const int nd = space->validSegmentCount(s1, s2);
+    Poses poses(std::size_t(nd) * kJoints);
+    ob::State* test = si_->allocState();
+    for (int j = 1; j <= nd; ++j) {
+      space->interpolate(s1, s2, double(j) / double(nd), test);
+      forwardKinematics(jointsOf(test), poses.data() + std::size_t(j - 1) * kJoints);
+    }
+    si_->freeState(test);
+    const bool ok =
+        cube::checkMotion(world_, body_, poses, cube::MotionOrder::bisection, options_) ==
+        cube::kNoIndex;
+    if (ok)
+      ++valid_;
+    else
+      ++invalid_;
+    return ok;
+  }
+  bool checkMotion(const ob::State* s1, const ob::State* s2,
+                   std::pair<ob::State*, double>& last_valid) const override {
+    // Path order: the first colliding state, as DiscreteMotionValidator reports it.
+    const auto& space = si_->getStateSpace();
+    const int nd = space->validSegmentCount(s1, s2);
+    Poses poses(std::size_t(nd) * kJoints);
+    ob::State* test = si_->allocState();
+    for (int j = 1; j <= nd; ++j) {
+      space->interpolate(s1, s2, double(j) / double(nd), test);
+      forwardKinematics(jointsOf(test), poses.data() + std::size_t(j - 1) * kJoints);
+    }
+    si_->freeState(test);
+    const std::size_t first =
+        cube::checkMotion(world_, body_, poses, cube::MotionOrder::path, options_);
+    if (first == cube::kNoIndex) {
+      ++valid_;
+      return true;
+    }
+    last_valid.second = double(first) / double(nd);  // state first is j = first + 1
+    if (last_valid.first != nullptr) space->interpolate(s1, s2, last_valid.second, last_valid.first);
+    ++invalid_;
+    return false;
+  }
+
+ private:
+  const cube::CubeCollisionManagerd& world_;
+  const cube::BodySet<S>& body_;
+  cube::BatchOptions options_;
+};
+
+// ---- The checker FCL users write today ----------------------------------------------------------
+
+class FclValidity final : public ob::StateValidityChecker {
+ public:
+  FclValidity(const ob::SpaceInformationPtr& si, const fcl::BroadPhaseCollisionManagerd& world,
+              const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry)
+      : ob::StateValidityChecker(si), world_(world) {
+    std::vector<Object*> ptrs;
+    for (std::size_t i = 0; i < geometry.size(); ++i) {
+      links_.push_back(std::make_unique<Object>(geometry[i]));
+      links_.back()->setUserData(reinterpret_cast<void*>(i));
+      ptrs.push_back(links_.back().get());
+    }
+    robot_.registerObjects(ptrs);
+    robot_.setup();
+  }
+  // OMPL's checkers are const; this one writes its link objects (one planner thread only).
+  bool isValid(const ob::State* s) const override {
+    Poses poses(kJoints);
+    forwardKinematics(jointsOf(s), poses.data());
+    for (int i = 0; i < kJoints; ++i) {
+      links_[i]->setTransform(poses[i]);
+      links_[i]->computeAABB();
+    }
+    for (const auto& l : links_) {
+      fcl::DefaultCollisionData<S> d;
+      world_.collide(l.get(), &d, fcl::DefaultCollisionFunction<S>);
+      if (d.result.isCollision()) return false;
+    }
+    robot_.update();
+    fcl::DefaultCollisionData<S> d;
+    robot_.collide(&d, &FclValidity::selfCallback);
+    return !d.result.isCollision();
+  }
+
+ private:
+  static bool selfCallback(Object* a, Object* b, void* data) {
+    const auto i = reinterpret_cast<std::uintptr_t>(a->getUserData());
+    const auto j = reinterpret_cast<std::uintptr_t>(b->getUserData());
+    if (i + 1 == j || j + 1 == i) return false;  // adjacent links share a joint
+    return fcl::DefaultCollisionFunction<S>(a, b, data);
+  }
+  const fcl::BroadPhaseCollisionManagerd& world_;
+  std::vector<std::unique_ptr<Object>> links_;
+  mutable fcl::DynamicAABBTreeCollisionManagerd robot_;
+};
+
+// ---- Planning ---------------------------------------------------------------------------------
+
+// A sampler whose random numbers start from a given seed: each planning run repeats the same
+// sequence (OMPL's global seed only seeds the first generators of a process).
+class SeededSampler final : public ob::RealVectorStateSampler {
+ public:
+  SeededSampler(const ob::StateSpace* space, std::uint_fast32_t seed)
+      : ob::RealVectorStateSampler(space) {
+    rng_.setLocalSeed(seed);
+  }
+};
+
+struct Outcome {
+  bool solved = false;
+  double seconds = 0;
+  std::vector<std::vector<double>> path;
+};
+
+enum class Checker { cube, fcl };
+
+Outcome plan(Checker which, const std::vector<double>& start, const std::vector<double>& goal,
+             std::uint_fast32_t seed, const cube::CubeCollisionManagerd& cube_world,
+             const cube::BodySet<S>& body, const fcl::BroadPhaseCollisionManagerd& fcl_world,
+             const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry,
+             int threads) {
+  auto space = std::make_shared<ob::RealVectorStateSpace>(kJoints);
+  space->setBounds(-M_PI, M_PI);
+  space->setStateSamplerAllocator(
+      [seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, seed); });
+  auto si = std::make_shared<ob::SpaceInformation>(space);
+  si->setStateValidityCheckingResolution(0.005);
+  if (which == Checker::cube) {
+    si->setStateValidityChecker(std::make_shared<CubeValidity>(si, cube_world, body, threads));
+    si->setMotionValidator(std::make_shared<CubeMotion>(si, cube_world, body, threads));
+  } else {
+    si->setStateValidityChecker(std::make_shared<FclValidity>(si, fcl_world, geometry));
+    si->setMotionValidator(std::make_shared<ob::DiscreteMotionValidator>(si));
+  }
+  si->setup();
+  ob::ScopedState<> s(space), g(space);
+  for (int i = 0; i < kJoints; ++i) {
+    s[i] = start[i];
+    g[i] = goal[i];
+  }
+  auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+  pdef->setStartAndGoalStates(s, g);
+  auto planner = std::make_shared<og::RRTConnect>(si);
+  planner->setProblemDefinition(pdef);
+  planner->setup();
+  Outcome out;
+  const auto t0 = std::chrono::steady_clock::now();
+  out.solved = planner->solve(ob::timedPlannerTerminationCondition(120.0)) ==
+               ob::PlannerStatus::EXACT_SOLUTION;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (out.solved) {
+    const auto& path = *pdef->getSolutionPath()->as<og::PathGeometric>();
+    for (std::size_t k = 0; k < path.getStateCount(); ++k) {
+      const double* q = jointsOf(path.getState(k));
+      out.path.emplace_back(q, q + kJoints);
+    }
+  }
+  return out;
+}
+
+// Whether the arm at q touches anything in `objs` (brute force, FCL's narrow phase).
+bool touches(const std::vector<double>& q,
+             const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry,
+             const Object& obj) {
+  Poses poses(kJoints);
+  forwardKinematics(q.data(), poses.data());
+  for (int i = 0; i < kJoints; ++i) {
+    const Object link(geometry[i], poses[i]);
+    fcl::CollisionRequestd req;
+    fcl::CollisionResultd res;
+    if (fcl::collide(&link, &obj, req, res) > 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::size_t n = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 10000;
+  const int problems = argc > 2 ? std::atoi(argv[2]) : 5;
+  const int threads = argc > 3 ? std::atoi(argv[3]) : 1;
+  ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
+
+  // The world: objects around the arm (reach 7), none within 1.2 of its base. Each problem's
+  // start and goal are cleared of obstacles below.
+  cube::scenes::SceneOptions o;
+  o.n = n;
+  o.half_extent = 8;
+  o.seed = 11;
+  o.size_scale = argc > 4 ? std::atof(argv[4]) : 0.35;
+  auto scene = cube::scenes::makeScene<S>(o);
+  const auto geometry = armGeometry();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::vector<std::pair<std::vector<double>, std::vector<double>>> tasks;
+  for (int p = 0; p < problems; ++p) {
+    std::vector<double> a(kJoints), b(kJoints);
+    for (int i = 0; i < kJoints; ++i) {
+      a[i] = 0.5 * angle(rng);
+      b[i] = 0.5 * angle(rng);
+    }
+    tasks.emplace_back(a, b);
+  }
+  std::vector<Object*> objs;
+  for (const auto& obj : scene.objects) {
+    if (obj->getTranslation().norm() < 1.2) continue;
+    bool blocks = false;
+    for (const auto& [a, b] : tasks) blocks = blocks || touches(a, geometry, *obj) || touches(b, geometry, *obj);
+    if (!blocks) objs.push_back(obj.get());
+  }
+  cube::CubeCollisionManagerd cube_world;
+  cube_world.registerObjects(objs);
+  cube_world.setup();
+  fcl::DynamicAABBTreeCollisionManagerd fcl_world;
+  fcl_world.registerObjects(objs);
+  fcl_world.setup();
+  cube::BodySet<S> body;
+  for (const auto& g : geometry) body.addLink(g);
+  for (int i = 0; i + 1 < kJoints; ++i) body.allowPair(i, i + 1);
+
+  std::printf("RRTConnect, %d-joint arm, %zu obstacles, %d problems, cube on %d thread(s)\n",
+              kJoints, objs.size(), problems, threads);
+  double cube_s = 0, fcl_s = 0;
+  int same = 0, solved = 0;
+  for (int p = 0; p < problems; ++p) {
+    const std::uint_fast32_t seed = 1000 + p;
+    const Outcome c = plan(Checker::cube, tasks[p].first, tasks[p].second, seed, cube_world, body,
+                           fcl_world, geometry, threads);
+    const Outcome f = plan(Checker::fcl, tasks[p].first, tasks[p].second, seed, cube_world, body,
+                           fcl_world, geometry, threads);
+    const bool equal = c.solved == f.solved && c.path == f.path;
+    same += equal;
+    solved += c.solved;
+    cube_s += c.seconds;
+    fcl_s += f.seconds;
+    std::printf("  problem %d: %s, %zu states; cube %.1f ms, FCL %.1f ms (%.2fx)%s\n", p,
+                c.solved ? "solved" : "not solved", c.path.size(), 1e3 * c.seconds,
+                1e3 * f.seconds, f.seconds / c.seconds, equal ? "" : "  PATHS DIFFER");
+  }
+  std::printf("planning time: cube %.1f ms, FCL DynamicAABBTree %.1f ms: %.2fx less\n",
+              1e3 * cube_s, 1e3 * fcl_s, fcl_s / cube_s);
+  std::printf("same paths: %d of %d problems (%d solved)\n", same, problems, solved);
+  return same == problems && solved > 0 ? 0 : 1;
+}
