@@ -6,7 +6,8 @@
 // problems, same seeds: identical answers give identical exploration, so the example checks that
 // both found the very same paths, and prints the planning times.
 //
-// Usage: ompl_planner [world objects] [problems] [threads]   (default 10000 5 1)
+// Usage: ompl_planner [world objects] [problems] [threads] [object size scale]
+// (default 2000 5 1 1.0)
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/default_broadphase_callbacks.h>
@@ -107,7 +108,9 @@ class CubeValidity final : public ob::StateValidityChecker {
 };
 
 // The states DiscreteMotionValidator checks (j / nd for j = 1 .. nd), in one call, in its order
-// (the last state, then midpoints breadth first): the same answer, from one batch.
+// (the last state, then midpoints breadth first): the same answer. Each state's joints are
+// interpolated as RealVectorStateSpace::interpolate does and its poses computed only when the
+// check reads it (cube::PoseFunction): an edge that collides early costs no kinematics after.
 class CubeMotion final : public ob::MotionValidator {
  public:
   CubeMotion(const ob::SpaceInformationPtr& si, const cube::CubeCollisionManagerd& world,
@@ -117,18 +120,7 @@ class CubeMotion final : public ob::MotionValidator {
     options_.threads = threads;
   }
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
-    const auto& space = si_->getStateSpace();
-    const int nd = space->validSegmentCount(s1, s2);
-    Poses poses(std::size_t(nd) * kJoints);
-    ob::State* test = si_->allocState();
-    for (int j = 1; j <= nd; ++j) {
-      space->interpolate(s1, s2, double(j) / double(nd), test);
-      forwardKinematics(jointsOf(test), poses.data() + std::size_t(j - 1) * kJoints);
-    }
-    si_->freeState(test);
-    const bool ok =
-        cube::checkMotion(world_, body_, poses, cube::MotionOrder::bisection, options_) ==
-        cube::kNoIndex;
+    const bool ok = firstColliding(s1, s2, cube::MotionOrder::bisection).first == cube::kNoIndex;
     if (ok)
       ++valid_;
     else
@@ -138,28 +130,33 @@ class CubeMotion final : public ob::MotionValidator {
   bool checkMotion(const ob::State* s1, const ob::State* s2,
                    std::pair<ob::State*, double>& last_valid) const override {
     // Path order: the first colliding state, as DiscreteMotionValidator reports it.
-    const auto& space = si_->getStateSpace();
-    const int nd = space->validSegmentCount(s1, s2);
-    Poses poses(std::size_t(nd) * kJoints);
-    ob::State* test = si_->allocState();
-    for (int j = 1; j <= nd; ++j) {
-      space->interpolate(s1, s2, double(j) / double(nd), test);
-      forwardKinematics(jointsOf(test), poses.data() + std::size_t(j - 1) * kJoints);
-    }
-    si_->freeState(test);
-    const std::size_t first =
-        cube::checkMotion(world_, body_, poses, cube::MotionOrder::path, options_);
+    const auto [first, nd] = firstColliding(s1, s2, cube::MotionOrder::path);
     if (first == cube::kNoIndex) {
       ++valid_;
       return true;
     }
-    last_valid.second = double(first) / double(nd);  // state first is j = first + 1
-    if (last_valid.first != nullptr) space->interpolate(s1, s2, last_valid.second, last_valid.first);
+    last_valid.second = double(first) / double(nd);  // state `first` is j = first + 1
+    if (last_valid.first != nullptr)
+      si_->getStateSpace()->interpolate(s1, s2, last_valid.second, last_valid.first);
     ++invalid_;
     return false;
   }
 
  private:
+  std::pair<std::size_t, int> firstColliding(const ob::State* s1, const ob::State* s2,
+                                             cube::MotionOrder order) const {
+    const int nd = si_->getStateSpace()->validSegmentCount(s1, s2);
+    const double* from = jointsOf(s1);
+    const double* to = jointsOf(s2);
+    const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* poses) {
+      const double t = double(k + 1) / double(nd);
+      double q[kJoints];
+      for (int i = 0; i < kJoints; ++i) q[i] = from[i] + (to[i] - from[i]) * t;
+      forwardKinematics(q, poses);
+    };
+    return {cube::checkMotion(world_, body_, std::size_t(nd), pose_of, order, options_), nd};
+  }
+
   const cube::CubeCollisionManagerd& world_;
   const cube::BodySet<S>& body_;
   cube::BatchOptions options_;
@@ -294,7 +291,7 @@ bool touches(const std::vector<double>& q,
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::size_t n = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 10000;
+  const std::size_t n = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 2000;
   const int problems = argc > 2 ? std::atoi(argv[2]) : 5;
   const int threads = argc > 3 ? std::atoi(argv[3]) : 1;
   ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
@@ -305,7 +302,7 @@ int main(int argc, char** argv) {
   o.n = n;
   o.half_extent = 8;
   o.seed = 11;
-  o.size_scale = argc > 4 ? std::atof(argv[4]) : 0.35;
+  o.size_scale = argc > 4 ? std::atof(argv[4]) : 1.0;
   auto scene = cube::scenes::makeScene<S>(o);
   const auto geometry = armGeometry();
   std::mt19937 rng(3);

@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -158,6 +159,25 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         const std::vector<fcl::Transform3<S>>& poses,
+                        MotionOrder order = MotionOrder::path,
+                        const BatchOptions& options = BatchOptions());
+
+/// Writes the links' poses of state `state` (0 <= state < the motion's states) to
+/// poses[0 .. body.size() - 1], every one of them (the buffer holds the last state's it was given).
+/// Called only for the states a check reads, at most once per state, possibly from several
+/// threads at once (BatchOptions::threads): it must be safe to call concurrently.
+template <typename S>
+using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* poses)>;
+
+/// checkMotion for one edge of `states` states whose poses `pose_of` writes on demand, for a
+/// planner that interpolates an edge and runs its kinematics per state: the states after the
+/// answer in `order` are never computed (with `threads` > 1, a few may be, and their answers
+/// dropped). The same answer as checkMotion over all the poses, whatever the thread count. Throws
+/// std::invalid_argument for an empty body set or a null function (before any work), and as
+/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on.
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        std::size_t states, const PoseFunction<S>& pose_of,
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 

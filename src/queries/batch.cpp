@@ -41,6 +41,7 @@ struct BodySet<S>::Links {
                                                // [after_at[i], after_at[i + 1]), ascending
   bool any_margin = false;
   bool any_bits = false;  // a link has filter bits other than the default
+  detail::BodyView<S> view{0};  // the links' tree, copied by each checker (bounds per state)
 
   std::size_t size() const { return geometry.size(); }
   void listPairs() {
@@ -123,6 +124,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   std::vector<std::uint8_t> allowed((n + 1) * (n + 1), 0);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) allowed[i * (n + 1) + j] = l.allowed[i * n + j];
+  detail::BodyView<S> view(std::uint32_t(n + 1));
   // Nothing can throw from here on but allocation, before any member changes.
   l.geometry.reserve(n + 1);
   l.margin.reserve(n + 1);
@@ -139,6 +141,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   l.allowed = std::move(allowed);
   l.any_margin = l.any_margin || margin > S(0);
   l.any_bits = l.any_bits || !l.bits.back().isDefault();
+  l.view = std::move(view);
   l.listPairs();
   return n;
 }
@@ -227,15 +230,13 @@ class StateChecker {
         links_(links),
         world_spheres_(world.table().spheres()),
         world_shapes_(world.table().shapes()),
-        body_(std::uint32_t(links.size())),
+        body_(links.view),
         rate_(volumeMarginRate(request_.gjk_tolerance)),
         distance_rate_(volumeMarginRate(distance_request_.distance_tolerance)) {
     slots_.resize(links.size());
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
-    // A predicate sees the link objects of every pair the walk offers: all are made now.
-    if (world.keep())
-      for (std::size_t l = 0; l < links.size(); ++l) construct(std::uint32_t(l));
+    eager_objects_ = bool(world.keep());
   }
   ~StateChecker() {
     for (std::size_t l = 0; l < slots_.size(); ++l)
@@ -293,6 +294,7 @@ class StateChecker {
     VolumeSphere sphere;
     VolumeShape shape;
     std::uint64_t placed = 0;  // the state the records were placed for
+    std::uint64_t posed = 0;   // the state its object was placed for
     bool made = false;         // its LinkObject is constructed
   };
   // A pair the records did not settle, or the best contact so far: (link, key) ordered, key the
@@ -324,17 +326,16 @@ class StateChecker {
   // records.
   bool place(const fcl::Transform3<S>* poses) {
     ++state_;
+    // x - x is 0 for a finite x and NaN otherwise: summed per lane over the links and tested
+    // once (every entry of R and t reaches c or h; an infinite one times a zero extent is NaN).
+    fcl::Vector3<S> finite = fcl::Vector3<S>::Zero();
     for (std::size_t l = 0; l < links_.size(); ++l) {
       Slot& slot = slots_[l];
       const fcl::Transform3<S>& pose = poses[l];
       const fcl::Matrix3<S> R = pose.linear();
       const fcl::Vector3<S> c = R * links_.mid[l] + pose.translation();
       const fcl::Vector3<S> h = R.cwiseAbs() * links_.half[l];
-      // Every entry of R and t reaches c or h (an infinite one times a zero extent is NaN).
-      if (!std::isfinite(c.sum() + h.sum())) {
-        bad_link_ = l;
-        return false;
-      }
+      finite += (c - c) + (h - h);
       slot.pose = &pose;
       slot.lo = c - h;
       slot.hi = c + h;
@@ -345,8 +346,17 @@ class StateChecker {
         b.hi[k] = c[k] + h[k] + grow;
       }
       body_.set(std::uint32_t(l), objectAt(std::uint32_t(l)), grownBy(b, links_.margin[l]));
-      if (slot.made) objectAt(std::uint32_t(l))->place(pose, slot.lo, slot.hi);  // for a predicate
     }
+    if (!(finite.array() == S(0)).all()) {
+      for (std::size_t l = 0; l < links_.size(); ++l)
+        if (!poses[l].linear().allFinite() || !poses[l].translation().allFinite()) {
+          bad_link_ = l;
+          return false;
+        }
+    }
+    // A predicate sees every link object the walk offers: placed now. Otherwise on first use.
+    if (eager_objects_)
+      for (std::uint32_t l = 0; l < links_.size(); ++l) object(l);
     body_.refit();
     return true;
   }
@@ -367,9 +377,10 @@ class StateChecker {
   }
   LinkObject<S>& object(std::uint32_t l) {
     Slot& slot = slots_[l];
-    if (!slot.made) {
-      construct(l);
+    if (slot.posed != state_) {
+      if (!slot.made) construct(l);
       objectAt(l)->place(*slot.pose, slot.lo, slot.hi);
+      slot.posed = state_;
     }
     return *objectAt(l);
   }
@@ -550,6 +561,7 @@ class StateChecker {
   VolumeSphere built_sphere_{};
   VolumeShape built_shape_{};
   bool first_pair_ = false;
+  bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
   std::size_t bad_link_ = 0;
   Candidate best_{kNone, kNone, kNone, false};  // the contact found (link kNone: none)
   std::vector<Candidate> pending_;               // pairs for FCL; its room kept between states
@@ -621,6 +633,88 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
   return out;
 }
 
+namespace detail {
+namespace {
+
+// One thread's scratch of a motion check: the checker and, for poses written on demand, room
+// for one state's.
+template <typename S>
+struct MotionScratch {
+  StateChecker<S> checker;
+  std::vector<fcl::Transform3<S>> poses;
+  MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand)
+      : checker(world, links), poses(on_demand ? links.size() : 0) {}
+};
+
+// checkMotions over `states` states whose poses pose_at(scratch, state) gives (a pointer to the
+// links' poses), edges as edge_starts says (checked by the caller).
+template <typename S, class PoseAt>
+std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
+                                         std::size_t states,
+                                         const std::vector<std::size_t>& edge_starts,
+                                         MotionOrder order, const BatchOptions& options,
+                                         bool on_demand, const PoseAt& pose_at) {
+  const std::size_t edges = edge_starts.size();
+  std::vector<std::size_t> first(edges, kNoIndex);
+  if (edges == 0) return first;
+  // Items in edge order, each edge's states in visiting order: edge e's take the places of
+  // its states, edge_starts[e] ...
+  struct Item {
+    std::uint32_t edge;
+    std::uint32_t rank;
+    std::size_t state;
+  };
+  std::vector<Item> items(states);
+  std::vector<std::size_t> visit;
+  for (std::size_t e = 0, item = 0; e < edges; ++e) {
+    const std::size_t begin = edge_starts[e];
+    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+    visitOrder(end - begin, order, visit);
+    for (std::size_t r = 0; r < visit.size(); ++r, ++item)
+      items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + visit[r]};
+  }
+  // Per edge: the lowest rank known to collide (or to hold a bad pose).
+  std::vector<std::atomic<std::size_t>> best(edges);
+  for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
+  std::vector<std::pair<std::size_t, std::size_t>> bad;  // (item, pose index): rare
+  const int threads = states < 2 ? 1 : resolveThreads(options.threads);
+  const std::size_t n = links.size();
+  parallelForWith(
+      states, threads, 4,
+      [&] { return std::make_unique<MotionScratch<S>>(core, links, on_demand); },
+      [&](auto& scratch, std::size_t i) {
+        const Item& item = items[i];
+        std::atomic<std::size_t>& b = best[item.edge];
+        if (item.rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
+        const int answer = scratch->checker.check(pose_at(*scratch, item.state),
+                                                  options.self_collision, false, false, nullptr);
+        if (answer == 0) return;
+        if (answer == StateChecker<S>::kBadPose) {
+          // As a contact: no state after it in the order is started, and the serial scan's
+          // first event decides (a pose error before any contact throws).
+#pragma omp critical(cube_batch_bad_pose)
+          bad.emplace_back(i, item.state * n + scratch->checker.badLink());
+        }
+        std::size_t seen = b.load(std::memory_order_relaxed);
+        while (item.rank < seen &&
+               !b.compare_exchange_weak(seen, item.rank, std::memory_order_relaxed)) {
+        }
+      });
+  // The earliest event of each edge in its order: a pose error there throws, edge by edge.
+  std::sort(bad.begin(), bad.end());
+  for (const auto& [i, pose] : bad)
+    if (best[items[i].edge].load(std::memory_order_relaxed) == items[i].rank)
+      badPose("checkMotions", pose);
+  for (std::size_t e = 0; e < edges; ++e) {
+    const std::size_t r = best[e].load(std::memory_order_relaxed);
+    if (r != kNoIndex) first[e] = items[edge_starts[e] + r].state - edge_starts[e];
+  }
+  return first;
+}
+
+}  // namespace
+}  // namespace detail
+
 template <typename S>
 std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                                       const std::vector<fcl::Transform3<S>>& poses,
@@ -632,69 +726,10 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
     if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
         edge_starts[e] >= states)
       fail("checkMotions", "edge_starts must start at 0 and increase strictly within the states");
-  const std::size_t edges = edge_starts.size();
-  std::vector<std::size_t> first(edges, kNoIndex);
-  if (edges == 0) return first;
-  // Items in edge order, each edge's states in visiting order; the visit orders of edges of
-  // the same length are the same, kept per length.
-  std::vector<std::size_t> edge_of(states), rank_of(states), state_of(states);
-  std::vector<std::size_t> visit;
-  for (std::size_t e = 0, item = 0; e < edges; ++e) {
-    const std::size_t begin = edge_starts[e];
-    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
-    detail::visitOrder(end - begin, order, visit);
-    for (std::size_t r = 0; r < visit.size(); ++r, ++item) {
-      edge_of[item] = e;
-      rank_of[item] = r;
-      state_of[item] = begin + visit[r];
-    }
-  }
-  std::vector<std::atomic<std::size_t>> best(edges);
-  std::vector<std::uint8_t> bad(states, 0);  // per item: its state has a bad pose
-  std::vector<std::size_t> bad_pose(states, 0);
-  for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
-  const detail::Broadphase<S>& core = detail::coreOf(world);
-  const int threads = states < 2 ? 1 : detail::resolveThreads(options.threads);
   const std::size_t n = links.size();
-  detail::parallelForWith(
-      states, threads, 4,
-      [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
-      [&](auto& checker, std::size_t item) {
-        std::atomic<std::size_t>& b = best[edge_of[item]];
-        const std::size_t rank = rank_of[item];
-        if (rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
-        const int answer = checker->check(poses.data() + state_of[item] * n,
-                                          options.self_collision, false, false, nullptr);
-        if (answer == 0) return;
-        if (answer == detail::StateChecker<S>::kBadPose) {
-          // As a contact: no state after it in the order is started, and the serial scan's
-          // first event decides (a pose error before any contact throws).
-          bad[item] = 1;
-          bad_pose[item] = state_of[item] * n + checker->badLink();
-        }
-        std::size_t seen = b.load(std::memory_order_relaxed);
-        while (rank < seen && !b.compare_exchange_weak(seen, rank, std::memory_order_relaxed)) {
-        }
-      });
-  // The earliest event of each edge in its order: a pose error throws, edge by edge.
-  std::vector<std::size_t> first_item(edges);
-  for (std::size_t e = 0, item = 0; e < edges; ++e) {
-    first_item[e] = item;
-    item += (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e];
-  }
-  for (std::size_t e = 0; e < edges; ++e) {
-    const std::size_t r = best[e].load(std::memory_order_relaxed);
-    if (r != kNoIndex && bad[first_item[e] + r]) detail::badPose("checkMotions", bad_pose[first_item[e] + r]);
-  }
-  for (std::size_t e = 0; e < edges; ++e) {
-    const std::size_t r = best[e].load(std::memory_order_relaxed);
-    if (r == kNoIndex) continue;
-    const std::size_t begin = edge_starts[e];
-    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
-    detail::visitOrder(end - begin, order, visit);
-    first[e] = visit[r];
-  }
-  return first;
+  return detail::firstCollisions(
+      detail::coreOf(world), links, states, edge_starts, order, options, false,
+      [&](auto&, std::size_t state) { return poses.data() + state * n; });
 }
 
 template <typename S>
@@ -707,6 +742,23 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   return first.empty() ? kNoIndex : first[0];
 }
 
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        std::size_t states, const PoseFunction<S>& pose_of, MotionOrder order,
+                        const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  if (links.size() == 0) fail("checkMotion", "the body set has no link");
+  if (!pose_of) fail("checkMotion", "null pose function");
+  if (states == 0) return kNoIndex;
+  const std::vector<std::size_t> starts{0};
+  return detail::firstCollisions(
+      detail::coreOf(world), links, states, starts, order, options, true,
+      [&](auto& scratch, std::size_t state) {
+        pose_of(state, scratch.poses.data());
+        return scratch.poses.data();
+      })[0];
+}
+
 #define CUBE_INSTANTIATE_BATCH(S)                                                             \
   template class BodySet<S>;                                                                  \
   template std::vector<StateResult<S>> checkStates<S>(                                        \
@@ -717,6 +769,9 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
       const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                     \
   template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,      \
                                       const std::vector<fcl::Transform3<S>>&, MotionOrder,    \
+                                      const BatchOptions&);                                   \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,      \
+                                      std::size_t, const PoseFunction<S>&, MotionOrder,       \
                                       const BatchOptions&);
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)
