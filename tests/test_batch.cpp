@@ -389,11 +389,25 @@ TEST(Batch, MotionsGiveTheSerialScansAnswer) {
         EXPECT_EQ(first[e], serialScan(states, starts[e], end, order)) << "edge " << e;
         edges_hit += first[e] != cube::kNoIndex;
       }
-      // One edge alone.
-      const std::vector<fcl::Transform3d> edge(poses.begin() + starts[3] * body.size(),
-                                               poses.begin() + starts[4] * body.size());
-      EXPECT_EQ(cube::checkMotion(w.manager, body, edge, order, o),
-                serialScan(states, starts[3], starts[4], order));
+      // One edge alone, from the array and from poses written on demand.
+      for (std::size_t e = 0; e + 1 < starts.size(); ++e) {
+        const std::vector<fcl::Transform3d> edge(poses.begin() + starts[e] * body.size(),
+                                                 poses.begin() + starts[e + 1] * body.size());
+        const std::size_t want = serialScan(states, starts[e], starts[e + 1], order);
+        EXPECT_EQ(cube::checkMotion(w.manager, body, edge, order, o), want);
+        std::atomic<std::size_t> calls{0};
+        const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* out) {
+          ++calls;
+          for (std::size_t l = 0; l < body.size(); ++l) out[l] = edge[k * body.size() + l];
+        };
+        const std::size_t n = edge.size() / body.size();
+        EXPECT_EQ(cube::checkMotion(w.manager, body, n, pose_of, order, o), want);
+        EXPECT_LE(calls.load(), n);
+        // On one thread in path order, no state after the answer is computed.
+        if (t == 1 && order == cube::MotionOrder::path) {
+          EXPECT_EQ(calls.load(), want == cube::kNoIndex ? n : want + 1);
+        }
+      }
     }
   EXPECT_GT(edges_hit, 3u);
   EXPECT_LT(edges_hit, 27u);
@@ -431,6 +445,33 @@ TEST(Batch, BadInputChangesNothing) {
   EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {1, 2}), std::invalid_argument);
   EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {0, 2, 2}), std::invalid_argument);
   EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {0, 4}), std::invalid_argument);
+  // Motions: a bad pose throws where the serial scan meets it, before the first collision.
+  {
+    const auto more = randomStates(300, 3, 9);
+    const auto r = cube::checkStates(w.manager, body, more);
+    std::size_t hit = cube::kNoIndex, free_state = cube::kNoIndex;
+    for (std::size_t k = 0; k < r.size(); ++k)
+      (r[k].colliding ? hit : free_state) = k;
+    ASSERT_NE(hit, cube::kNoIndex);
+    ASSERT_NE(free_state, cube::kNoIndex);
+    auto nan = more;
+    nan[0].translation()[0] = std::nan("");
+    std::vector<fcl::Transform3d> edge;
+    for (const std::size_t k : {hit, std::size_t(0)})  // a collision, then the bad state
+      edge.insert(edge.end(), (k == 0 ? nan : more).begin() + k * 3,
+                  (k == 0 ? nan : more).begin() + k * 3 + 3);
+    EXPECT_EQ(cube::checkMotion(w.manager, body, edge), 0u);
+    edge.clear();
+    for (const std::size_t k : {free_state, std::size_t(0)})  // free, then the bad state
+      edge.insert(edge.end(), (k == 0 ? nan : more).begin() + k * 3,
+                  (k == 0 ? nan : more).begin() + k * 3 + 3);
+    EXPECT_THROW(cube::checkMotion(w.manager, body, edge), std::invalid_argument);
+    EXPECT_THROW(cube::checkMotion(w.manager, body, 3, cube::PoseFunction<S>()),
+                 std::invalid_argument);
+    EXPECT_THROW(cube::checkMotion(w.manager, cube::BodySet<S>(), 3,
+                                   [](std::size_t, fcl::Transform3d*) {}),
+                 std::invalid_argument);
+  }
   // Still usable, same answers as before the errors.
   cube::BatchOptions o;
   o.first_pair = true;

@@ -23,7 +23,12 @@
 namespace cube {
 namespace detail {
 struct BodyAccess;
-}
+/// T as a parameter type that takes no part in deducing S (a lambda converts to it).
+template <class T>
+struct NoDeduce {
+  using type = T;
+};
+}  // namespace detail
 
 /// "No such state, link or object".
 inline constexpr std::size_t kNoIndex = std::numeric_limits<std::size_t>::max();
@@ -177,7 +182,8 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on.
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
-                        std::size_t states, const PoseFunction<S>& pose_of,
+                        std::size_t states,
+                        const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 

@@ -744,8 +744,9 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
-                        std::size_t states, const PoseFunction<S>& pose_of, MotionOrder order,
-                        const BatchOptions& options) {
+                        std::size_t states,
+                        const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+                        MotionOrder order, const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
   if (links.size() == 0) fail("checkMotion", "the body set has no link");
   if (!pose_of) fail("checkMotion", "null pose function");
