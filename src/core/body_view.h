@@ -17,14 +17,17 @@
 namespace cube {
 namespace detail {
 
+/// Objects per leaf of a body's tree.
+inline constexpr std::uint32_t kBodyLeaf = 8;
+
 template <typename S>
 class BodyView {
  public:
-  /// n objects, ids 0 .. n-1: leaves of at most kMaskLeaf consecutive ids (neighbours in a
-  /// chain of links lie near one another), halved top-down into a binary tree.
-  explicit BodyView(std::uint32_t n) : items_(n) {
+  /// n objects, ids 0 .. n-1: leaves of at most per_leaf (<= kMaskLeaf) consecutive ids
+  /// (neighbours in a chain of links lie near one another), halved top-down into a binary tree.
+  explicit BodyView(std::uint32_t n, std::uint32_t per_leaf = kBodyLeaf) : items_(n) {
     if (n == 0) return;
-    const std::uint32_t leaves = (n + kMaskLeaf - 1) / kMaskLeaf;
+    const std::uint32_t leaves = (n + per_leaf - 1) / per_leaf;
     struct Open {
       std::uint32_t node, first_leaf, leaf_count;
     };
@@ -35,6 +38,7 @@ class BodyView {
       if (o.leaf_count == 1) {
         const std::uint32_t first = o.first_leaf * n / leaves;
         const std::uint32_t end = (o.first_leaf + 1) * n / leaves;
+        leaves_.push_back(o.node);
         nodes_[o.node].first = first;
         nodes_[o.node].count = end - first;
         for (std::uint32_t i = first; i < end; ++i) items_[i] = Item<S>{Box<S>{}, nullptr, o.node, i};
@@ -49,6 +53,9 @@ class BodyView {
       open.push_back({child, o.first_leaf, half});
       open.push_back({child + 1, o.first_leaf + half, o.leaf_count - half});
     }
+    std::sort(leaves_.begin(), leaves_.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return nodes_[a].first < nodes_[b].first;
+    });
   }
 
   /// Object i and the box the walks test for it (grown by whatever margin it has).
@@ -82,10 +89,17 @@ class BodyView {
     return View<S>{nodes_.data(), items_.data(), nodes_.empty() ? kNone : 0u,
                    std::uint32_t(items_.size())};
   }
+  /// The leaves in the order of their ids (leaf k holds the lowest ids after leaf k - 1's).
+  std::size_t leafCount() const { return leaves_.size(); }
+  /// Leaf k alone as a view (its ids as in view()).
+  View<S> leafView(std::size_t k) const {
+    return View<S>{nodes_.data(), items_.data(), leaves_[k], std::uint32_t(items_.size())};
+  }
 
  private:
   NodeArray nodes_;
   std::vector<Item<S>> items_;
+  std::vector<std::uint32_t> leaves_;  // leaf nodes in id order
 };
 
 }  // namespace detail

@@ -258,8 +258,12 @@ class StateChecker {
     first_pair_ = first_pair;
     best_ = Candidate{kNone, kNone, kNone, false};
     pending_.clear();
-    if (world_.size() != 0) {
-      world_.collide(body_.view(), links_.any_bits ? links_.bits.data() : nullptr, this,
+    // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
+    // the first group of links that touches (as a link-by-link check does), and a free one
+    // walks little more than the whole tree at once would.
+    for (std::size_t k = 0; k < body_.leafCount() && world_.size() != 0 && !found(); ++k) {
+      pending_.clear();
+      world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
                      CollideFn<S>(&StateChecker::onWorld), nullptr);
       if (found() && !first_pair) return true;
       if (decidePending()) return true;
