@@ -17,8 +17,11 @@
 namespace cube {
 namespace detail {
 
-/// Objects per leaf of a body's tree.
-inline constexpr std::uint32_t kBodyLeaf = 8;
+/// Objects per leaf of a body's tree. A 30-link robot (instructions per state, callgrind,
+/// uniform / clustered 10,000, free / colliding states, one walk per leaf): 8 a leaf 19.1k / 9.2k
+/// free, 22.7k / 33.7k colliding (a leaf of 8 links spans a long box that meets many of the
+/// world's leaves); 4 a leaf 17.7k / 9.8k, 16.8k / 21.5k; 2 and 1 cost free states up to 2x.
+inline constexpr std::uint32_t kBodyLeaf = 4;
 
 template <typename S>
 class BodyView {
