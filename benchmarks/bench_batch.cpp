@@ -1,19 +1,19 @@
 // Batched state and motion checks (issue 37): a 30-link robot in batches of states against a
 // static world, checkStates / checkMotions against every FCL manager used the way FCL users do
 // it today. Per state: each link's setTransform and computeAABB, then the faster of (a) a robot
-// manager's update() (of the world's kind) and world->collide(robot), (b) world->collide(link) link by link; stop at
-// the first contact (FCL's default callback and request). With self-collision the robot
-// manager's self-collide follows, adjacent links skipped. Edges: the states in path order,
+// manager's update() (of the world's kind) and world->collide(robot), (b) world->collide(link) link
+// by link; stop at the first contact (FCL's default callback and request). With self-collision the
+// robot manager's self-collide follows, adjacent links skipped. Edges: the states in path order,
 // stopping at the edge's first colliding state.
 //
 // Names: batch_<kind>/<scene>/<n>/<manager>; kind states_free (70% of the states free),
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
-// 100 states, self-collision off), single (the states of states_free, one per call: against
-// FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL managers
-// first, then cube (one thread) and cube_t2 (two threads), which report vs_best_fcl = the best
-// FCL manager's time in this run / cube's, and us_per_state. Each case first checks, outside the
-// timed part, that its answers equal the per-link check with FCL's dynamic tree (state by state,
-// edge by edge); a mismatch fails the binary.
+// 100 states from a free state, self-collision off), single (the states of states_free, one per
+// call: against FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL
+// managers first, then cube (one thread) and cube_t2 (two threads), which report vs_best_fcl = the
+// best FCL manager's time in this run / cube's, and us_per_state. Each case first checks, outside
+// the timed part, that its answers equal the per-link check with FCL's dynamic tree (state by
+// state, edge by edge); a mismatch fails the binary.
 
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_SSaP.h>
@@ -55,8 +55,8 @@ namespace scenes = cube::scenes;
 constexpr std::size_t kLinks = 30;
 constexpr std::size_t kStates = 200;
 
-const char* const kFcl[] = {"DynamicAABBTree", "DynamicAABBTree_Array", "SaP", "SSaP",
-                            "IntervalTree", "SpatialHashing", "Naive"};
+const char* const kFcl[] = {"DynamicAABBTree", "DynamicAABBTree_Array", "SaP",  "SSaP",
+                            "IntervalTree",    "SpatialHashing",        "Naive"};
 
 std::unique_ptr<Manager> makeFcl(const std::string& name, const std::vector<Object*>& objs,
                                  double typical, double half) {
@@ -263,8 +263,8 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
   cube::BatchOptions opt;
   for (const bool self : {false, true}) {
     Poses free_pool, hit_pool;
-    for (int round = 0; round < 40 && (free_pool.size() < kStates * kLinks ||
-                                       hit_pool.size() < kStates * kLinks);
+    for (int round = 0;
+         round < 40 && (free_pool.size() < kStates * kLinks || hit_pool.size() < kStates * kLinks);
          ++round) {
       Poses batch;
       for (std::size_t k = 0; k < 200; ++k) poseOf(*s.robot, randomConfig(rng, s.half), batch);
@@ -301,10 +301,19 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
   }
   for (std::size_t k = 0; k < kStates; ++k)
     s.singles.emplace_back(s.free_mix.begin() + k * kLinks, s.free_mix.begin() + (k + 1) * kLinks);
-  // Edges: 20 edges of 20 to 100 states, straight lines in configuration space.
+  // Edges: 20 edges of 20 to 100 states, straight lines in configuration space from a free
+  // configuration (a planner extends its tree from states known to be free).
+  cube::BatchOptions one;
+  one.threads = 1;
   for (std::size_t e = 0; e < 20; ++e) {
     s.edge_starts.push_back(s.edge_poses.size() / kLinks);
-    const Config a = randomConfig(rng, s.half);
+    Config a = randomConfig(rng, s.half);
+    for (int tries = 0; tries < 10000; ++tries) {
+      Poses p;
+      poseOf(*s.robot, a, p);
+      if (!cube::checkStates(*s.world, s.robot->body, p, one)[0].colliding) break;
+      a = randomConfig(rng, s.half);
+    }
     Config b = a;
     std::uniform_real_distribution<double> step(-0.05 * s.half, 0.05 * s.half), turn(-0.6, 0.6);
     for (int k = 0; k < 3; ++k) b.base[k] += step(rng);
@@ -462,16 +471,16 @@ void registerBatch() {
   for (const char* scene : {"uniform", "clustered", "meshes"})
     for (std::size_t n : {std::size_t(1000), std::size_t(10000), std::size_t(100000)}) {
       if (n >= 100000 && std::string(scene) == "meshes") continue;
-      for (Kind k : {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges,
-                     Kind::single}) {
+      for (Kind k :
+           {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges, Kind::single}) {
         std::vector<std::string> managers;
         for (const char* m : kFcl)
           if (runsFcl(m, scene, n, k)) managers.push_back(m);
         managers.push_back("cube");
         if (k != Kind::single) managers.push_back("cube_t2");
         for (const std::string& m : managers) {
-          const std::string name = std::string("batch_") + kindName(k) + "/" + scene + "/" +
-                                   std::to_string(n) + "/" + m;
+          const std::string name =
+              std::string("batch_") + kindName(k) + "/" + scene + "/" + std::to_string(n) + "/" + m;
           benchmark::RegisterBenchmark(name.c_str(),
                                        [k, scene = std::string(scene), n, m](benchmark::State& st) {
                                          run(st, k, scene, n, m);

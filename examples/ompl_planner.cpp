@@ -232,8 +232,7 @@ enum class Checker { cube, fcl };
 Outcome plan(Checker which, const std::vector<double>& start, const std::vector<double>& goal,
              std::uint_fast32_t seed, const cube::CubeCollisionManagerd& cube_world,
              const cube::BodySet<S>& body, const fcl::BroadPhaseCollisionManagerd& fcl_world,
-             const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry,
-             int threads) {
+             const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry, int threads) {
   auto space = std::make_shared<ob::RealVectorStateSpace>(kJoints);
   space->setBounds(-M_PI, M_PI);
   space->setStateSamplerAllocator(
@@ -320,7 +319,8 @@ int main(int argc, char** argv) {
   for (const auto& obj : scene.objects) {
     if (obj->getTranslation().norm() < 1.2) continue;
     bool blocks = false;
-    for (const auto& [a, b] : tasks) blocks = blocks || touches(a, geometry, *obj) || touches(b, geometry, *obj);
+    for (const auto& [a, b] : tasks)
+      blocks = blocks || touches(a, geometry, *obj) || touches(b, geometry, *obj);
     if (!blocks) objs.push_back(obj.get());
   }
   cube::CubeCollisionManagerd cube_world;
@@ -349,8 +349,8 @@ int main(int argc, char** argv) {
     cube_s += c.seconds;
     fcl_s += f.seconds;
     std::printf("  problem %d: %s, %zu states; cube %.1f ms, FCL %.1f ms (%.2fx)%s\n", p,
-                c.solved ? "solved" : "not solved", c.path.size(), 1e3 * c.seconds,
-                1e3 * f.seconds, f.seconds / c.seconds, equal ? "" : "  PATHS DIFFER");
+                c.solved ? "solved" : "not solved", c.path.size(), 1e3 * c.seconds, 1e3 * f.seconds,
+                f.seconds / c.seconds, equal ? "" : "  PATHS DIFFER");
   }
   std::printf("planning time: cube %.1f ms, FCL DynamicAABBTree %.1f ms: %.2fx less\n",
               1e3 * cube_s, 1e3 * fcl_s, fcl_s / cube_s);

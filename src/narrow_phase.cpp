@@ -966,7 +966,7 @@ void forEachPair(
   checkPairs(pairs, "forEachPair");
   if (!fn) throw std::invalid_argument("cube::forEachPair: empty function");
   detail::parallelFor(pairs.size(), pairs.size() >= kParallelMinPairs ? resolveThreads(threads) : 1,
-              [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
+                      [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
 }
 
 #define CUBE_INSTANTIATE_NARROW_PHASE(S)                                                           \

@@ -86,12 +86,14 @@ struct World {
 void fillWorld(World& w, std::size_t n, std::uint32_t seed, bool meshes, bool planes) {
   std::mt19937 rng(seed);
   for (std::size_t i = 0; i < n; ++i) {
-    w.objects.push_back(std::make_unique<Object>(randomShape(rng, 1.2, meshes), randomPose(rng, 10)));
+    w.objects.push_back(
+        std::make_unique<Object>(randomShape(rng, 1.2, meshes), randomPose(rng, 10)));
     w.objects.back()->computeAABB();
   }
   if (planes) {
-    w.objects.push_back(std::make_unique<Object>(
-        std::make_shared<fcl::Halfspaced>(fcl::Vector3d(0, 0, 1), -9.0), fcl::Transform3d::Identity()));
+    w.objects.push_back(
+        std::make_unique<Object>(std::make_shared<fcl::Halfspaced>(fcl::Vector3d(0, 0, 1), -9.0),
+                                 fcl::Transform3d::Identity()));
     w.objects.push_back(std::make_unique<Object>(
         std::make_shared<fcl::Planed>(fcl::Vector3d(1, 1, 0).normalized(), 8.0),
         fcl::Transform3d::Identity()));
@@ -177,13 +179,15 @@ Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d
   for (std::size_t l = 0; l < body.size() && !out.colliding; ++l) {
     for (const auto& o : w.objects) {  // registration order
       if (!meets(l, o.get())) continue;
-      if (bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]), *o, body.margin(l) + w.manager.margin(o.get()))) {
+      if (bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]), *o,
+                     body.margin(l) + w.manager.margin(o.get()))) {
         out = {true, l, cube::kNoIndex, o.get()};
         break;
       }
     }
     for (std::size_t j = l + 1; self && !out.colliding && j < body.size(); ++j)
-      if (body.checked(l, j) && bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]), *links[j], body.margin(l) + body.margin(j)))
+      if (body.checked(l, j) && bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]),
+                                           *links[j], body.margin(l) + body.margin(j)))
         out = {true, l, j, nullptr};
   }
   if (out.colliding) return out;
@@ -195,7 +199,8 @@ Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d
         out.clearance = std::min(out.clearance, d);
       }
     for (std::size_t j = l + 1; self && j < body.size(); ++j)
-      if (body.checked(l, j)) out.clearance = std::min(out.clearance, bruteDistance(*links[l], *links[j]));
+      if (body.checked(l, j))
+        out.clearance = std::min(out.clearance, bruteDistance(*links[l], *links[j]));
   }
   return out;
 }
@@ -297,13 +302,16 @@ TEST(Batch, MarginsFilterBitsAndThePredicate) {
   fillWorld(w, 300, 21, false, false);
   // World margins: one object of three has its own, the rest the manager-wide one.
   w.manager.setMargin(0.05);
-  for (std::size_t i = 0; i < w.objects.size(); i += 3) w.manager.setMargin(w.objects[i].get(), 0.2);
-  for (std::size_t i = 0; i < w.objects.size(); i += 4) w.manager.setFilter(w.objects[i].get(), 2, ~0ull);
+  for (std::size_t i = 0; i < w.objects.size(); i += 3)
+    w.manager.setMargin(w.objects[i].get(), 0.2);
+  for (std::size_t i = 0; i < w.objects.size(); i += 4)
+    w.manager.setFilter(w.objects[i].get(), 2, ~0ull);
   std::mt19937 rng(4);
   cube::BodySet<S> body;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> bits;
   for (std::size_t l = 0; l < 6; ++l) {
-    const std::uint64_t mask = l % 2 ? ~std::uint64_t(2) : ~std::uint64_t(0);  // odd links skip group 2
+    const std::uint64_t mask =
+        l % 2 ? ~std::uint64_t(2) : ~std::uint64_t(0);  // odd links skip group 2
     body.addLink(randomShape(rng, 1.0, false), l % 3 == 0 ? 0.3 : 0.0, 1, mask);
     bits.emplace_back(1, mask);
   }
@@ -361,7 +369,8 @@ TEST(Batch, MotionsGiveTheSerialScansAnswer) {
   for (std::size_t l = 0; l < body.size(); ++l) shape.push_back(randomPose(rng, 1.5));
   for (int e = 0; e < 30; ++e) {
     starts.push_back(poses.size() / body.size());
-    const fcl::Vector3d from = randomPose(rng, 9).translation(), to = randomPose(rng, 9).translation();
+    const fcl::Vector3d from = randomPose(rng, 9).translation(),
+                        to = randomPose(rng, 9).translation();
     const std::size_t n = 1 + std::size_t(e * 13 % 40);
     for (std::size_t k = 0; k < n; ++k) {
       const double t = n == 1 ? 0 : double(k) / double(n - 1);
@@ -424,7 +433,8 @@ TEST(Batch, BadInputChangesNothing) {
   EXPECT_THROW(body.addLink(std::make_shared<fcl::Halfspaced>(fcl::Vector3d(0, 0, 1), 0)),
                std::invalid_argument);
   EXPECT_THROW(body.addLink(std::make_shared<fcl::Sphered>(1), -1.0), std::invalid_argument);
-  EXPECT_THROW(body.addLink(std::make_shared<fcl::Sphered>(1), std::nan("")), std::invalid_argument);
+  EXPECT_THROW(body.addLink(std::make_shared<fcl::Sphered>(1), std::nan("")),
+               std::invalid_argument);
   EXPECT_THROW(body.allowPair(0, 3), std::invalid_argument);
   EXPECT_THROW(body.allowPair(1, 1), std::invalid_argument);
   EXPECT_EQ(body.size(), 3u);
@@ -450,8 +460,7 @@ TEST(Batch, BadInputChangesNothing) {
     const auto more = randomStates(300, 3, 9);
     const auto r = cube::checkStates(w.manager, body, more);
     std::size_t hit = cube::kNoIndex, free_state = cube::kNoIndex;
-    for (std::size_t k = 0; k < r.size(); ++k)
-      (r[k].colliding ? hit : free_state) = k;
+    for (std::size_t k = 0; k < r.size(); ++k) (r[k].colliding ? hit : free_state) = k;
     ASSERT_NE(hit, cube::kNoIndex);
     ASSERT_NE(free_state, cube::kNoIndex);
     auto nan = more;
@@ -468,9 +477,9 @@ TEST(Batch, BadInputChangesNothing) {
     EXPECT_THROW(cube::checkMotion(w.manager, body, edge), std::invalid_argument);
     EXPECT_THROW(cube::checkMotion(w.manager, body, 3, cube::PoseFunction<S>()),
                  std::invalid_argument);
-    EXPECT_THROW(cube::checkMotion(w.manager, cube::BodySet<S>(), 3,
-                                   [](std::size_t, fcl::Transform3d*) {}),
-                 std::invalid_argument);
+    EXPECT_THROW(
+        cube::checkMotion(w.manager, cube::BodySet<S>(), 3, [](std::size_t, fcl::Transform3d*) {}),
+        std::invalid_argument);
   }
   // Still usable, same answers as before the errors.
   cube::BatchOptions o;

@@ -8,8 +8,8 @@
 // of the world's cubes and the cull of the pipeline (callbacks.h): the answers are those of
 // checking every link against every world object and every non-allowed pair of links with FCL.
 
-#include <fcl/geometry/collision_geometry.h>
 #include <fcl/common/types.h>
+#include <fcl/geometry/collision_geometry.h>
 
 #include <cstddef>
 #include <cstdint>

@@ -44,7 +44,8 @@ class BodyView {
         leaves_.push_back(o.node);
         nodes_[o.node].first = first;
         nodes_[o.node].count = end - first;
-        for (std::uint32_t i = first; i < end; ++i) items_[i] = Item<S>{Box<S>{}, nullptr, o.node, i};
+        for (std::uint32_t i = first; i < end; ++i)
+          items_[i] = Item<S>{Box<S>{}, nullptr, o.node, i};
         continue;
       }
       const std::uint32_t child = std::uint32_t(nodes_.size());
@@ -56,9 +57,8 @@ class BodyView {
       open.push_back({child, o.first_leaf, half});
       open.push_back({child + 1, o.first_leaf + half, o.leaf_count - half});
     }
-    std::sort(leaves_.begin(), leaves_.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return nodes_[a].first < nodes_[b].first;
-    });
+    std::sort(leaves_.begin(), leaves_.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return nodes_[a].first < nodes_[b].first; });
   }
 
   /// Object i and the box the walks test for it (grown by whatever margin it has).

@@ -522,8 +522,8 @@ bool Broadphase<S>::distance(const Probe& probe, void* data, DistanceFn<S> fn, S
                              QueryStats* stats) const {
   const PairGate<S> gate = probeGate(probe.bits);
   const bool gate_on = gated() || !probe.bits.isDefault();
-  return distanceQuery(probe.obj, grownBy(probe.box, probe.margin), gate_on ? &gate : nullptr,
-                       data, fn, best, stats);
+  return distanceQuery(probe.obj, grownBy(probe.box, probe.margin), gate_on ? &gate : nullptr, data,
+                       fn, best, stats);
 }
 
 template <typename S>

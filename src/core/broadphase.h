@@ -130,8 +130,7 @@ class Broadphase {
   bool distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
                 QueryStats* stats) const;
   /// The same from a probe (its grown box, its bits).
-  bool distance(const Probe& probe, void* data, DistanceFn<S> fn, S& best,
-                QueryStats* stats) const;
+  bool distance(const Probe& probe, void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const;
   bool distanceSelf(void* data, DistanceFn<S> fn, S& best, QueryStats* stats) const;
   bool distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
                 QueryStats* stats) const;

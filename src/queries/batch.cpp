@@ -13,14 +13,14 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <type_traits>
 #include <deque>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
-#include "cube_collision/narrow_phase.h"
 #include "core/body_view.h"
+#include "cube_collision/narrow_phase.h"
 #include "cull.h"
 #include "fcl_narrow.h"
 #include "manager_access.h"
@@ -34,13 +34,13 @@ struct BodySet<S>::Links {
   std::vector<std::shared_ptr<fcl::CollisionGeometry<S>>> geometry;
   std::vector<S> margin;
   std::vector<detail::Filter> bits;
-  std::vector<fcl::Vector3<S>> mid, half;     // the local AABB: centre, half extents
-  std::vector<detail::VolumeSource> source;   // the cull's records' geometry part
-  std::vector<std::uint8_t> allowed;          // size() x size(): 1 = never checked
+  std::vector<fcl::Vector3<S>> mid, half;      // the local AABB: centre, half extents
+  std::vector<detail::VolumeSource> source;    // the cull's records' geometry part
+  std::vector<std::uint8_t> allowed;           // size() x size(): 1 = never checked
   std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
                                                // [after_at[i], after_at[i + 1]), ascending
   bool any_margin = false;
-  bool any_bits = false;  // a link has filter bits other than the default
+  bool any_bits = false;        // a link has filter bits other than the default
   detail::BodyView<S> view{0};  // the links' tree, copied by each checker (bounds per state)
 
   std::size_t size() const { return geometry.size(); }
@@ -112,7 +112,8 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
     fail(where, "the margin must be finite and >= 0");
   geometry->computeLocalAABB();
   const fcl::AABB<S>& local = geometry->aabb_local;
-  if (!local.min_.allFinite() || !local.max_.allFinite() || !(local.min_.array() <= local.max_.array()).all())
+  if (!local.min_.allFinite() || !local.max_.allFinite() ||
+      !(local.min_.array() <= local.max_.array()).all())
     fail(where, "the geometry's local AABB is not finite");
   Links& l = *links_;
   const std::size_t n = l.size();
@@ -291,8 +292,8 @@ class StateChecker {
  private:
   // Per link: the state's boxes and pose, the cull's records (placed on first use).
   struct Slot {
-    Box<S> box;                     // the walk's: the exact box grown by the cull's rate
-    fcl::Vector3<S> lo, hi;         // the exact box of the posed local AABB
+    Box<S> box;              // the walk's: the exact box grown by the cull's rate
+    fcl::Vector3<S> lo, hi;  // the exact box of the posed local AABB
     const fcl::Transform3<S>* pose = nullptr;
     VolumeSource source;
     VolumeSphere sphere;
@@ -369,7 +370,6 @@ class StateChecker {
   std::size_t badLink() const { return bad_link_; }
 
  private:
-
   // Link l's object, made on first use and placed for the state (most links meet no
   // candidate: their objects are never touched).
   LinkObject<S>* objectAt(std::uint32_t l) {
@@ -479,7 +479,7 @@ class StateChecker {
     const VolumeGap gap = separationOf(sa, ha, sb, hb, rate_, within);
     if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return Verdict::kApart;
     return verdictOf(sa, ha, sb, hb, rate_, true) == Verdict::kTouching ? Verdict::kTouching
-                                                                         : Verdict::kUnknown;
+                                                                        : Verdict::kUnknown;
   }
 
   // FCL's answer: contact, or (margin m > 0) a distance of at most m.
@@ -513,8 +513,7 @@ class StateChecker {
                              ? float(best)
                              : std::numeric_limits<float>::infinity();
     const VolumeGap gap = separationOf(sa, ha, sb, hb, distance_rate_, enough);
-    if (gap.lower_bound - gap.margin > enough + 4.f * FLT_EPSILON * std::fabs(enough))
-      return false;
+    if (gap.lower_bound - gap.margin > enough + 4.f * FLT_EPSILON * std::fabs(enough)) return false;
     best = std::min(best, pairDistance(a, b));
     return best <= S(0);
   }
@@ -568,7 +567,7 @@ class StateChecker {
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
   std::size_t bad_link_ = 0;
   Candidate best_{kNone, kNone, kNone, false};  // the contact found (link kNone: none)
-  std::vector<Candidate> pending_;               // pairs for FCL; its room kept between states
+  std::vector<Candidate> pending_;              // pairs for FCL; its room kept between states
 };
 
 int resolveThreads(int threads) {
@@ -582,8 +581,8 @@ std::size_t checkedStates(const Links<S>& links, const std::vector<fcl::Transfor
   if (links.size() == 0) fail(where, "the body set has no link");
   if (poses.size() % links.size() != 0)
     fail(where, "the pose array's size (" + std::to_string(poses.size()) +
-                    ") is not a multiple of the number of links (" +
-                    std::to_string(links.size()) + ")");
+                    ") is not a multiple of the number of links (" + std::to_string(links.size()) +
+                    ")");
   return poses.size() / links.size();
 }
 
@@ -625,12 +624,12 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
   const int threads = states < 2 ? 1 : detail::resolveThreads(options.threads);
   const std::size_t n = links.size();
   detail::parallelForWith(
-      states, threads, 4,
-      [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
+      states, threads, 4, [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
       [&](auto& checker, std::size_t k) {
         const int answer = checker->check(poses.data() + k * n, options.self_collision,
                                           options.first_pair, options.clearance, &out[k]);
-        if (answer == detail::StateChecker<S>::kBadPose) detail::badPose("checkStates", k * n + checker->badLink());
+        if (answer == detail::StateChecker<S>::kBadPose)
+          detail::badPose("checkStates", k * n + checker->badLink());
         out[k].colliding = answer != 0;
         if (out[k].colliding && options.clearance) out[k].clearance = S(0);
       });
@@ -694,8 +693,8 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
                                                   options.self_collision, false, false, nullptr);
         if (answer == 0) return;
         if (answer == StateChecker<S>::kBadPose) {
-          // As a contact: no state after it in the order is started, and the serial scan's
-          // first event decides (a pose error before any contact throws).
+      // As a contact: no state after it in the order is started, and the serial scan's
+      // first event decides (a pose error before any contact throws).
 #pragma omp critical(cube_batch_bad_pose)
           bad.emplace_back(i, item.state * n + scratch->checker.badLink());
         }
@@ -756,27 +755,26 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (!pose_of) fail("checkMotion", "null pose function");
   if (states == 0) return kNoIndex;
   const std::vector<std::size_t> starts{0};
-  return detail::firstCollisions(
-      detail::coreOf(world), links, states, starts, order, options, true,
-      [&](auto& scratch, std::size_t state) {
-        pose_of(state, scratch.poses.data());
-        return scratch.poses.data();
-      })[0];
+  return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
+                                 [&](auto& scratch, std::size_t state) {
+                                   pose_of(state, scratch.poses.data());
+                                   return scratch.poses.data();
+                                 })[0];
 }
 
-#define CUBE_INSTANTIATE_BATCH(S)                                                             \
-  template class BodySet<S>;                                                                  \
-  template std::vector<StateResult<S>> checkStates<S>(                                        \
+#define CUBE_INSTANTIATE_BATCH(S)                                                                \
+  template class BodySet<S>;                                                                     \
+  template std::vector<StateResult<S>> checkStates<S>(                                           \
       const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
-      const BatchOptions&);                                                                   \
-  template std::vector<std::size_t> checkMotions<S>(                                          \
+      const BatchOptions&);                                                                      \
+  template std::vector<std::size_t> checkMotions<S>(                                             \
       const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
-      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                     \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,      \
-                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,    \
-                                      const BatchOptions&);                                   \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,      \
-                                      std::size_t, const PoseFunction<S>&, MotionOrder,       \
+      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                        \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
+                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,       \
+                                      const BatchOptions&);                                      \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
+                                      std::size_t, const PoseFunction<S>&, MotionOrder,          \
                                       const BatchOptions&);
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)
