@@ -6,7 +6,7 @@ cd "$(dirname "$0")"
 
 mode=${1:-demo}
 packages=(build-essential cmake pkg-config libfcl-dev libccd-dev libeigen3-dev liboctomap-dev
-          libgtest-dev libgmock-dev libbenchmark-dev libcairo2-dev)
+          libgtest-dev libgmock-dev libbenchmark-dev libcairo2-dev libompl-dev)
 # CI's ThreadSanitizer stage (.ci/run) builds with clang and LLVM's OpenMP runtime, whose Archer
 # tool tells ThreadSanitizer about OpenMP's synchronisation (GCC's libgomp is not instrumented).
 [ "${1:-demo}" = test ] && packages+=(clang libomp-dev)
