@@ -61,30 +61,35 @@ class BodyView {
               [&](std::uint32_t a, std::uint32_t b) { return nodes_[a].first < nodes_[b].first; });
   }
 
-  /// Object i and the box the walks test for it (grown by whatever margin it has).
-  void set(std::uint32_t i, fcl::CollisionObject<S>* obj, const Box<S>& box) {
-    items_[i].obj = obj;
-    items_[i].box = box;
-  }
+  /// Object i, kept from state to state.
+  void setObject(std::uint32_t i, fcl::CollisionObject<S>* obj) { items_[i].obj = obj; }
+  /// The box the walks test for object i (grown by whatever margin it has), written in place.
+  Box<S>& box(std::uint32_t i) { return items_[i].box; }
   /// The cubes' bounds from the boxes set: call after the last set() of a state.
   void refit() {
     for (std::size_t k = nodes_.size(); k-- > 0;) {
       Node& node = nodes_[k];
       if (node.isLeaf()) {
         Box<S> u = items_[node.first].box;
-        for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i)
-          for (int d = 0; d < 3; ++d) {
-            u.lo[d] = std::min(u.lo[d], items_[i].box.lo[d]);
-            u.hi[d] = std::max(u.hi[d], items_[i].box.hi[d]);
-          }
+        for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) {
+          const Box<S>& b = items_[i].box;
+          u.lo[0] = std::min(u.lo[0], b.lo[0]);
+          u.lo[1] = std::min(u.lo[1], b.lo[1]);
+          u.lo[2] = std::min(u.lo[2], b.lo[2]);
+          u.hi[0] = std::max(u.hi[0], b.hi[0]);
+          u.hi[1] = std::max(u.hi[1], b.hi[1]);
+          u.hi[2] = std::max(u.hi[2], b.hi[2]);
+        }
         roundOut(u, node.lo, node.hi);
       } else {
         const Node& x = nodes_[node.first];
         const Node& y = nodes_[node.first + 1];
-        for (int d = 0; d < 3; ++d) {
-          node.lo[d] = std::min(x.lo[d], y.lo[d]);
-          node.hi[d] = std::max(x.hi[d], y.hi[d]);
-        }
+        node.lo[0] = std::min(x.lo[0], y.lo[0]);
+        node.lo[1] = std::min(x.lo[1], y.lo[1]);
+        node.lo[2] = std::min(x.lo[2], y.lo[2]);
+        node.hi[0] = std::max(x.hi[0], y.hi[0]);
+        node.hi[1] = std::max(x.hi[1], y.hi[1]);
+        node.hi[2] = std::max(x.hi[2], y.hi[2]);
       }
     }
   }
