@@ -217,17 +217,6 @@ bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
 template <typename S>
 using Links = typename BodySet<S>::Links;
 
-template <typename S>
-Box<S> grownBy(const Box<S>& b, S m) {
-  if (m == S(0)) return b;
-  Box<S> g;
-  for (int k = 0; k < 3; ++k) {
-    g.lo[k] = b.lo[k] - m;
-    g.hi[k] = b.hi[k] + m;
-  }
-  return g;
-}
-
 // One thread's checker: the links' objects, boxes and records for the state at hand, and the
 // walks of the world. Made once per thread and call; no allocation per state.
 template <typename S>
@@ -266,7 +255,7 @@ class StateChecker {
   /// Two passes: the walks and the records settle what they can (most pairs apart, many in
   /// contact proved by inscribed balls), then FCL answers the rest, so that a colliding state
   /// proved on the records makes no FCL call.
-  /// kBadPose (and the link in bad_link()) if a pose has a NaN or infinite entry, found while
+  /// kBadPose (and the link in badLink()) if a pose has a NaN or infinite entry, found while
   /// placing the links: the state's poses are read once.
   static constexpr int kBadPose = -1;
   int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
@@ -306,9 +295,8 @@ class StateChecker {
   }
 
  private:
-  // Per link: the state's boxes and pose, the cull's records (placed on first use).
+  // Per link: the state's pose, the cull's records (placed on first use), its object's state.
   struct Slot {
-    fcl::Vector3<S> lo, hi;  // the exact box of the posed local AABB
     const fcl::Transform3<S>* pose = nullptr;
     VolumeSource source;
     VolumeSphere sphere;
@@ -341,16 +329,15 @@ class StateChecker {
                                          links_.bits[l]};
   }
 
-  // Poses the links: the object (transform, exact AABB), the box the walks test (grown by the
-  // cull's rate, so that pairs FCL counts as touching within its tolerance are met) and the
-  // records.
+  // Poses the links: the boxes the walks test (the exact box of each posed local AABB grown by
+  // the cull's rate, so that pairs FCL counts as touching within its tolerance are met, and by
+  // the link's margin). Objects and records follow on first use.
   bool place(const fcl::Transform3<S>* poses) {
     ++state_;
     const std::size_t n = links_.size();
     static_assert(sizeof(fcl::Transform3<S>) == 16 * sizeof(S), "a pose is 16 numbers");
-    // Centres and half extents of all links at once (four per instruction with AVX2): with
-    // Eigen's 3x3 products this loop took 190 instructions a link, most of a free state's check
-    // in a clustered world.
+    // Centres and half extents of all links at once (four per instruction with AVX2): placing
+    // the links is most of a free state's check in a clustered world.
     poseBoxes(
         poses->data(), n,
         PoseBoxes<S>{{links_.mid_of[0].data(), links_.mid_of[1].data(), links_.mid_of[2].data()},
@@ -399,8 +386,6 @@ class StateChecker {
   std::size_t badLink() const { return bad_link_; }
 
  private:
-  // Link l's object, made on first use and placed for the state (most links meet no
-  // candidate: their objects are never touched).
   // Link l's exact box grown by the cull's rate (the walks' box before its margin).
   Box<S> rateBox(std::size_t l) const {
     Box<S> b;
@@ -417,6 +402,8 @@ class StateChecker {
     new (&objects_[l]) LinkObject<S>(links_.geometry[l]);
     slots_[l].made = true;
   }
+  // Link l's object, made on first use and placed for the state (most links meet no
+  // candidate: their objects are never touched).
   LinkObject<S>& object(std::uint32_t l) {
     Slot& slot = slots_[l];
     if (slot.posed != state_) {
