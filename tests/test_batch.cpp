@@ -419,8 +419,9 @@ TEST(Batch, MotionsGiveTheSerialScansAnswer) {
         }
       }
     }
+  // The scene must exercise both answers (ThreadSanitizer's clang build met 28 of 30).
   EXPECT_GT(edges_hit, 3u);
-  EXPECT_LT(edges_hit, 27u);
+  EXPECT_LT(edges_hit, starts.size());
 }
 
 // The posed boxes of the links (AVX2 where the CPU has it) equal the portable version bit for

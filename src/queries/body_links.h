@@ -1,0 +1,58 @@
+#pragma once
+
+// What a BodySet keeps (private to the library): per link the geometry, margin, filter bits,
+// local AABB (also per coordinate, for the pose-box kernel) and the cull's record source, the
+// allowed pairs, and the links' tree the checkers copy.
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/body_view.h"
+#include "core/geometry.h"
+#include "core/volume.h"
+#include "cube_collision/batch.h"
+
+namespace cube {
+
+template <typename S>
+struct BodySet<S>::Links {
+  std::vector<std::shared_ptr<fcl::CollisionGeometry<S>>> geometry;
+  std::vector<S> margin;
+  std::vector<detail::Filter> bits;
+  std::vector<fcl::Vector3<S>> mid, half;      // the local AABB: centre, half extents
+  std::vector<S> mid_of[3], half_of[3];        // the same per coordinate (poseBoxes reads them)
+  std::vector<detail::VolumeSource> source;    // the cull's records' geometry part
+  std::vector<std::uint8_t> allowed;           // size() x size(): 1 = never checked
+  std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
+                                               // [after_at[i], after_at[i + 1]), ascending
+  bool any_margin = false;
+  bool any_bits = false;        // a link has filter bits other than the default
+  detail::BodyView<S> view{0};  // the links' tree, copied by each checker (bounds per state)
+
+  std::size_t size() const { return geometry.size(); }
+  void listPairs() {
+    const std::size_t n = size();
+    after.clear();
+    after_at.assign(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      after_at[i] = std::uint32_t(after.size());
+      for (std::size_t j = i + 1; j < n; ++j)
+        if (!allowed[i * n + j]) after.push_back(std::uint32_t(j));
+    }
+    after_at[n] = std::uint32_t(after.size());
+  }
+};
+
+namespace detail {
+
+struct BodyAccess {
+  template <typename S>
+  static const typename BodySet<S>::Links& links(const BodySet<S>& body) {
+    return *body.links_;
+  }
+};
+
+}  // namespace detail
+
+}  // namespace cube

@@ -1,0 +1,135 @@
+// BodySet (include/cube_collision/batch.h): the links and what every check needs from them,
+// computed once per link.
+
+#include <fcl/narrowphase/collision_object.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "queries/body_links.h"
+
+namespace cube {
+
+namespace {
+
+[[noreturn]] void fail(const char* where, const std::string& what) {
+  throw std::invalid_argument(std::string("cube::") + where + ": " + what);
+}
+
+}  // namespace
+
+template <typename S>
+BodySet<S>::BodySet() : links_(std::make_unique<Links>()) {
+  links_->listPairs();
+}
+template <typename S>
+BodySet<S>::~BodySet() = default;
+template <typename S>
+BodySet<S>::BodySet(const BodySet& other) : links_(std::make_unique<Links>(*other.links_)) {}
+template <typename S>
+BodySet<S>& BodySet<S>::operator=(const BodySet& other) {
+  if (this != &other) links_ = std::make_unique<Links>(*other.links_);
+  return *this;
+}
+template <typename S>
+BodySet<S>::BodySet(BodySet&& other) noexcept : links_(std::move(other.links_)) {
+  other.links_ = nullptr;
+}
+template <typename S>
+BodySet<S>& BodySet<S>::operator=(BodySet&& other) noexcept {
+  std::swap(links_, other.links_);
+  return *this;
+}
+
+template <typename S>
+std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geometry, S margin,
+                                std::uint64_t category, std::uint64_t mask) {
+  if (links_ == nullptr) links_ = std::make_unique<Links>();  // a moved-from set
+  const char* where = "BodySet::addLink";
+  if (geometry == nullptr) fail(where, "null geometry");
+  const fcl::NODE_TYPE type = geometry->getNodeType();
+  if (type == fcl::GEOM_PLANE || type == fcl::GEOM_HALFSPACE)
+    fail(where, "a plane or halfspace cannot be a link (unbounded)");
+  if (!(margin >= S(0)) || !std::isfinite(margin))
+    fail(where, "the margin must be finite and >= 0");
+  geometry->computeLocalAABB();
+  const fcl::AABB<S>& local = geometry->aabb_local;
+  if (!local.min_.allFinite() || !local.max_.allFinite() ||
+      !(local.min_.array() <= local.max_.array()).all())
+    fail(where, "the geometry's local AABB is not finite");
+  Links& l = *links_;
+  const std::size_t n = l.size();
+  detail::VolumeSource source;
+  detail::VolumeSphere sphere;
+  detail::VolumeShape shape;
+  const fcl::CollisionObject<S> at_origin(geometry);
+  detail::rebuildVolume(at_origin, source, sphere, shape);
+  std::vector<std::uint8_t> allowed((n + 1) * (n + 1), 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) allowed[i * (n + 1) + j] = l.allowed[i * n + j];
+  detail::BodyView<S> view(std::uint32_t(n + 1));
+  // Nothing can throw from here on but allocation, before any member changes.
+  l.geometry.reserve(n + 1);
+  l.margin.reserve(n + 1);
+  l.bits.reserve(n + 1);
+  l.mid.reserve(n + 1);
+  l.half.reserve(n + 1);
+  for (int d = 0; d < 3; ++d) {
+    l.mid_of[d].reserve(n + 1);
+    l.half_of[d].reserve(n + 1);
+  }
+  l.source.reserve(n + 1);
+  l.geometry.push_back(std::move(geometry));
+  l.margin.push_back(margin);
+  l.bits.push_back(detail::Filter{category, mask});
+  l.mid.push_back(local.center());
+  l.half.push_back((local.max_ - local.min_) / S(2));
+  for (int d = 0; d < 3; ++d) {
+    l.mid_of[d].push_back(l.mid.back()[d]);
+    l.half_of[d].push_back(l.half.back()[d]);
+  }
+  l.source.push_back(source);
+  l.allowed = std::move(allowed);
+  l.any_margin = l.any_margin || margin > S(0);
+  l.any_bits = l.any_bits || !l.bits.back().isDefault();
+  l.view = std::move(view);
+  l.listPairs();
+  return n;
+}
+
+template <typename S>
+void BodySet<S>::allowPair(std::size_t i, std::size_t j) {
+  const std::size_t n = size();
+  if (i >= n || j >= n) fail("BodySet::allowPair", "unknown link index");
+  if (i == j) fail("BodySet::allowPair", "a link is never checked against itself");
+  links_->allowed[i * n + j] = links_->allowed[j * n + i] = 1;
+  links_->listPairs();
+}
+
+template <typename S>
+bool BodySet<S>::checked(std::size_t i, std::size_t j) const {
+  const std::size_t n = size();
+  return i < n && j < n && i != j && !links_->allowed[i * n + j];
+}
+
+template <typename S>
+std::size_t BodySet<S>::size() const {
+  return links_ == nullptr ? 0 : links_->size();
+}
+
+template <typename S>
+const std::shared_ptr<fcl::CollisionGeometry<S>>& BodySet<S>::geometry(std::size_t i) const {
+  return links_->geometry.at(i);
+}
+
+template <typename S>
+S BodySet<S>::margin(std::size_t i) const {
+  return links_->margin.at(i);
+}
+
+template class BodySet<double>;
+template class BodySet<float>;
+
+}  // namespace cube

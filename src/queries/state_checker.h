@@ -1,0 +1,445 @@
+#pragma once
+
+// One thread's checker of the batched checks (queries/batch.cpp): the links placed for a state,
+// the world's walks through the core's query entries, the cull on the records, FCL on the rest.
+// Private to the library.
+
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/collision_result.h>
+#include <fcl/narrowphase/distance_request.h>
+#include <fcl/narrowphase/distance_result.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include "core/body_view.h"
+#include "core/broadphase.h"
+#include "core/kernels/pose_boxes.h"
+#include "cull.h"
+#include "fcl_narrow.h"
+#include "queries/body_links.h"
+#include "query_guard.h"
+
+namespace cube {
+namespace detail {
+
+// A link's object in one thread's scratch: shares the link's geometry without the
+// computeLocalAABB() that FCL's constructors call (writing to a geometry other threads read).
+template <typename S>
+class LinkObject final : public fcl::CollisionObject<S> {
+ public:
+  explicit LinkObject(const std::shared_ptr<fcl::CollisionGeometry<S>>& geometry)
+      : fcl::CollisionObject<S>(nullptr) {
+    this->cgeom = geometry;
+    this->cgeom_const = geometry;
+  }
+  /// The state's pose, and its AABB (what a predicate's getAABB() reads).
+  void place(const fcl::Transform3<S>& pose, const fcl::Vector3<S>& lo, const fcl::Vector3<S>& hi) {
+    this->setTransform(pose);
+    this->aabb.min_ = lo;
+    this->aabb.max_ = hi;
+  }
+};
+
+template <typename S>
+bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
+  const fcl::NODE_TYPE t = o.getNodeType();
+  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
+}
+
+template <typename S>
+using Links = typename BodySet<S>::Links;
+
+// One thread's checker: the links' objects, boxes and records for the state at hand, and the
+// walks of the world. Made once per thread and call; no allocation per state.
+template <typename S>
+class StateChecker {
+ public:
+  using Object = fcl::CollisionObject<S>;
+
+  StateChecker(const Broadphase<S>& world, const Links<S>& links)
+      : scope_(&world),
+        world_(world),
+        links_(links),
+        world_spheres_(world.table().spheres()),
+        world_shapes_(world.table().shapes()),
+        body_(links.view),
+        rate_(volumeMarginRate(request_.gjk_tolerance)),
+        distance_rate_(volumeMarginRate(distance_request_.distance_tolerance)) {
+    slots_.resize(links.size());
+    for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
+    for (int d = 0; d < 3; ++d) {
+      c_[d].resize(links.size());
+      h_[d].resize(links.size());
+    }
+    grow_.resize(links.size());
+    objects_ = std::make_unique<ObjectStorage[]>(links.size());
+    for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
+    eager_objects_ = bool(world.keep());
+  }
+  ~StateChecker() {
+    for (std::size_t l = 0; l < slots_.size(); ++l)
+      if (slots_[l].made) objectAt(std::uint32_t(l))->~LinkObject<S>();
+  }
+  StateChecker(const StateChecker&) = delete;
+  StateChecker& operator=(const StateChecker&) = delete;
+
+  /// Whether the state collides; the first pair and the clearance into `out` as asked.
+  /// Two passes: the walks and the records settle what they can (most pairs apart, many in
+  /// contact proved by inscribed balls), then FCL answers the rest, so that a colliding state
+  /// proved on the records makes no FCL call.
+  /// kBadPose (and the link in badLink()) if a pose has a NaN or infinite entry, found while
+  /// placing the links: the state's poses are read once.
+  static constexpr int kBadPose = -1;
+  int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
+            StateResult<S>* out) {
+    if (!place(poses)) return kBadPose;
+    first_pair_ = first_pair;
+    best_ = Candidate{kNone, kNone, kNone, false};
+    pending_.clear();
+    // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
+    // the first group of links that touches (as a link-by-link check does), and a free one
+    // walks little more than the whole tree at once would.
+    for (std::size_t k = 0; k < body_.leafCount() && world_.size() != 0 && !found(); ++k) {
+      pending_.clear();
+      world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
+                     CollideFn<S>(&StateChecker::onWorld), nullptr);
+      if (found() && !first_pair) return true;
+      if (decidePending()) return true;
+    }
+    if (self) {
+      pending_.clear();
+      collidePairs(body_.view(), body_.view(), true, this, CollideFn<S>(&StateChecker::onLinks));
+      if (found() && !first_pair) return true;
+      decidePending();
+    }
+    if (found()) {
+      if (out != nullptr && first_pair) {
+        out->link = best_.link;
+        if (best_.is_link)
+          out->other_link = best_.other;
+        else
+          out->object = world_.table().object(best_.other);
+      }
+      return true;
+    }
+    if (out != nullptr && clearance) out->clearance = clearanceOf(self);
+    return false;
+  }
+
+ private:
+  // Per link: the state's pose, the cull's records (placed on first use), its object's state.
+  struct Slot {
+    const fcl::Transform3<S>* pose = nullptr;
+    VolumeSource source;
+    VolumeSphere sphere;
+    VolumeShape shape;
+    std::uint64_t placed = 0;  // the state the records were placed for
+    std::uint64_t posed = 0;   // the state its object was placed for
+    bool made = false;         // its LinkObject is constructed
+  };
+  // A pair the records did not settle, or the best contact so far: (link, key) ordered, key the
+  // world object's registration number or the other link's index (links after the world).
+  struct Candidate {
+    std::uint32_t link;
+    std::uint32_t key;
+    std::uint32_t other;  // world id or link index
+    bool is_link;
+    bool operator<(const Candidate& c) const {
+      if (link != c.link) return link < c.link;
+      if (is_link != c.is_link) return !is_link;
+      return key < c.key;
+    }
+  };
+  bool found() const { return best_.link != kNone; }
+  struct WorldNear {
+    StateChecker* checker;
+    std::uint32_t link;
+  };
+
+  typename Broadphase<S>::Probe probe(std::size_t l) {
+    return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), links_.margin[l],
+                                         links_.bits[l]};
+  }
+
+  // Poses the links: the boxes the walks test (the exact box of each posed local AABB grown by
+  // the cull's rate, so that pairs FCL counts as touching within its tolerance are met, and by
+  // the link's margin). Objects and records follow on first use.
+  bool place(const fcl::Transform3<S>* poses) {
+    ++state_;
+    const std::size_t n = links_.size();
+    static_assert(sizeof(fcl::Transform3<S>) == 16 * sizeof(S), "a pose is 16 numbers");
+    // Centres and half extents of all links at once (four per instruction with AVX2): placing
+    // the links is most of a free state's check in a clustered world.
+    poseBoxes(
+        poses->data(), n,
+        PoseBoxes<S>{{links_.mid_of[0].data(), links_.mid_of[1].data(), links_.mid_of[2].data()},
+                     {links_.half_of[0].data(), links_.half_of[1].data(), links_.half_of[2].data()},
+                     {c_[0].data(), c_[1].data(), c_[2].data()},
+                     {h_[0].data(), h_[1].data(), h_[2].data()}});
+    // x - x is 0 for a finite x and NaN otherwise: summed over the links and tested once (every
+    // entry of R and t reaches c or h; an infinite one times a zero extent is NaN).
+    S finite = 0;
+    const S rate = S(rate_);
+    for (std::size_t l = 0; l < n; ++l) {
+      Slot& slot = slots_[l];
+      const S c[3] = {c_[0][l], c_[1][l], c_[2][l]};
+      const S h[3] = {h_[0][l], h_[1][l], h_[2][l]};
+      finite += (c[0] - c[0]) + (c[1] - c[1]) + (c[2] - c[2]) + (h[0] - h[0]) + (h[1] - h[1]) +
+                (h[2] - h[2]);
+      slot.pose = poses + l;
+      const S reach = std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2])}) +
+                      std::max({h[0], h[1], h[2]});
+      const S grow = rate * (S(1) + reach);
+      grow_[l] = grow;
+      const S g = grow + links_.margin[l];
+      Box<S>& walked = body_.box(std::uint32_t(l));
+      walked.lo[0] = c[0] - h[0] - g;
+      walked.lo[1] = c[1] - h[1] - g;
+      walked.lo[2] = c[2] - h[2] - g;
+      walked.hi[0] = c[0] + h[0] + g;
+      walked.hi[1] = c[1] + h[1] + g;
+      walked.hi[2] = c[2] + h[2] + g;
+    }
+    if (!(finite == S(0))) {
+      for (std::size_t l = 0; l < links_.size(); ++l)
+        if (!poses[l].linear().allFinite() || !poses[l].translation().allFinite()) {
+          bad_link_ = l;
+          return false;
+        }
+    }
+    // A predicate sees every link object the walk offers: placed now. Otherwise on first use.
+    if (eager_objects_)
+      for (std::uint32_t l = 0; l < links_.size(); ++l) object(l);
+    body_.refit();
+    return true;
+  }
+
+ public:
+  std::size_t badLink() const { return bad_link_; }
+
+ private:
+  // Link l's exact box grown by the cull's rate (the walks' box before its margin).
+  Box<S> rateBox(std::size_t l) const {
+    Box<S> b;
+    for (int k = 0; k < 3; ++k) {
+      b.lo[k] = c_[k][l] - h_[k][l] - grow_[l];
+      b.hi[k] = c_[k][l] + h_[k][l] + grow_[l];
+    }
+    return b;
+  }
+  LinkObject<S>* objectAt(std::uint32_t l) {
+    return reinterpret_cast<LinkObject<S>*>(&objects_[l]);
+  }
+  void construct(std::uint32_t l) {
+    new (&objects_[l]) LinkObject<S>(links_.geometry[l]);
+    slots_[l].made = true;
+  }
+  // Link l's object, made on first use and placed for the state (most links meet no
+  // candidate: their objects are never touched).
+  LinkObject<S>& object(std::uint32_t l) {
+    Slot& slot = slots_[l];
+    if (slot.posed != state_) {
+      if (!slot.made) construct(l);
+      fcl::Vector3<S> lo, hi;
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = c_[k][l] - h_[k][l];
+        hi[k] = c_[k][l] + h_[k][l];
+      }
+      objectAt(l)->place(*slot.pose, lo, hi);
+      slot.posed = state_;
+    }
+    return *objectAt(l);
+  }
+
+  // A pair offered by a walk: settled on the records if they can (a contact recorded, true to
+  // stop the walk when any contact will do), else kept for FCL.
+  bool offer(const Candidate& c, const VolumeSphere& sa, const VolumeShape& ha,
+             const VolumeSphere& sb, const VolumeShape& hb, S m) {
+    if (first_pair_ && found() && !(c < best_)) return false;  // cannot come first
+    switch (cull(sa, ha, sb, hb, m)) {
+      case Verdict::kApart:
+        return false;
+      case Verdict::kTouching:
+        best_ = c;
+        return !first_pair_;
+      case Verdict::kUnknown:
+        pending_.push_back(c);
+        return false;
+    }
+    return false;
+  }
+
+  static bool onWorld(Object* w, ObjectId iw, Object*, ObjectId link, void* data) {
+    StateChecker& c = *static_cast<StateChecker*>(data);
+    const VolumeSphere* s;
+    const VolumeShape* h;
+    c.worldRecords(*w, iw, s, h);
+    const Slot& slot = c.linkRecords(link);
+    const Candidate cand{link, c.world_.table().seq(iw), iw, false};
+    return c.offer(cand, slot.sphere, slot.shape, *s, *h,
+                   c.links_.margin[link] + c.world_.marginOf(iw));
+  }
+
+  static bool onLinks(Object*, ObjectId x, Object*, ObjectId y, void* data) {
+    StateChecker& c = *static_cast<StateChecker*>(data);
+    const std::uint32_t i = std::min(x, y), j = std::max(x, y);
+    const std::size_t n = c.links_.size();
+    if (c.links_.allowed[i * n + j]) return false;
+    const Slot& a = c.linkRecords(i);
+    const Slot& b = c.linkRecords(j);
+    return c.offer(Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
+                   c.links_.margin[i] + c.links_.margin[j]);
+  }
+
+  // FCL on the pairs kept, in walk order (the first pair: in the order of Candidate, up to the
+  // best proved on the records). True once a contact is known.
+  bool decidePending() {
+    if (first_pair_) std::sort(pending_.begin(), pending_.end());
+    for (const Candidate& c : pending_) {
+      if (found() && !(c < best_)) break;  // sorted (first pair), or found (any)
+      const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
+                            : links_.margin[c.link] + world_.marginOf(c.other);
+      const Object& b =
+          c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
+      if (narrow(object(c.link), b, m)) {
+        best_ = c;
+        if (!first_pair_) return true;
+        break;
+      }
+    }
+    return found() && !first_pair_;
+  }
+
+  // The world object's records: the table's, or built here (a world that keeps none).
+  void worldRecords(const Object& w, ObjectId iw, const VolumeSphere*& s, const VolumeShape*& h) {
+    if (world_spheres_ != nullptr) {
+      s = world_spheres_ + iw;
+      h = world_shapes_ + iw;
+      return;
+    }
+    buildVolume(w, built_sphere_, built_shape_);
+    s = &built_sphere_;
+    h = &built_shape_;
+  }
+
+  // Link l's records, placed on first use in a state.
+  Slot& linkRecords(std::uint32_t l) {
+    Slot& slot = slots_[l];
+    if (slot.placed != state_) {
+      slot.placed = state_;
+      moveVolume(object(l), slot.source, slot.sphere, slot.shape);
+    }
+    return slot;
+  }
+
+  // What the records say about a pair within margin m (0: plain contact).
+  Verdict cull(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+               const VolumeShape& hb, S m) const {
+    if (m == S(0)) return verdictOf(sa, ha, sb, hb, rate_, true);
+    // Within a margin: the bound must beat it, with room for rounding m to a float.
+    const float within = float(m);
+    const VolumeGap gap = separationOf(sa, ha, sb, hb, rate_, within);
+    if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return Verdict::kApart;
+    return verdictOf(sa, ha, sb, hb, rate_, true) == Verdict::kTouching ? Verdict::kTouching
+                                                                        : Verdict::kUnknown;
+  }
+
+  // FCL's answer: contact, or (margin m > 0) a distance of at most m.
+  bool narrow(const Object& a, const Object& b, S m) {
+    fcl::CollisionResult<S> result;
+    if (fclCollide(&a, &b, request_, result) > 0) return true;
+    return m > S(0) && pairDistance(a, b) <= m;
+  }
+
+  S pairDistance(const Object& a, const Object& b) {
+    if (distanceUnanswered(a) || distanceUnanswered(b)) return a.getAABB().distance(b.getAABB());
+    fcl::DistanceResult<S> result;
+    return fclDistance(&a, &b, distance_request_, result);
+  }
+
+  static bool onWorldNear(Object* w, ObjectId iw, Object*, ObjectId, void* data, S& best) {
+    WorldNear& near = *static_cast<WorldNear*>(data);
+    StateChecker& c = *near.checker;
+    const VolumeSphere* s;
+    const VolumeShape* h;
+    c.worldRecords(*w, iw, s, h);
+    const Slot& slot = c.linkRecords(near.link);
+    return c.lower(c.object(near.link), slot.sphere, slot.shape, *w, *s, *h, best);
+  }
+
+  // Lowers best to the distance of a and b unless their records prove it is not below best;
+  // true (stop) once best <= 0.
+  bool lower(const Object& a, const VolumeSphere& sa, const VolumeShape& ha, const Object& b,
+             const VolumeSphere& sb, const VolumeShape& hb, S& best) {
+    const float enough = best < S(std::numeric_limits<float>::max())
+                             ? float(best)
+                             : std::numeric_limits<float>::infinity();
+    const VolumeGap gap = separationOf(sa, ha, sb, hb, distance_rate_, enough);
+    if (gap.lower_bound - gap.margin > enough + 4.f * FLT_EPSILON * std::fabs(enough)) return false;
+    best = std::min(best, pairDistance(a, b));
+    return best <= S(0);
+  }
+
+  S clearanceOf(bool self) {
+    S best = std::numeric_limits<S>::max();
+    const std::size_t n = links_.size();
+    for (std::size_t l = 0; l < n && best > S(0); ++l) {
+      if (world_.size() == 0) break;
+      typename Broadphase<S>::Probe p = probe(l);
+      p.margin = S(0);
+      WorldNear near{this, std::uint32_t(l)};
+      world_.distance(p, &near, DistanceFn<S>(&StateChecker::onWorldNear), best, nullptr);
+    }
+    for (std::size_t i = 0; self && i < n && best > S(0); ++i)
+      for (std::uint32_t k = links_.after_at[i]; k < links_.after_at[i + 1] && best > S(0); ++k) {
+        const std::uint32_t j = links_.after[k];
+        const Box<S> bi = rateBox(i), bj = rateBox(j);
+        S gap2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const S g = std::max({bi.lo[a] - bj.hi[a], bj.lo[a] - bi.hi[a], S(0)});
+          gap2 += g * g;
+        }
+        if (std::sqrt(gap2) >= best) continue;
+        const Slot& x = linkRecords(std::uint32_t(i));
+        const Slot& y = linkRecords(j);
+        lower(object(std::uint32_t(i)), x.sphere, x.shape, object(j), y.sphere, y.shape, best);
+      }
+    return best;
+  }
+
+  const QueryScope scope_;  // a pair predicate that mutates the world is refused
+  const Broadphase<S>& world_;
+  const Links<S>& links_;
+  const VolumeSphere* world_spheres_;
+  const VolumeShape* world_shapes_;
+  BodyView<S> body_;  // the links' boxes (grown by their margins) for the walk
+  const fcl::CollisionRequest<S> request_{};
+  const fcl::DistanceRequest<S> distance_request_{};
+  const float rate_;
+  const float distance_rate_;
+  std::uint64_t state_ = 0;
+  std::vector<Slot> slots_;
+  std::vector<S> c_[3], h_[3];  // the state's posed local AABBs, per coordinate
+  std::vector<S> grow_;         // per link: the cull's rate times its scale
+  struct alignas(LinkObject<S>) ObjectStorage {
+    unsigned char bytes[sizeof(LinkObject<S>)];
+  };
+  std::unique_ptr<ObjectStorage[]> objects_;  // LinkObjects, constructed on first use
+  VolumeSphere built_sphere_{};
+  VolumeShape built_shape_{};
+  bool first_pair_ = false;
+  bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
+  std::size_t bad_link_ = 0;
+  Candidate best_{kNone, kNone, kNone, false};  // the contact found (link kNone: none)
+  std::vector<Candidate> pending_;              // pairs for FCL; its room kept between states
+};
+
+}  // namespace detail
+}  // namespace cube
