@@ -80,7 +80,8 @@ struct BatchOptions {
   bool self_collision = false;
   /// Report each colliding state's first pair (StateResult): the pair whose lower link index is
   /// smallest; for that link, world objects (lowest registration number first) before links
-  /// (lowest index first). Costs the narrow phase of every candidate of that link.
+  /// (lowest index first). Costs the narrow phase of every candidate that could come before
+  /// the first contact found (pairs proved touching on the cull's volumes need none).
   bool first_pair = false;
   /// Report each free state's clearance (StateResult::clearance).
   bool clearance = false;
@@ -99,8 +100,9 @@ struct StateResult {
   std::size_t link = kNoIndex;
   fcl::CollisionObject<S>* object = nullptr;
   std::size_t other_link = kNoIndex;
-  /// With BatchOptions::clearance: for a free state, the smallest fcl::distance between a link
-  /// and a world object it may meet (filter bits) or between two checked links (with
+  /// With BatchOptions::clearance: for a free state, the smallest fcl::distance(link, other)
+  /// between a link and a world object it may meet (filter bits, the world's pair predicate) or
+  /// between two checked links (with
   /// self_collision); a pair with a plane, halfspace or octree, whose distance FCL 0.7 does not
   /// answer, counts the distance between the two AABBs (the link's exact box of its local AABB
   /// posed, the object's getAABB()). Margins do not lower it. 0 for a colliding state; the
@@ -108,7 +110,7 @@ struct StateResult {
   S clearance = std::numeric_limits<S>::max();
 };
 
-/// Checks `states` states of `body` against the objects of `world`: pose k * body.size() + l
+/// Checks the states of `poses` for `body` against the objects of `world`: pose k * body.size() + l
 /// is link l's world pose in state k (a contiguous array of states, each the links' poses in
 /// link order). A state collides when FCL reports a contact between one of its links and a world
 /// object whose filter bits and the world's pair predicate (setPairFilter, asked as
@@ -133,8 +135,8 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
 enum class MotionOrder {
   /// State 0, 1, 2, ...: the answer is the first colliding state along the path.
   path,
-  /// OMPL's DiscreteMotionValidator::checkMotion(s1, s2) order: the last state, then the middle of
-  /// each interval left, widest first (ties to the earlier interval). Finds a collision after
+  /// OMPL's DiscreteMotionValidator::checkMotion(s1, s2) order: the last state, then the middles
+  /// of the intervals left, breadth first (as OMPL's queue takes them). Finds a collision after
   /// fewer checks on average when obstacles lie inside an edge rather than near its start (the
   /// common case for a planner's long edges); for an edge that starts inside an obstacle `path`
   /// finds it first. The answer is the first colliding state in this order.
@@ -168,7 +170,7 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                         const BatchOptions& options = BatchOptions());
 
 /// Writes the links' poses of state `state` (0 <= state < the motion's states) to
-/// poses[0 .. body.size() - 1], every one of them (the buffer holds the last state's it was given).
+/// poses[0 .. body.size() - 1], every one of them (the buffer may hold another state's poses).
 /// Called only for the states a check reads, at most once per state, possibly from several
 /// threads at once (BatchOptions::threads): it must be safe to call concurrently.
 template <typename S>
@@ -179,7 +181,8 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// answer in `order` are never computed (with `threads` > 1, a few may be, and their answers
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. Throws
 /// std::invalid_argument for an empty body set or a null function (before any work), and as
-/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on.
+/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on (with
+/// `threads` > 1, possibly one from a state after the answer).
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
