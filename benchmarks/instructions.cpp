@@ -1,0 +1,185 @@
+// cube_instructions: fixed workloads of the cube manager for instruction counts under callgrind
+// (benchmarks/instructions.sh runs it). Timing on this shared machine moves 10-20% between runs;
+// instruction counts do not, so a refactor is judged by them. Each run does one case: the scene
+// is built with instrumentation off, then the case's calls run with callgrind's instrumentation
+// on (CALLGRIND_START/STOP_INSTRUMENTATION), and the binary prints how many calls it made and a
+// checksum of the answers (pairs found, contacts, colliding states), so that two builds are
+// compared on the same work.
+//
+// Usage: cube_instructions <case> <objects>
+// cases: self (broadphase self-collide, counting callback), queries (100 object queries,
+// counting callback), robot (a 30-object robot manager against the world, 16 poses), update (1%
+// of the objects moved, update(), 10 steps), distance (10 object distances, FCL's narrow phase),
+// contacts (collideAll self-collide, FCL's narrow phase), states (checkStates of 50 states of a
+// 30-link robot, one thread).
+
+#include <fcl/broadphase/default_broadphase_callbacks.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/sphere.h>
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else  // without valgrind's headers the workloads still run (and count nothing)
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#endif
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cube_collision/batch.h"
+#include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
+#include "scenes.h"
+
+namespace {
+
+using S = double;
+using Object = fcl::CollisionObject<S>;
+namespace scenes = cube::scenes;
+
+bool countPair(Object*, Object*, void* data) {
+  ++*static_cast<std::size_t*>(data);
+  return false;
+}
+
+struct Run {
+  std::size_t calls = 0;
+  std::size_t checksum = 0;
+};
+
+std::vector<std::unique_ptr<Object>> queryObjects(const scenes::SceneOptions& o, std::size_t n,
+                                                  std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> p(-o.half_extent, o.half_extent);
+  std::vector<std::unique_ptr<Object>> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    fcl::Transform3d tf = fcl::Transform3d::Identity();
+    tf.translation() = fcl::Vector3d(p(rng), p(rng), p(rng));
+    out.push_back(
+        std::make_unique<Object>(std::make_shared<fcl::Sphered>(0.5 * scenes::typicalSize(o)), tf));
+    out.back()->computeAABB();
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: cube_instructions <case> <objects>\n");
+    return 2;
+  }
+  const std::string which = argv[1];
+  scenes::SceneOptions o;
+  o.n = std::strtoul(argv[2], nullptr, 10);
+  o.seed = 5;
+  scenes::Scene<S> scene = scenes::makeScene<S>(o);
+  cube::CubeCollisionManager<S> world;
+  world.registerObjects(scene.pointers());
+  world.setup();
+  Run run;
+
+  if (which == "self") {
+    CALLGRIND_START_INSTRUMENTATION;
+    world.collide(&run.checksum, countPair);
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 1;
+  } else if (which == "queries") {
+    const auto qs = queryObjects(o, 100, 7);
+    CALLGRIND_START_INSTRUMENTATION;
+    for (const auto& q : qs) world.collide(q.get(), &run.checksum, countPair);
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = qs.size();
+  } else if (which == "robot") {
+    scenes::SceneOptions r = o;
+    r.n = 30;
+    r.half_extent = o.half_extent / 10;
+    r.seed = 9;
+    scenes::Scene<S> robot_scene = scenes::makeScene<S>(r);
+    cube::CubeCollisionManager<S> robot;
+    robot.registerObjects(robot_scene.pointers());
+    robot.setup();
+    std::vector<fcl::Vector3d> home;
+    for (const auto& l : robot_scene.objects) home.push_back(l->getTranslation());
+    CALLGRIND_START_INSTRUMENTATION;
+    for (int k = 0; k < 16; ++k) {
+      const double x = o.half_extent * (-0.8 + 1.6 * k / 15.0);
+      for (std::size_t i = 0; i < robot_scene.objects.size(); ++i) {
+        robot_scene.objects[i]->setTranslation(home[i] + fcl::Vector3d(x, 0, 0));
+        robot_scene.objects[i]->computeAABB();
+      }
+      robot.update();
+      fcl::DefaultCollisionData<S> d;
+      world.collide(&robot, &d, fcl::DefaultCollisionFunction<S>);
+      run.checksum += d.result.isCollision();
+    }
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 16;
+  } else if (which == "update") {
+    CALLGRIND_START_INSTRUMENTATION;
+    for (int step = 0; step < 10; ++step) {
+      scenes::jitter(scene, 0.01, 0.1 * scenes::typicalSize(o), true, 100 + step);
+      world.update();
+    }
+    CALLGRIND_STOP_INSTRUMENTATION;
+    world.collide(&run.checksum, countPair);
+    run.calls = 10;
+  } else if (which == "distance") {
+    const auto qs = queryObjects(o, 10, 11);
+    CALLGRIND_START_INSTRUMENTATION;
+    for (const auto& q : qs) {
+      const auto r = cube::minimumDistance<S>(world, q.get(), fcl::DistanceRequest<S>());
+      run.checksum += std::size_t(r.min_distance > 0);
+    }
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = qs.size();
+  } else if (which == "contacts") {
+    fcl::CollisionRequest<S> all;
+    all.num_max_contacts = 1000000;
+    cube::NarrowPhaseOptions<S> one;
+    one.threads = 1;
+    CALLGRIND_START_INSTRUMENTATION;
+    run.checksum = cube::collideAll<S>(world, all, one).numContacts();
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 1;
+  } else if (which == "states") {
+    cube::BodySet<S> body;
+    const double len = scenes::typicalSize(o);
+    for (int i = 0; i < 30; ++i)
+      body.addLink(i % 2 ? std::shared_ptr<fcl::CollisionGeometryd>(
+                               std::make_shared<fcl::Capsuled>(0.15 * len, 0.7 * len))
+                         : std::make_shared<fcl::Boxd>(0.3 * len, 0.3 * len, len));
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<double> p(-0.9 * o.half_extent, 0.9 * o.half_extent),
+        a(-0.6, 0.6);
+    std::vector<fcl::Transform3d> poses;
+    for (int k = 0; k < 50; ++k) {
+      fcl::Transform3d t = fcl::Transform3d::Identity();
+      t.translation() = fcl::Vector3d(p(rng), p(rng), p(rng));
+      for (int i = 0; i < 30; ++i) {
+        t = t * fcl::AngleAxisd(a(rng), i % 2 ? fcl::Vector3d::UnitX() : fcl::Vector3d::UnitY());
+        fcl::Transform3d mid = t;
+        mid.translate(fcl::Vector3d(0, 0, len / 2));
+        poses.push_back(mid);
+        t.translate(fcl::Vector3d(0, 0, len));
+      }
+    }
+    cube::BatchOptions one;
+    one.threads = 1;
+    CALLGRIND_START_INSTRUMENTATION;
+    for (const auto& r : cube::checkStates(world, body, poses, one)) run.checksum += r.colliding;
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 50;
+  } else {
+    std::fprintf(stderr, "cube_instructions: unknown case %s\n", which.c_str());
+    return 2;
+  }
+  std::printf("calls %zu checksum %zu\n", run.calls, run.checksum);
+  return 0;
+}
