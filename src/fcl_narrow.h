@@ -16,6 +16,14 @@
 namespace cube {
 namespace detail {
 
+/// Whether FCL 0.7's fcl::distance leaves the object's pairs unanswered (planes, halfspaces:
+/// no support function in its GJK; octrees): callers stand in the AABBs' distance.
+template <typename S>
+bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
+  const fcl::NODE_TYPE t = o.getNodeType();
+  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
+}
+
 /// fcl::collide(a, b, request, result).
 template <typename S>
 std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,

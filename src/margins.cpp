@@ -15,11 +15,7 @@ namespace cube {
 
 namespace {
 
-template <typename S>
-bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
-  const fcl::NODE_TYPE t = o.getNodeType();
-  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
-}
+using detail::distanceUnanswered;
 
 template <typename S>
 std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manager,

@@ -26,9 +26,7 @@ int hardwareThreads() {
 
 namespace {
 
-int resolveThreads(int threads) {
-  return threads > 0 ? threads : hardwareThreads();
-}
+using detail::resolveThreads;
 
 // When threads pay. Work is counted in candidate pairs of shapes: the cull (about 0.1 us) and,
 // for one pair in three or so, FCL's call (0.2-2 us): 0.25-0.5 us a pair here. A pair with a

@@ -9,8 +9,15 @@
 #include <optional>
 #include <vector>
 
+#include "cube_collision/narrow_phase.h"
+
 namespace cube {
 namespace detail {
+
+/// A thread count from the user: > 0 as given, else hardwareThreads().
+inline int resolveThreads(int threads) {
+  return threads > 0 ? threads : hardwareThreads();
+}
 
 /// Runs body(scratch, i) for every i in [0, n) on `threads` threads, each thread with its own
 /// scratch from make() (made once per thread, on that thread). An exception stops nothing: the

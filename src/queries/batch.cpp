@@ -18,35 +18,25 @@
 
 namespace cube {
 
-namespace {
-
-[[noreturn]] void fail(const char* where, const std::string& what) {
-  throw std::invalid_argument(std::string("cube::") + where + ": " + what);
-}
-
-}  // namespace
+using detail::batchError;
 
 namespace detail {
 namespace {
-
-int resolveThreads(int threads) {
-  return threads > 0 ? threads : hardwareThreads();
-}
 
 // The number of states in `poses`, after checking it as the header says.
 template <typename S>
 std::size_t checkedStates(const Links<S>& links, const std::vector<fcl::Transform3<S>>& poses,
                           const char* where) {
-  if (links.size() == 0) fail(where, "the body set has no link");
+  if (links.size() == 0) batchError(where, "the body set has no link");
   if (poses.size() % links.size() != 0)
-    fail(where, "the pose array's size (" + std::to_string(poses.size()) +
-                    ") is not a multiple of the number of links (" + std::to_string(links.size()) +
-                    ")");
+    batchError(where, "the pose array's size (" + std::to_string(poses.size()) +
+                          ") is not a multiple of the number of links (" +
+                          std::to_string(links.size()) + ")");
   return poses.size() / links.size();
 }
 
 [[noreturn]] void badPose(const char* where, std::size_t index) {
-  fail(where, "pose " + std::to_string(index) + " has a NaN or infinite entry");
+  batchError(where, "pose " + std::to_string(index) + " has a NaN or infinite entry");
 }
 
 // The states of an edge of n states in `order`: rank r visits state visit[r].
@@ -187,7 +177,8 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
   for (std::size_t e = 0; e < edge_starts.size(); ++e)
     if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
         edge_starts[e] >= states)
-      fail("checkMotions", "edge_starts must start at 0 and increase strictly within the states");
+      batchError("checkMotions",
+                 "edge_starts must start at 0 and increase strictly within the states");
   const std::size_t n = links.size();
   return detail::firstCollisions(
       detail::coreOf(world), links, states, edge_starts, order, options, false,
@@ -210,8 +201,8 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                         const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
                         MotionOrder order, const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
-  if (links.size() == 0) fail("checkMotion", "the body set has no link");
-  if (!pose_of) fail("checkMotion", "null pose function");
+  if (links.size() == 0) batchError("checkMotion", "the body set has no link");
+  if (!pose_of) batchError("checkMotion", "null pose function");
   if (states == 0) return kNoIndex;
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,

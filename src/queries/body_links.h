@@ -6,6 +6,8 @@
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/body_view.h"
@@ -20,14 +22,12 @@ struct BodySet<S>::Links {
   std::vector<std::shared_ptr<fcl::CollisionGeometry<S>>> geometry;
   std::vector<S> margin;
   std::vector<detail::Filter> bits;
-  std::vector<fcl::Vector3<S>> mid, half;      // the local AABB: centre, half extents
-  std::vector<S> mid_of[3], half_of[3];        // the same per coordinate (poseBoxes reads them)
+  std::vector<S> mid_of[3], half_of[3];        // the local AABB per coordinate: centre, half
   std::vector<detail::VolumeSource> source;    // the cull's records' geometry part
   std::vector<std::uint8_t> allowed;           // size() x size(): 1 = never checked
   std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
                                                // [after_at[i], after_at[i + 1]), ascending
-  bool any_margin = false;
-  bool any_bits = false;        // a link has filter bits other than the default
+  bool any_bits = false;                       // a link has filter bits other than the default
   detail::BodyView<S> view{0};  // the links' tree, copied by each checker (bounds per state)
 
   std::size_t size() const { return geometry.size(); }
@@ -45,6 +45,11 @@ struct BodySet<S>::Links {
 };
 
 namespace detail {
+
+/// The batch's std::invalid_argument: "cube::<where>: <what>".
+[[noreturn]] inline void batchError(const char* where, const std::string& what) {
+  throw std::invalid_argument(std::string("cube::") + where + ": " + what);
+}
 
 struct BodyAccess {
   template <typename S>

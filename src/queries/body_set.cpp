@@ -12,13 +12,7 @@
 
 namespace cube {
 
-namespace {
-
-[[noreturn]] void fail(const char* where, const std::string& what) {
-  throw std::invalid_argument(std::string("cube::") + where + ": " + what);
-}
-
-}  // namespace
+using detail::batchError;
 
 template <typename S>
 BodySet<S>::BodySet() : links_(std::make_unique<Links>()) {
@@ -48,17 +42,17 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
                                 std::uint64_t category, std::uint64_t mask) {
   if (links_ == nullptr) links_ = std::make_unique<Links>();  // a moved-from set
   const char* where = "BodySet::addLink";
-  if (geometry == nullptr) fail(where, "null geometry");
+  if (geometry == nullptr) batchError(where, "null geometry");
   const fcl::NODE_TYPE type = geometry->getNodeType();
   if (type == fcl::GEOM_PLANE || type == fcl::GEOM_HALFSPACE)
-    fail(where, "a plane or halfspace cannot be a link (unbounded)");
+    batchError(where, "a plane or halfspace cannot be a link (unbounded)");
   if (!(margin >= S(0)) || !std::isfinite(margin))
-    fail(where, "the margin must be finite and >= 0");
+    batchError(where, "the margin must be finite and >= 0");
   geometry->computeLocalAABB();
   const fcl::AABB<S>& local = geometry->aabb_local;
   if (!local.min_.allFinite() || !local.max_.allFinite() ||
       !(local.min_.array() <= local.max_.array()).all())
-    fail(where, "the geometry's local AABB is not finite");
+    batchError(where, "the geometry's local AABB is not finite");
   Links& l = *links_;
   const std::size_t n = l.size();
   detail::VolumeSource source;
@@ -74,8 +68,6 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   l.geometry.reserve(n + 1);
   l.margin.reserve(n + 1);
   l.bits.reserve(n + 1);
-  l.mid.reserve(n + 1);
-  l.half.reserve(n + 1);
   for (int d = 0; d < 3; ++d) {
     l.mid_of[d].reserve(n + 1);
     l.half_of[d].reserve(n + 1);
@@ -84,15 +76,13 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   l.geometry.push_back(std::move(geometry));
   l.margin.push_back(margin);
   l.bits.push_back(detail::Filter{category, mask});
-  l.mid.push_back(local.center());
-  l.half.push_back((local.max_ - local.min_) / S(2));
+  const fcl::Vector3<S> mid = local.center(), half = (local.max_ - local.min_) / S(2);
   for (int d = 0; d < 3; ++d) {
-    l.mid_of[d].push_back(l.mid.back()[d]);
-    l.half_of[d].push_back(l.half.back()[d]);
+    l.mid_of[d].push_back(mid[d]);
+    l.half_of[d].push_back(half[d]);
   }
   l.source.push_back(source);
   l.allowed = std::move(allowed);
-  l.any_margin = l.any_margin || margin > S(0);
   l.any_bits = l.any_bits || !l.bits.back().isDefault();
   l.view = std::move(view);
   l.listPairs();
@@ -102,8 +92,8 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
 template <typename S>
 void BodySet<S>::allowPair(std::size_t i, std::size_t j) {
   const std::size_t n = size();
-  if (i >= n || j >= n) fail("BodySet::allowPair", "unknown link index");
-  if (i == j) fail("BodySet::allowPair", "a link is never checked against itself");
+  if (i >= n || j >= n) batchError("BodySet::allowPair", "unknown link index");
+  if (i == j) batchError("BodySet::allowPair", "a link is never checked against itself");
   links_->allowed[i * n + j] = links_->allowed[j * n + i] = 1;
   links_->listPairs();
 }

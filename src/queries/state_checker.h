@@ -48,12 +48,6 @@ class LinkObject final : public fcl::CollisionObject<S> {
 };
 
 template <typename S>
-bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
-  const fcl::NODE_TYPE t = o.getNodeType();
-  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
-}
-
-template <typename S>
 using Links = typename BodySet<S>::Links;
 
 // One thread's checker: the links' objects, boxes and records for the state at hand, and the
@@ -102,7 +96,6 @@ class StateChecker {
     if (!place(poses)) return kBadPose;
     first_pair_ = first_pair;
     best_ = Candidate{kNone, kNone, kNone, false};
-    pending_.clear();
     // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
     // the first group of links that touches (as a link-by-link check does), and a free one
     // walks little more than the whole tree at once would.
@@ -278,11 +271,12 @@ class StateChecker {
 
   static bool onWorld(Object* w, ObjectId iw, Object*, ObjectId link, void* data) {
     StateChecker& c = *static_cast<StateChecker*>(data);
+    const Candidate cand{link, c.world_.table().seq(iw), iw, false};
+    if (c.first_pair_ && c.found() && !(cand < c.best_)) return false;  // cannot come first
     const VolumeSphere* s;
     const VolumeShape* h;
     c.worldRecords(*w, iw, s, h);
     const Slot& slot = c.linkRecords(link);
-    const Candidate cand{link, c.world_.table().seq(iw), iw, false};
     return c.offer(cand, slot.sphere, slot.shape, *s, *h,
                    c.links_.margin[link] + c.world_.marginOf(iw));
   }
