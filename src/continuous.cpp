@@ -176,29 +176,20 @@ using ObjectPairs = std::vector<std::pair<fcl::CollisionObject<S>*, fcl::Collisi
 template <typename S>
 struct Found {
   const detail::ObjectTable<S>* table;
-  const std::vector<char>* moving;  // by ObjectId of the manager's table
   std::vector<std::pair<std::uint32_t, std::uint32_t>> seqs;
   std::vector<std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>> pairs;
 
-  void add(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
-    std::uint32_t sa = table->seq(table->find(a));
-    std::uint32_t sb = table->seq(table->find(b));
+  // Each pair with its lower registration number first.
+  static bool add(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b, ObjectId ib,
+                  void* data) {
+    Found& f = *static_cast<Found*>(data);
+    std::uint32_t sa = f.table->seq(ia), sb = f.table->seq(ib);
     if (sb < sa) {
       std::swap(a, b);
       std::swap(sa, sb);
     }
-    seqs.emplace_back(sa, sb);
-    pairs.emplace_back(a, b);
-  }
-  static bool movers(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* data) {
-    static_cast<Found*>(data)->add(a, b);
-    return false;
-  }
-  // (mover, managed object): a managed mover is met in the movers' own self-collide.
-  static bool withStill(fcl::CollisionObject<S>* mover, fcl::CollisionObject<S>* other,
-                        void* data) {
-    Found& f = *static_cast<Found*>(data);
-    if (!(*f.moving)[f.table->find(other)]) f.add(mover, other);
+    f.seqs.emplace_back(sa, sb);
+    f.pairs.emplace_back(a, b);
     return false;
   }
 };
@@ -238,40 +229,24 @@ ObjectPairs<S> sweptPairs(const CubeCollisionManager<S>& manager,
     checkObjectMotion(*obj, motions[i].end, where, name + ".object");
   }
 
-  std::vector<fcl::CollisionObject<S>*> objs(motions.size());
+  // The movers' swept boxes through the core's sweep query: with one another, then with the
+  // objects that stay, under the manager's margins, filter bits and pair predicate.
+  std::vector<ObjectId> ids(motions.size());
   std::vector<Box<S>> boxes(motions.size());
   for (std::size_t i = 0; i < motions.size(); ++i) {
-    objs[i] = motions[i].object;
-    const fcl::AABB<S> b = sweptBox(*objs[i], motions[i].end, motion_type);
+    ids[i] = table.find(motions[i].object);
+    const fcl::AABB<S> b = sweptBox(*motions[i].object, motions[i].end, motion_type);
     for (int k = 0; k < 3; ++k) {
       boxes[i].lo[k] = b.min_[k];
       boxes[i].hi[k] = b.max_[k];
     }
   }
-  // The movers' swept boxes in a hierarchy of their own, walked against itself (mover with
-  // mover) and against the manager's (mover with still object).
-  Config config = manager.config();
-  config.keep_pairs = false;  // one self-collide: a pair list would be built for nothing
-  detail::Broadphase<S> swept(config);
-  // Margins, filter bits and the pair predicate apply as in every query of the manager: each
-  // swept box grown by its object's margin, each mover with its bits.
-  for (std::size_t i = 0; i < objs.size(); ++i) {
-    const S m = core.margin(objs[i]);
-    for (int k = 0; k < 3; ++k) {
-      boxes[i].lo[k] -= m;
-      boxes[i].hi[k] += m;
-    }
-  }
-  swept.addMany(objs.data(), boxes.data(), objs.size());
-  for (fcl::CollisionObject<S>* obj : objs) swept.setFilter(obj, core.filter(obj));
-  swept.setKeep(core.keep());
-  Found<S> found{&table, &moving, {}, {}};
+  Found<S> found{&table, {}, {}};
   {
     // The pair predicate is the user's code: a mutation of the manager from it is refused, as
     // from the manager's own queries.
     const detail::QueryScope scope(&core);
-    swept.collideSelf(&found, &Found<S>::movers, nullptr);
-    swept.collide(core, &found, &Found<S>::withStill, nullptr);
+    core.collideMoving(ids.data(), boxes.data(), ids.size(), &found, &Found<S>::add);
   }
 
   std::vector<std::size_t> order(found.pairs.size());

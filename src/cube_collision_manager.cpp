@@ -443,7 +443,7 @@ std::pair<std::uint64_t, std::uint64_t> CubeCollisionManager<S>::filter(const Ob
 template <typename S>
 void CubeCollisionManager<S>::setPairFilter(std::function<bool(Object*, Object*)> keep) {
   refuseInsideQuery(core_.get(), "setPairFilter");
-  core_->setKeep(std::move(keep));
+  core_->setPredicate(std::move(keep));
 }
 
 namespace {

@@ -456,7 +456,7 @@ struct AllVisitor {
   RayQuery<S>& q;
   std::vector<Found<S>>& out;
   static bool before(State, State) { return false; }
-  bool keep(State) const { return true; }
+  bool worth(State) const { return true; }
   bool enter(std::uint32_t child, int, State, State&) const {
     const Node& n = tree.nodes[child];
     double a, b;
@@ -489,7 +489,7 @@ struct FirstVisitor {
 
   double bound() const { return limit; }
   static bool before(State x, State y) { return x < y; }
-  bool keep(State entry) const { return entry <= bound(); }
+  bool worth(State entry) const { return entry <= bound(); }
   bool enter(std::uint32_t child, int, State, State& entry) const {
     const Node& n = tree.nodes[child];
     double exit;
@@ -537,7 +537,7 @@ struct RegionVisitor {
   std::vector<std::pair<std::uint32_t, fcl::CollisionObject<S>*>>& out;
   const detail::ObjectTable<S>& table;
   static bool before(State, State) { return false; }
-  bool keep(State) const { return true; }
+  bool worth(State) const { return true; }
   bool enter(std::uint32_t child, int, State, State&) const {
     const Node& n = tree.nodes[child];
     return pred(n.lo, n.hi);

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -17,11 +18,35 @@
 #include "core/pair_list.h"
 #include "core/rebuild_policy.h"
 #include "core/traversal.h"
+#include "core/unbounded_list.h"
+#include "core/walk.h"
 #include "cube_collision/config.h"
 #include "cube_collision/query_stats.h"
 
 namespace cube {
 namespace detail {
+
+/// Broadphase::search's visitor of walkTree: the region's choices, cube by cube.
+template <typename S, class Region>
+struct RegionGuide {
+  using State = typename Region::State;
+  static constexpr bool kOrdered = Region::kOrdered;
+  const View<S>& cubes;
+  const std::uint32_t* seq;
+  Region& region;
+  static bool before(const State& x, const State& y) { return Region::before(x, y); }
+  bool worth(const State& s) const { return region.worth(s); }
+  bool enter(std::uint32_t child, int, const State&, State& out) {
+    const Node& n = cubes.nodes[child];
+    return region.enters(n.lo, n.hi, out);
+  }
+  Step at(std::uint32_t cube, const State&) {
+    const Node& n = cubes.nodes[cube];
+    if (!n.isLeaf()) return Step::open;
+    region.leaf(cubes.items + n.first, n.count, seq);
+    return Step::skip;
+  }
+};
 
 template <typename S>
 class Broadphase {
@@ -65,8 +90,8 @@ class Broadphase {
   /// The filter bits of a registered object, or of any other (the default).
   Filter filter(const Object* obj) const;
   /// The predicate every pair must pass after the filter bits (empty: none).
-  void setKeep(KeepFn<S> keep) { keep_ = std::move(keep); }
-  const KeepFn<S>& keep() const { return keep_; }
+  void setPredicate(PairPredicate<S> p) { predicate_ = std::move(p); }
+  const PairPredicate<S>& predicate() const { return predicate_; }
   /// Gives a registered object its own margin (>= 0) and its new box `box`; false if not
   /// registered.
   bool setMargin(const Object* obj, const Box<S>& box, S margin);
@@ -124,6 +149,13 @@ class Broadphase {
   /// canonical_pairs says; fn gets the body's ids.
   bool collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
                QueryStats* stats) const;
+  /// A sweep of registered objects: objects `ids` (registered, each once) at boxes `boxes` (each
+  /// grown here by its object's margin) with one another, then with every other registered
+  /// object at its own box, under the gate of a self query (filter bits, the predicate; pairs of
+  /// two movers oriented by registration number when canonical_pairs): fn(a, ia, b, ib, data)
+  /// with the table's ids, a mover as b against an object that stays. Pairs in walk order.
+  bool collideMoving(const ObjectId* ids, const Box<S>* boxes, std::size_t n, void* data,
+                     CollideFn<S> fn) const;
   /// Pairs (object of this, object of other) whose boxes overlap.
   bool collide(const Broadphase& other, void* data, CollideFn<S> fn, QueryStats* stats) const;
   /// Branch and bound from `best` (lowered by fn) over the objects near `box`.
@@ -135,28 +167,36 @@ class Broadphase {
   bool distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
                 QueryStats* stats) const;
 
+  /// A query by a region of space rather than by an object (a ray, a box, a ball): the region
+  /// says which cubes it enters, and is handed the objects of every leaf it reaches, the
+  /// unbounded list first (a plane often bounds a ray's search), then the cubes' leaves in the
+  /// order of walkTree with the region as its guide. The region: `using State`,
+  /// `static constexpr bool kOrdered`, `static bool before(State, State)` and
+  /// `bool worth(State)` as walkTree's visitor; `bool enters(const float* lo, const float* hi,
+  /// State& out)` for a cube (and the root); `void leaf(const Item<S>* items, std::uint32_t n,
+  /// const std::uint32_t* seq)` for a run of objects, dead slots (obj null) included, seq the
+  /// registration numbers by id.
+  template <class Region>
+  void search(Region& region) const;
+
   /// Registered objects in registration order.
   void objects(std::vector<Object*>& out) const { table_.objects(out); }
   /// Whether the next self-collide reads the pair list.
   bool pairsListed() const { return pairs_.valid(); }
 
-  // Inspection, and the read-only entry of queries written outside the core (ray, region and
-  // swept queries): the cubes and the unbounded list as views, and where each id is.
+  /// The cubes and the unbounded list as views, and where each id is.
   Scene<S> scene() const {
-    return Scene<S>{tree_.view(), unboundedView(), table_.locations(), config_.all_pairs_limit};
+    return Scene<S>{tree_.view(), unbounded_.view(), table_.locations(), config_.all_pairs_limit};
   }
+  // Inspection: the components, read-only.
   const CubeTree<S>& tree() const { return tree_; }
-  const ItemArray<S>& unboundedItems() const { return unbounded_; }
+  const ItemArray<S>& unboundedItems() const { return unbounded_.items(); }
   const ObjectTable<S>& table() const { return table_; }
   std::size_t bytes() const;
   /// Checks every component's invariants and how they agree; on failure says why.
   bool validate(std::string* why) const;
 
  private:
-  View<S> unboundedView() const {
-    return View<S>{&unbounded_node_, unbounded_.data(), unbounded_.empty() ? kNone : 0u,
-                   std::uint32_t(unbounded_.size())};
-  }
   /// With the filter groups the tree should keep apart, if any (see CubeTree::rebuild).
   IdArrays ids() {
     const bool apart = table_.separable(config_.filter_groups);
@@ -173,8 +213,6 @@ class Broadphase {
   void place(ObjectId id, Object* obj, const Box<S>& box);
   /// Takes an id out of wherever it is.
   void unplace(ObjectId id);
-  /// Sorts the unbounded list by registration number.
-  void orderUnbounded();
   /// Sets one registered object's box, moving it between the cubes and the list if its kind
   /// changed; false if not registered. Rebuilds nothing: the caller asks the policy after.
   bool move(const Object* obj, const Box<S>& box);
@@ -199,20 +237,52 @@ class Broadphase {
   Box<S> queryBox(const Object* obj, const Box<S>& box) const {
     return any_margin_ ? grown(box, table_.find(obj)) : box;
   }
-  /// Whether pairs must pass a gate (filter bits, the predicate, canonical order).
-  bool gated() const { return table_.filters() != nullptr || keep_ || config_.canonical_pairs; }
-  /// The gate of a self query.
-  PairGate<S> selfGate() const;
-  /// The gate of a query of this manager's objects (side a) against those of `other` (null: an
-  /// object query, whose object `obj` is looked up here for its bits).
-  PairGate<S> crossGate(const Broadphase* other, const Object* obj) const;
-  /// The gate of a query by an object with filter bits `bits`.
-  PairGate<S> probeGate(const Filter& bits) const;
-  /// An object query from its grown box and its gate (null: none).
-  bool collideQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate, void* data,
-                    CollideFn<S> fn, QueryStats* stats) const;
-  bool distanceQuery(Object* obj, const Box<S>& box, const PairGate<S>* gate, void* data,
-                     DistanceFn<S> fn, S& best, QueryStats* stats) const;
+
+  // The query plan (core/query_plan.cpp): every query names its other side, and plan() decides
+  // once, for all of them, the gate, the source of pairs and how they are delivered.
+
+  /// The other side of a query (a self query has none): another broadphase, or objects of no
+  /// table seen as one view (a query object: one leaf; a body: its small tree).
+  struct Against {
+    const Broadphase* other = nullptr;
+    View<S> view{};
+    const SingleView<S>* one = nullptr;  ///< a query object: its view's storage (ids kNone)
+    Object* obj = nullptr;               ///< a query object: the object
+    Filter bits{};                       ///< a query object: its filter bits
+    const Filter* ids = nullptr;         ///< a body: bits per body id (null: all default)
+  };
+  /// What plan() decided.
+  struct Plan {
+    std::optional<PairGate<S>> gate;  ///< set when a rule is (walks without one ask nothing)
+    bool canonical = false;           ///< gather the pairs, then call in registration order
+    bool from_list = false;           ///< a self query read from the valid pair list
+    bool split = false;               ///< a self walk cut into tasks for `threads` threads
+    bool one_object = false;          ///< an object query without a gate: collideObject's walk
+    int threads = 1;
+    std::size_t all_pairs_limit = 0;  ///< views up to this many slots take the all-pairs test
+    const PairGate<S>* walkGate() const { return gate ? &*gate : nullptr; }
+  };
+  /// The gate of a query against `b` (null: a self query): the one place where a gate is built.
+  PairGate<S> gate(const Against* b) const;
+  Plan plan(const Against* b, int threads) const;
+  /// Runs run(a, b, self) on the view pairs of a query against `b` (null: self) until one returns
+  /// true: the cubes, then the unbounded list.
+  template <class Run>
+  bool forViews(const Against* b, Run&& run) const;
+  /// The one collide runner: a plan's pairs to fn.
+  [[gnu::always_inline]] inline bool collideRun(const Against* b, int threads, void* data,
+                                                CollideFn<S> fn, QueryStats* stats) const;
+  /// The one distance runner.
+  bool distanceRun(const Against* b, void* data, DistanceFn<S> fn, S& best,
+                   QueryStats* stats) const;
+  /// A split self walk's pairs (Plan::split): delivered wave by wave, or, with `out`, gathered.
+  bool collideSplit(const Plan& p, void* data, CollideFn<S> fn,
+                    std::vector<std::uint64_t>* out) const;
+  /// Canonical delivery: `found` sorted by registration numbers, then to fn.
+  bool callInOrder(const std::vector<std::uint64_t>& found, const Against* b, void* data,
+                   CollideFn<S> fn, QueryStats* stats) const;
+  /// The other side of an object query: the object in `one` (its grown box), its bits.
+  static Against objectSide(const SingleView<S>& one, const Filter& bits);
   /// After motions: rebuild if due, then, with `keep`, keep the pair list (moved_ holds the ids
   /// whose box changed; `was_valid` whether the list was valid before).
   void afterMotion(bool keep, bool was_valid);
@@ -221,11 +291,10 @@ class Broadphase {
   ObjectTable<S> table_;
   CubeTree<S> tree_;
   RebuildPolicy policy_;
-  ItemArray<S> unbounded_;  // objects too large for the cubes, tested by every query
-  Node unbounded_node_{};   // the list seen as one leaf of infinite extent
+  UnboundedList<S> unbounded_;  // objects too large for the cubes, tested by every query
   PairList<S> pairs_;
   std::vector<ObjectId> moved_;  // update()'s scratch: ids whose box changed
-  KeepFn<S> keep_;               // the user's pair predicate (setPairFilter)
+  PairPredicate<S> predicate_;   // the user's pair predicate (setPairFilter)
   S default_margin_ = 0;         // manager-wide margin
   bool any_margin_ = false;      // a margin was ever set: query objects need a lookup
   bool setup_done_ = false;
@@ -288,6 +357,20 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
   }
   afterMotion(keep, was_valid);
   return bad;
+}
+
+template <typename S>
+template <class Region>
+void Broadphase<S>::search(Region& region) const {
+  const std::uint32_t* seq = table_.seqs();
+  if (!unbounded_.empty()) region.leaf(unbounded_.items().data(), unbounded_.size(), seq);
+  const View<S> cubes = tree_.view();
+  if (cubes.root == kNone) return;
+  typename Region::State start{};
+  const Node& root = cubes.nodes[cubes.root];
+  if (!region.enters(root.lo, root.hi, start)) return;
+  RegionGuide<S, Region> guide{cubes, seq, region};
+  walkTree(cubes.nodes, cubes.root, start, guide);
 }
 
 extern template class Broadphase<float>;

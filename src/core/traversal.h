@@ -11,6 +11,7 @@
 
 #include "core/geometry.h"
 #include "core/kernels/pair_kernels.h"
+#include "core/pair_gate.h"
 #include "cube_collision/query_stats.h"
 
 namespace cube {
@@ -61,79 +62,6 @@ struct DistanceFn {
 template <typename S>
 using DistanceFnArg = typename NonDeduced<DistanceFn<S>>::type;
 
-/// A predicate on two objects: false drops the pair before any callback.
-template <typename S>
-using KeepFn = std::function<bool(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*)>;
-
-/// What a pair of overlapping boxes must also pass to reach a callback: the two objects' filter
-/// bits, the user's predicate, and, in self queries, the orientation (lower registration number
-/// first). A null member leaves its rule out; walks without a gate test nothing more.
-template <typename S>
-struct PairGate {
-  const Filter* filters_a = nullptr;   ///< per id of side a's objects; null: all default
-  const Filter* filters_b = nullptr;   ///< per id of side b's objects; null: all default
-  const Filter* groups_a = nullptr;    ///< per filter group of side a (View::groups index it)
-  const Filter* groups_b = nullptr;    ///< per filter group of side b
-  Filter query;                        ///< side b's object when its id is kNone
-  const KeepFn<S>* keep = nullptr;     ///< the user's predicate, if any
-  const std::uint32_t* seq = nullptr;  ///< self queries: orient pairs by these numbers
-
-  /// The filter bits of the objects with ids x and y (y may be kNone: the query object).
-  std::pair<const Filter*, const Filter*> bitsOf(ObjectId x, ObjectId y) const {
-    static constexpr Filter kAll{};
-    const Filter* fx = filters_a != nullptr ? filters_a + x : &kAll;
-    const Filter* fy = y == kNone ? &query : filters_b != nullptr ? filters_b + y : &kAll;
-    return {fx, fy};
-  }
-  /// Whether the filter bits let the objects with ids x and y pair.
-  bool bitsPass(ObjectId x, ObjectId y) const {
-    const auto f = bitsOf(x, y);
-    return filtersPass(*f.first, *f.second);
-  }
-  /// Whether there are bits to test (else every pair passes them).
-  bool hasBits() const { return filters_a != nullptr || filters_b != nullptr; }
-  /// Whether every object of a cube of group ga (side a) may pair with every object of a cube
-  /// of group gb (side b; kNone: the query object) by their bits: true (pass), false (none
-  /// can), or unknown (a mixed cube, or no groups). Returns 1, 0 or -1.
-  int groupsPass(Group ga, Group gb, bool query_b) const {
-    if (ga == kMixedGroup || groups_a == nullptr) return -1;
-    if (query_b) return filtersPass(groups_a[ga], query);
-    if (gb == kMixedGroup || groups_b == nullptr) return -1;
-    return filtersPass(groups_a[ga], groups_b[gb]);
-  }
-  /// `bits` with the pairs whose filter bits do not pass cleared; bits_of(b) points at bit b's
-  /// two Filters. No branch per pair: whether a pair passes is a coin toss for the branch predictor
-  /// when groups are mixed, and a mispredicted branch costs more than the test.
-  template <class BitsOf>
-  static std::uint64_t passing(std::uint64_t bits, BitsOf&& bits_of) {
-    std::uint64_t out = bits;
-    for (std::uint64_t m = bits; m != 0; m &= m - 1) {
-      const unsigned b = static_cast<unsigned>(__builtin_ctzll(m));
-      const auto f = bits_of(b);
-      out &= ~(std::uint64_t(!filtersPass(*f.first, *f.second)) << b);
-    }
-    return out;
-  }
-  /// The rules after the bits, for a pair whose bits passed: orientation and the predicate.
-  /// x and y are records or ids; obj(x) gives the object. Calls then(first, second) if it passes;
-  /// false (the query goes on) otherwise.
-  template <class T, class IdOf, class ObjOf, class Then>
-  bool finish(const T& x, const T& y, IdOf&& id, ObjOf&& obj, Then&& then) const {
-    const bool swap = seq != nullptr && seq[id(y)] < seq[id(x)];
-    const T& first = swap ? y : x;
-    const T& second = swap ? x : y;
-    if (keep != nullptr && !(*keep)(obj(first), obj(second))) return false;
-    return then(first, second);
-  }
-  /// Calls then(x, y) on the pair, oriented, if it passes; false (the query goes on) otherwise.
-  template <class Then>
-  bool through(const Item<S>& x, const Item<S>& y, Then&& then) const {
-    if (!bitsPass(x.id, y.id)) return false;
-    return finish(
-        x, y, [](const Item<S>& i) { return i.id; }, [](const Item<S>& i) { return i.obj; }, then);
-  }
-};
-
 /// A one-object view for queries: the caller owns the storage.
 template <typename S>
 struct SingleView {
@@ -155,18 +83,25 @@ template <typename S>
 bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
                   QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
 
-/// An object query without a gate: collidePairs(tree, query.view(), false, data, fn, stats),
-/// straight into the one-object walk. Most queries are short, and the set-up that pairs of
-/// trees need was a tenth of their time.
+/// The collide of two views every query runs (the walk chosen once, here): the pairs of
+/// collidePairs(a, b, self, data, fn, stats, gate), found by collideAllPairs where
+/// allPairsFit(a, b, self, all_pairs_limit), by the walk of one object down `a` where `b` is a
+/// single object and there is no gate, else by the walk of cube pairs.
 template <typename S>
-bool collideObject(const View<S>& tree, const SingleView<S>& query, void* data, CollideFnArg<S> fn,
+bool collideViews(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
+                  void* data, CollideFnArg<S> fn, QueryStats* stats = nullptr,
+                  const PairGate<S>* gate = nullptr);
+
+/// collideViews(tree, object.view(), false, 0, data, fn, stats) for an object without a gate,
+/// straight into the walk of one object down a tree: most queries are those, and short.
+template <typename S>
+bool collideObject(const View<S>& tree, const SingleView<S>& object, void* data, CollideFnArg<S> fn,
                    QueryStats* stats = nullptr);
 
 /// Appends to `out` every pair of distinct objects x of `a` and y of `b` whose boxes overlap
-/// (closed; with `self`, each unordered pair once) as id(x) << 32 | id(y). In the order and with
-/// the argument order in which a collide would call its callback: collidePairs, or
-/// collideAllPairs where allPairsFit(a, b, self, all_pairs_limit). With a gate, only the
-/// pairs that pass it, oriented by it (an id of kNone stays kNone).
+/// (closed; with `self`, each unordered pair once) as id(x) << 32 | id(y): the pairs of
+/// collideViews(a, b, self, all_pairs_limit, ...), by the same walk, in its order and argument
+/// order. With a gate, only the pairs that pass it, oriented by it (an id of kNone stays kNone).
 template <typename S>
 void collectPairs(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
                   std::vector<std::uint64_t>& out, const PairGate<S>* gate = nullptr);

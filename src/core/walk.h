@@ -8,6 +8,7 @@
 // of cubes.
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
@@ -99,13 +100,13 @@ enum class Step { open, skip, stop };
 /// v.enter(child, which, state, child_state) for each child (which = 0, 1), and the children it
 /// takes are visited next (V::kOrdered: the one V::before puts first; otherwise the first
 /// child first, so that an unordered walk is a preorder). A stacked cube is visited only if
-/// v.keep(state) still holds when it comes off the stack (a distance bound may have shrunk).
+/// v.worth(state) still holds when it comes off the stack (a distance bound may have shrunk).
 /// `nodes` is read after each v.at, which may append to it (the build grows the tree it walks).
 /// Returns true if v.at said stop.
 ///
 /// The visitor: `using State` (copied onto the stack), `static constexpr bool kOrdered`,
 /// `static bool before(const State&, const State&)` (used only if kOrdered),
-/// `bool keep(const State&)`, `Step at(std::uint32_t, const State&)`,
+/// `bool worth(const State&)`, `Step at(std::uint32_t, const State&)`,
 /// `bool enter(std::uint32_t, int, const State&, State&)`.
 template <class Nodes, class V>
 bool walkTree(const Nodes& nodes, std::uint32_t root, const typename V::State& start, V& v) {
@@ -117,7 +118,7 @@ bool walkTree(const Nodes& nodes, std::uint32_t root, const typename V::State& s
   stack.push(E{root, start});
   while (!stack.empty()) {
     E e = stack.pop();
-    if (!v.keep(e.state)) continue;
+    if (!v.worth(e.state)) continue;
     for (bool more = true; more;) {
       const Step step = v.at(e.node, e.state);
       if (step == Step::stop) return true;
@@ -140,7 +141,7 @@ struct PreorderVisitor {
   At& at_fn;
   Child& child_fn;
   static bool before(const State&, const State&) { return false; }
-  bool keep(const State&) const { return true; }
+  bool worth(const State&) const { return true; }
   Step at(std::uint32_t cube, const State& s) { return at_fn(cube, s); }
   bool enter(std::uint32_t, int which, const State& parent, State& out) {
     out = child_fn(which, parent);
@@ -159,15 +160,46 @@ bool walkPreorder(const Nodes& nodes, std::uint32_t root, const State& start, At
   return walkTree(nodes, root, start, v);
 }
 
+/// Two cubes, one of tree A and one of tree B (or both of one tree).
+struct CubePair {
+  std::uint32_t a, b;
+};
+
+/// The expansion step of walkPair, also the one SplitWalk cuts its tasks with: the child pairs a
+/// pair of cubes (a, b) opens into, neither a pair of leaves nor (with `self`) a leaf with
+/// itself, in the order a walk without preference visits them. A cube with itself (self, a ==
+/// b) gives its two children each with itself, then the two together; two internal cubes the
+/// four pairs of their children; an internal cube and a leaf the internal one's two children
+/// with the leaf. Calls f(pairs, fixed, open_a, open_b) once: `pairs` a std::array of 3, 4 or 2
+/// CubePairs (its size a constant, so that the walk's choice among them is unrolled), of which
+/// the first `fixed` are visited whatever the visitor says (the children with themselves), and
+/// whether a's and b's children are among them.
+template <class F>
+inline void childPairs(const Node& na, const Node& nb, std::uint32_t a, std::uint32_t b, bool self,
+                       F&& f) {
+  if (self && a == b) {
+    const std::uint32_t c = na.first;
+    f(std::array<CubePair, 3>{{{c, c}, {c + 1, c + 1}, {c, c + 1}}}, 2, true, false);
+  } else if (!na.isLeaf() && !nb.isLeaf()) {
+    const std::uint32_t ca = na.first, cb = nb.first;
+    f(std::array<CubePair, 4>{{{ca, cb}, {ca, cb + 1}, {ca + 1, cb}, {ca + 1, cb + 1}}}, 0, true,
+      true);
+  } else if (nb.isLeaf()) {
+    f(std::array<CubePair, 2>{{{na.first, b}, {na.first + 1, b}}}, 0, true, false);
+  } else {
+    f(std::array<CubePair, 2>{{{a, nb.first}, {a, nb.first + 1}}}, 0, false, true);
+  }
+}
+
 /// Visits pairs of cubes (a of tree A, b of tree B) depth-first from (rootA, rootB); with
 /// `self` (A and B the same tree), each unordered pair of cubes once: a cube with itself means
 /// the pairs within it. At a pair of leaves, v.leafPair(a, b) (or v.leafSelf(a) for a leaf with
 /// itself); otherwise the larger step is taken: both cubes opened (four child pairs), or the
 /// internal one of an internal cube and a leaf (two). v.enter(a, b, state) decides which child
-/// pairs are visited and gives their states; order and keep() as in walkTree. v.visit() is
+/// pairs are visited and gives their states; order and worth() as in walkTree. v.visit() is
 /// called at each pair visited. Returns true as soon as a leaf call does.
 ///
-/// The visitor: State, kOrdered, before and keep as for walkTree, and `void visit()`,
+/// The visitor: State, kOrdered, before and worth as for walkTree, and `void visit()`,
 /// `bool enter(std::uint32_t a, std::uint32_t b, State&)`, `bool leafSelf(std::uint32_t)`,
 /// `bool leafPair(std::uint32_t, std::uint32_t)`, `void prefetch(bool in_a, std::uint32_t)`.
 template <class V>
@@ -181,7 +213,7 @@ bool walkPair(const Node* na_nodes, const Node* nb_nodes, std::uint32_t root_a,
   stack.push(E{root_a, root_b, start});
   while (!stack.empty()) {
     E e = stack.pop();
-    if (!v.keep(e.state)) continue;
+    if (!v.worth(e.state)) continue;
     for (bool more = true; more;) {
       more = false;
       v.visit();
@@ -193,43 +225,25 @@ bool walkPair(const Node* na_nodes, const Node* nb_nodes, std::uint32_t root_a,
           if (v.leafSelf(e.a)) return true;
           break;
         }
-        // Within a cube: within each child, then across the two.
-        const std::uint32_t c = na.first;
-        E e3[3] = {{c, c, {}}, {c + 1, c + 1, {}}, {c, c + 1, {}}};
-        bool take[3] = {true, true, false};
-        take[2] = v.enter(c, c + 1, e3[2].state);
-        v.prefetch(true, c);
-        v.prefetch(true, c + 1);
-        more = continueWithBest<V>(stack, take, e3, e);
-        continue;
-      }
-      const bool la = na.isLeaf(), lb = nb.isLeaf();
-      if (la && lb) {
+      } else if (na.isLeaf() && nb.isLeaf()) {
         if (v.leafPair(e.a, e.b)) return true;
         break;
       }
-      if (!la && !lb) {
-        // Open both cubes: one visit settles four child pairs.
-        const std::uint32_t ca = na.first, cb = nb.first;
-        E e4[4] = {{ca, cb, {}}, {ca, cb + 1, {}}, {ca + 1, cb, {}}, {ca + 1, cb + 1, {}}};
-        bool take[4];
-        for (int i = 0; i < 4; ++i) take[i] = v.enter(e4[i].a, e4[i].b, e4[i].state);
-        for (std::uint32_t i = 0; i < 2; ++i) {
-          v.prefetch(true, ca + i);
-          v.prefetch(false, cb + i);
-        }
-        more = continueWithBest<V>(stack, take, e4, e);
-      } else {
-        // Open the internal one.
-        const std::uint32_t c = lb ? na.first : nb.first;
-        E e2[2] = {{lb ? c : e.a, lb ? e.b : c, {}}, {lb ? c + 1 : e.a, lb ? e.b : c + 1, {}}};
-        bool take[2];
-        for (int i = 0; i < 2; ++i) {
-          take[i] = v.enter(e2[i].a, e2[i].b, e2[i].state);
-          v.prefetch(lb, c + std::uint32_t(i));
-        }
-        more = continueWithBest<V>(stack, take, e2, e);
-      }
+      childPairs(na, nb, e.a, e.b, self,
+                 [&](const auto& pairs, int fixed, bool open_a, bool open_b) {
+                   constexpr int N = int(std::tuple_size<std::decay_t<decltype(pairs)>>::value);
+                   E ch[N];
+                   bool take[N];
+                   for (int i = 0; i < N; ++i) {
+                     ch[i] = E{pairs[i].a, pairs[i].b, {}};
+                     take[i] = i < fixed || v.enter(ch[i].a, ch[i].b, ch[i].state);
+                   }
+                   for (std::uint32_t i = 0; i < 2; ++i) {
+                     if (open_a) v.prefetch(true, na.first + i);
+                     if (open_b) v.prefetch(false, nb.first + i);
+                   }
+                   more = continueWithBest<V>(stack, take, ch, e);
+                 });
     }
   }
   return false;

@@ -75,7 +75,7 @@ class StateChecker {
     grow_.resize(links.size());
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
-    eager_objects_ = bool(world.keep());
+    eager_objects_ = bool(world.predicate());
   }
   ~StateChecker() {
     for (std::size_t l = 0; l < slots_.size(); ++l)
