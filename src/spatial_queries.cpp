@@ -25,10 +25,10 @@
 #include <utility>
 #include <vector>
 
+#include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "core/walk.h"
-#include "fcl_narrow.h"
-#include "manager_access.h"
+#include "pipeline/fcl_narrow.h"
 
 namespace cube {
 

@@ -32,7 +32,7 @@
 
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
-#include "cull.h"
+#include "pipeline/cull.h"
 
 namespace {
 

@@ -13,9 +13,9 @@
 #include <string>
 #include <unordered_map>
 
-#include "cull.h"
-#include "fcl_narrow.h"
 #include "narrow_phase_stream.h"
+#include "pipeline/cull.h"
+#include "pipeline/fcl_narrow.h"
 #include "pipeline/parallel_for.h"
 
 namespace cube {
