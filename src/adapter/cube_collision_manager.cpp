@@ -16,8 +16,8 @@
 #include "adapter/manager_walks.h"
 #include "adapter/query_guard.h"
 #include "core/broadphase.h"
-#include "narrow_phase_stream.h"
 #include "pipeline/cull.h"
+#include "pipeline/pair_volumes.h"
 
 namespace cube {
 

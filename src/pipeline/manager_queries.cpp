@@ -12,7 +12,8 @@
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
-#include "narrow_phase_stream.h"
+#include "pipeline/collide_stream.h"
+#include "pipeline/distance_search.h"
 
 namespace cube {
 
