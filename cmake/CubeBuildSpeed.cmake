@@ -34,7 +34,7 @@ if(CUBE_COLLISION_SANITIZE STREQUAL "address" AND NOT CUBE_COLLISION_SANITIZE_FC
   # In the AddressSanitizer build, FCL's float narrow phase is left uninstrumented, like its double
   # one in libfcl: instrumented, this file alone compiled for many minutes. Our code (the library,
   # the tests, the scene generators) stays instrumented; the library's own float callbacks
-  # (src/callbacks.cpp) still compile FCL's float code instrumented.
+  # (src/pipeline/callbacks.cpp) still compile FCL's float code instrumented.
   # No debug information either (the sanitizer build adds some): libfcl has none.
   target_compile_options(cube_fcl_float PRIVATE -fno-sanitize=all -g0)
 endif()

@@ -32,8 +32,8 @@ endif()
 
 # Debug information of sanitizer builds. Line tables (-g1) give the reports' stack traces their
 # files and lines; full -g (variables, for a debugger) makes FCL's float narrow phase, which
-# src/callbacks.cpp instantiates, much slower to compile (GCC's variable tracking gives up on
-# its largest functions after trying, and the assembler then reads a huge file).
+# src/pipeline/callbacks.cpp instantiates, much slower to compile (GCC's variable tracking gives up
+# on its largest functions after trying, and the assembler then reads a huge file).
 set(CUBE_COLLISION_SANITIZE_DEBUG "-g1" CACHE STRING "Debug-information flag of sanitizer builds (-g1 line tables; -g for a debugger)")
 
 if(_cube_san_flags)

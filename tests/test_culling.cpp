@@ -1,8 +1,8 @@
-// The culling in front of the narrow phase (src/cull.h) never drops a colliding pair: every FCL
-// primitive and meshes, random rotations, and pairs pushed to the exact touching position that
-// FCL's own narrow phase finds. Its distance bound never exceeds FCL's distance. And the default
-// callbacks, which cull and bound, give the contacts and distances of FCL's narrow phase on every
-// pair.
+// The culling in front of the narrow phase (src/pipeline/cull.h) never drops a colliding pair:
+// every FCL primitive and meshes, random rotations, and pairs pushed to the exact touching position
+// that FCL's own narrow phase finds. Its distance bound never exceeds FCL's distance. And the
+// default callbacks, which cull and bound, give the contacts and distances of FCL's narrow phase on
+// every pair.
 
 #include <fcl/broadphase/broadphase_bruteforce.h>
 #include <fcl/geometry/bvh/BVH_model.h>
@@ -32,7 +32,7 @@
 
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
-#include "cull.h"
+#include "pipeline/cull.h"
 
 namespace {
 

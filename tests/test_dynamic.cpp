@@ -8,9 +8,9 @@
 #include <random>
 #include <set>
 
+#include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
-#include "manager_access.h"
 #include "scenes.h"
 #include "support/correctness.h"
 

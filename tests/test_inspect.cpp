@@ -13,10 +13,10 @@
 #include <sstream>
 #include <vector>
 
+#include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/inspect.h"
-#include "manager_access.h"
 #include "scenes.h"
 
 namespace {

@@ -20,13 +20,13 @@
 #include <stdexcept>
 #include <vector>
 
+#include "adapter/manager_access.h"
+#include "adapter/manager_walks.h"
 #include "core/broadphase.h"
 #include "core/traversal.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
-#include "manager_access.h"
 #include "scenes.h"
-#include "manager_walks.h"
 #include "support/oracle.h"
 
 namespace {

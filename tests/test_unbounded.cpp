@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
+#include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
-#include "manager_access.h"
 #include "support/oracle.h"
 
 namespace {

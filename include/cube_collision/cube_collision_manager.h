@@ -18,7 +18,7 @@ namespace cube {
 namespace detail {
 template <typename S>
 class Broadphase;      // the core (src/core/broadphase.h), private to the library
-struct ManagerAccess;  // the library's and its tests' way to the core (src/manager_access.h)
+struct ManagerAccess;  // the library's and tests' way to the core (src/adapter/manager_access.h)
 }  // namespace detail
 
 /// A drop-in fcl::BroadPhaseCollisionManager<S> backed by a cube hierarchy (axis-aligned cuboids

@@ -3,7 +3,8 @@
 // The broadphase core: the object table, the cube tree, the list of unbounded objects, the
 // rebuild policy and the pair list, behind one interface of registrations, motions and queries.
 // It knows FCL's objects only as pointers it hands back to callbacks; FCL's manager class, the
-// reading of AABBs and the checking of input are the adapter's (src/cube_collision_manager.cpp).
+// reading of AABBs and the checking of input are the adapter's
+// (src/adapter/cube_collision_manager.cpp).
 
 #include <cstddef>
 #include <cstdint>
@@ -184,7 +185,8 @@ class Broadphase {
   /// Whether the next self-collide reads the pair list.
   bool pairsListed() const { return pairs_.valid(); }
 
-  /// The cubes and the unbounded list as views, and where each id is.
+  /// The cubes and the unbounded list as views, and where each id is: for the core's own
+  /// components and white-box tests. Queries go through the entries above, never through this.
   Scene<S> scene() const {
     return Scene<S>{tree_.view(), unbounded_.view(), table_.locations(), config_.all_pairs_limit};
   }

@@ -11,8 +11,8 @@
 #include <string>
 #include <utility>
 
+#include "adapter/manager_access.h"
 #include "cube_collision/narrow_phase.h"
-#include "manager_access.h"
 #include "pipeline/parallel_for.h"
 #include "queries/state_checker.h"
 

@@ -18,13 +18,13 @@
 #include <new>
 #include <vector>
 
+#include "adapter/query_guard.h"
 #include "core/body_view.h"
 #include "core/broadphase.h"
 #include "core/kernels/pose_boxes.h"
-#include "cull.h"
-#include "fcl_narrow.h"
+#include "pipeline/cull.h"
+#include "pipeline/fcl_narrow.h"
 #include "queries/body_links.h"
-#include "query_guard.h"
 
 namespace cube {
 namespace detail {

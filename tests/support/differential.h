@@ -31,9 +31,9 @@
 #include <utility>
 #include <vector>
 
+#include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "cube_collision/cube_collision_manager.h"
-#include "manager_access.h"
 #include "oracle.h"
 
 namespace cube {

@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "adapter/manager_access.h"
+#include "adapter/query_guard.h"
 #include "core/broadphase.h"
-#include "manager_access.h"
-#include "query_guard.h"
 
 namespace cube {
 

@@ -1,4 +1,4 @@
-#include "query_guard.h"
+#include "adapter/query_guard.h"
 
 #include <stdexcept>
 #include <string>

@@ -1,15 +1,19 @@
-#include "cube_collision/queries.h"
+// The one-call queries of include/cube_collision/queries.h over any FCL manager: its collide and
+// distance walks (a cube manager's own, with ids, through adapter/manager_walks.h) feeding the
+// narrow-phase pipeline's streams.
 
 #include <algorithm>
 #include <atomic>
 #include <stdexcept>
 
+#include "adapter/manager_access.h"
+#include "adapter/manager_walks.h"
+#include "adapter/query_guard.h"
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
-#include "manager_access.h"
-#include "manager_walks.h"
-#include "narrow_phase_stream.h"
-#include "query_guard.h"
+#include "cube_collision/queries.h"
+#include "pipeline/collide_stream.h"
+#include "pipeline/distance_search.h"
 
 namespace cube {
 

@@ -1,6 +1,6 @@
 // Tight volumes and the separating-axis tests behind surelyApart.
 
-#include "cull.h"
+#include "pipeline/cull.h"
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>

@@ -3,8 +3,8 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
-#include "cull.h"
-#include "fcl_narrow.h"
+#include "pipeline/cull.h"
+#include "pipeline/fcl_narrow.h"
 
 namespace cube {
 

@@ -11,10 +11,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "core/walk.h"
 #include "cube_collision/cube_collision_manager.h"
-#include "manager_access.h"
 
 namespace cube {
 

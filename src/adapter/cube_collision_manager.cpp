@@ -12,12 +12,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "adapter/manager_access.h"
+#include "adapter/manager_walks.h"
+#include "adapter/query_guard.h"
 #include "core/broadphase.h"
-#include "cull.h"
-#include "manager_access.h"
-#include "manager_walks.h"
-#include "narrow_phase_stream.h"
-#include "query_guard.h"
+#include "pipeline/cull.h"
+#include "pipeline/pair_volumes.h"
 
 namespace cube {
 

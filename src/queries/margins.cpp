@@ -8,8 +8,8 @@
 #include <functional>
 
 #include "cube_collision/queries.h"
-#include "cull.h"
-#include "fcl_narrow.h"
+#include "pipeline/cull.h"
+#include "pipeline/fcl_narrow.h"
 
 namespace cube {
 

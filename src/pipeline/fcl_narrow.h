@@ -1,8 +1,8 @@
 #pragma once
 
-// FCL's narrow phase, instantiated in one file (src/callbacks.cpp). FCL ships only its double
-// instantiations prebuilt; the float ones are compiled where fcl::collide / fcl::distance are
-// called, which takes minutes (over ten under the sanitizers, where that file is left out).
+// FCL's narrow phase, instantiated in one file (src/pipeline/callbacks.cpp). FCL ships only its
+// double instantiations prebuilt; the float ones are compiled where fcl::collide / fcl::distance
+// are called, which takes minutes (over ten under the sanitizers, where that file is left out).
 // Every other file of the library calls FCL's narrow phase through these.
 
 #include <fcl/narrowphase/collision_object.h>

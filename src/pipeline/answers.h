@@ -1,0 +1,108 @@
+#pragma once
+
+// What the narrow-phase pipeline's files (collide_stream.cpp, distance_search.cpp,
+// narrow_phase.cpp) share: how a pair was answered, when threads pay, and the steps of answering
+// one pair without the cache (cache.h holds those with it).
+
+#include <fcl/narrowphase/collision_object.h>
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/contact.h>
+
+#include <cstddef>
+#include <cstdint>
+
+#include "cube_collision/narrow_phase.h"
+#include "pipeline/cull.h"
+
+namespace cube {
+namespace detail {
+
+/// How a pair was answered: proved apart or touching by the tight volumes (cull.h), found in
+/// the cache, or by FCL.
+enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
+
+// When threads pay. Work is counted in candidate pairs of shapes: the cull (about 0.1 us) and,
+// for one pair in three or so, FCL's call (0.2-2 us): 0.25-0.5 us a pair here. A pair with a
+// mesh or an octree counts kHeavyPairWork (its FCL call takes 10-100 us). Opening a two-thread
+// region costs about 1 us while the other core idles and tens of us while it is busy, so a
+// region is opened only for kParallelMinWork or more: 30-60 us of work.
+constexpr std::size_t kHeavyPairWork = 64;
+constexpr std::size_t kParallelMinWork = 128;
+
+inline void addStats(NarrowPhaseStats* out, const NarrowPhaseStats& s) {
+  if (out == nullptr) return;
+  out->candidate_pairs += s.candidate_pairs;
+  out->culled += s.culled;
+  out->proved += s.proved;
+  out->cached += s.cached;
+  out->narrow_calls += s.narrow_calls;
+}
+
+// Culling and caching leave requests with costs or a cached GJK guess alone: an octree's cost
+// sources come from cells its box does not bound, and a guess is carried from pair to pair.
+template <typename S>
+bool plainRequest(const fcl::CollisionRequest<S>& request) {
+  return !request.enable_cost && !request.enable_cached_gjk_guess;
+}
+
+// A verdict of the tight volumes as an answer: kComputed for a pair FCL must answer.
+inline Answer answerOf(Verdict v) {
+  switch (v) {
+    case Verdict::kApart:
+      return Answer::kApart;
+    case Verdict::kTouching:
+      return Answer::kProved;
+    case Verdict::kUnknown:
+      break;
+  }
+  return Answer::kComputed;
+}
+
+// The tight volumes' verdict from the two objects. Safe on several threads at once.
+template <typename S>
+Answer judge(const fcl::CollisionRequest<S>& request, const fcl::CollisionObject<S>* a,
+             const fcl::CollisionObject<S>* b) {
+  if (!plainRequest(request)) return Answer::kComputed;
+  return answerOf(verdict(*a, *b, S(request.gjk_tolerance), provable(request)));
+}
+
+// The one contact FCL's shape collision gives a touching pair when the request asks for no
+// contact geometry (position, normal and depth left as FCL leaves them: unset).
+template <typename S>
+fcl::Contact<S> provedContact(const ObjectPair<S>& pair) {
+  return fcl::Contact<S>(pair.first->collisionGeometry().get(),
+                         pair.second->collisionGeometry().get(), fcl::Contact<S>::NONE,
+                         fcl::Contact<S>::NONE);
+}
+
+// Counts one answer of a kind.
+inline void count(NarrowPhaseStats& stats, Answer kind) {
+  switch (kind) {
+    case Answer::kApart:
+      ++stats.culled;
+      return;
+    case Answer::kProved:
+      ++stats.proved;
+      return;
+    case Answer::kCached:
+      ++stats.cached;
+      return;
+    case Answer::kComputed:
+      ++stats.narrow_calls;
+      return;
+  }
+}
+
+// What a pair handed to the threads costs, in kParallelMinWork's unit (a candidate pair of
+// shapes): a pair with a mesh or an octree counts kHeavyPairWork.
+template <typename S>
+std::size_t workOf(const ObjectPair<S>& pair) {
+  const auto heavy = [](const fcl::CollisionObject<S>* o) {
+    const fcl::OBJECT_TYPE t = o->getObjectType();
+    return t == fcl::OT_BVH || t == fcl::OT_OCTREE;
+  };
+  return heavy(pair.first) || heavy(pair.second) ? kHeavyPairWork : 1;
+}
+
+}  // namespace detail
+}  // namespace cube

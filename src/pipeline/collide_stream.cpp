@@ -1,0 +1,323 @@
+// The collide stream (collide_stream.h): answered at once on the calling thread while the query
+// is small, then in chunks on the threads; the cache looked up and stored on the calling thread.
+
+#include "pipeline/collide_stream.h"
+
+#include <algorithm>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "pipeline/answers.h"
+#include "pipeline/cache.h"
+#include "pipeline/cull.h"
+#include "pipeline/fcl_narrow.h"
+#include "pipeline/parallel_for.h"
+
+namespace cube {
+namespace detail {
+
+namespace {
+
+// A collide stream answers pairs at once on the calling thread until it has seen kSerialWork of
+// work (every candidate pair counts 1, an FCL call on a mesh or an octree kHeavyPairWork more),
+// then gathers chunks of kFirstChunkWork, doubling up to kMaxChunkWork. Chunks cost more per
+// pair than answering at once (a result per pair, the contacts copied in the merge): a self-
+// collide of 1,000 uniform objects (800 pairs) took 137 us on one thread and 177 us on two when
+// it left after 8 FCL calls. Queries below kSerialWork (most object queries, robot checks, small
+// scenes of shapes) never open a region. Pairs culled on the object tables' records (about 20
+// ns a pair, on this thread) count only what an FCL call on a mesh or an octree weighs beyond
+// 1: threads share FCL's calls only, and for shapes (0.2 us a call in the clustered
+// 10,000-object scene) a chunk's bookkeeping cost more than the second thread saved (41 ms
+// on one thread, 47 on two), so queries of shapes stay on the calling thread.
+constexpr std::size_t kSerialWork = 1024;
+constexpr std::size_t kFirstChunkWork = 256;
+constexpr std::size_t kMaxChunkWork = 4096;
+
+// The cache, then the tight volumes: kCached with the entry, or judge's verdict. On the calling
+// thread (a lookup compares and updates the objects' poses).
+template <typename S>
+Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
+                fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
+  cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
+  if (cached != nullptr) return Answer::kCached;
+  return judge(request, a, b);
+}
+
+// A pair's contacts, in the cache or in a fresh result (FCL gives no const view of its list).
+template <typename S>
+struct Contacts {
+  const std::vector<fcl::Contact<S>>* cached;
+  const fcl::CollisionResult<S>* fresh;
+
+  std::size_t size() const { return cached ? cached->size() : fresh->numContacts(); }
+  const fcl::Contact<S>& operator[](std::size_t k) const {
+    return cached ? (*cached)[k] : fresh->getContact(k);
+  }
+};
+
+}  // namespace
+
+template <typename S>
+struct CollideStream<S>::Slot {
+  Answer kind = Answer::kApart;
+  bool judged = false;  // kind is the cull's already (pairs with volumes)
+  CollideEntry<S>* cached = nullptr;
+  fcl::CollisionResult<S> fresh;
+};
+
+// Whether a pair's answer goes to the cache: not one the volumes gave, which they give again
+// next time for less than a lookup costs.
+template <typename S>
+bool CollideStream<S>::kept(const Slot& s) {
+  return !(s.judged && (s.kind == Answer::kApart || s.kind == Answer::kProved));
+}
+
+template <typename S>
+CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
+                                const NarrowPhaseOptions<S>& options)
+    : request_(request),
+      stats_out_(options.stats),
+      cache_(options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr),
+      threads_(resolveThreads(options.threads)),
+      chunk_work_(kFirstChunkWork),
+      scratch_(cache_ != nullptr ? std::make_unique<Slot>() : nullptr),
+      rate_(volumeMarginRate(S(request.gjk_tolerance))),
+      plain_(plainRequest(request)),
+      prove_(provable(request)) {
+  if (cache_ != nullptr) {
+    ++cache_->stamp;
+    cache_->collide.begin(*cache_, request);
+  }
+}
+
+template <typename S>
+CollideStream<S>::~CollideStream() = default;
+
+template <typename S>
+bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+  return pushJudged(a, b, nullptr, nullptr);
+}
+
+template <typename S>
+bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
+                            ObjectId ib) {
+  if (done_) return true;
+  if (!plain_) return pushJudged(a, b, nullptr, nullptr);
+  Volumes va, vb;
+  if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape))
+    return pushJudged(a, b, nullptr, nullptr);
+  return pushJudged(a, b, &va, &vb);
+}
+
+template <typename S>
+bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
+                                  const Volumes* va, const Volumes* vb) {
+  if (done_) return true;
+  ++stats_.candidate_pairs;
+  // With volumes the cull runs here, before the cache (it costs less than a lookup).
+  const auto cull = [&] {
+    return answerOf(verdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
+  };
+  if (serial_) {
+    // Work that threads could share: with the cull on records it runs here, at about 20 ns a
+    // pair, and only FCL's calls on meshes or octrees weigh enough (see kSerialWork).
+    if (va == nullptr) ++serial_work_;
+    CollideEntry<S>* cached = nullptr;
+    Answer kind;
+    if (va == nullptr) {
+      kind = classify(cache_, request_, a, b, cached);
+    } else {
+      kind = cull();
+      if (kind == Answer::kComputed && cache_ != nullptr) {
+        cached = cache_->collide.find(*cache_, a, b);
+        if (cached != nullptr) kind = Answer::kCached;
+      }
+    }
+    if (cache_ == nullptr) {
+      answerNow(a, b, kind);
+    } else {
+      scratch_->kind = kind;
+      scratch_->judged = va != nullptr;
+      scratch_->cached = cached;
+      answerNow(ObjectPair<S>(a, b), *scratch_);
+    }
+    // A request that may stop at its first contact stays on this thread: a chunk would call FCL
+    // for pairs after the stop. Others go to the threads once the query proves large.
+    if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork)
+      serial_ = false;
+    return done_;
+  }
+  // In chunks: the cache is looked up here (and the cull on volumes runs here), the rest of the
+  // cull and FCL run in the chunk, on the threads.
+  const Answer judged = va != nullptr ? cull() : Answer::kComputed;
+  // Proved apart by the volumes: nothing to merge, nothing to store, so no place in a chunk.
+  if (judged == Answer::kApart) {
+    count(stats_, judged);
+    return done_;
+  }
+  const std::size_t i = chunk_.size();
+  chunk_.emplace_back(a, b);
+  if (slots_.size() <= i) slots_.resize(i + 1);
+  Slot& s = slots_[i];
+  s.judged = va != nullptr;
+  s.kind = judged;
+  s.cached = cache_ != nullptr && s.kind == Answer::kComputed ? cache_->collide.find(*cache_, a, b)
+                                                              : nullptr;
+  if (s.cached != nullptr) s.kind = Answer::kCached;
+  if (s.kind == Answer::kProved) {
+    s.fresh.clear();
+    s.fresh.addContact(provedContact(chunk_[i]));
+  }
+  if (s.kind == Answer::kComputed) {
+    pending_.push_back(i);
+    pending_work_ += workOf(chunk_[i]);
+  }
+  // A cached answer is merged at once while nothing waits before it, so that a full result
+  // stops the walk where it would on one thread.
+  if (pending_.empty() || pending_work_ >= chunk_work_) flush();
+  return done_;
+}
+
+template <typename S>
+ObjectPair<S> CollideStream<S>::lastHit(NarrowPhaseCache<S>& cache) {
+  return cache.impl().last_hit;
+}
+
+template <typename S>
+bool CollideStream<S>::pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+  if (done_) return true;
+  const bool was_serial = serial_;
+  flush();
+  serial_ = true;
+  push(a, b);
+  serial_ = was_serial;
+  return done_;
+}
+
+template <typename S>
+bool CollideStream<S>::callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
+                                void* stream) {
+  return static_cast<CollideStream*>(stream)->push(a, b);
+}
+
+template <typename S>
+bool CollideStream<S>::callbackWithIds(fcl::CollisionObject<S>* a, ObjectId ia,
+                                       fcl::CollisionObject<S>* b, ObjectId ib, void* stream) {
+  return static_cast<CollideStream*>(stream)->push(a, ia, b, ib);
+}
+
+template <typename S>
+void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
+                                 Answer kind) {
+  count(stats_, kind);
+  if (kind == Answer::kApart) return;
+  if (kind == Answer::kProved) {
+    // What FCL's shape collision adds: one contact if the result has room.
+    if (result_.numContacts() < request_.num_max_contacts)
+      result_.addContact(provedContact(ObjectPair<S>(a, b)));
+    markDone();
+    return;
+  }
+  // FCL's own way, one accumulating result: FCL decides which contacts fit.
+  fclCollide(a, b, request_, result_);
+  markDone();
+  if (threads_ > 1) serial_work_ += workOf(ObjectPair<S>(a, b)) - 1;  // one thread never leaves
+}
+
+template <typename S>
+void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
+  count(stats_, s.kind);
+  switch (s.kind) {
+    case Answer::kCached:
+      merge(pair, s);
+      return;
+    case Answer::kApart:
+      if (kept(s)) keepPair(s.kind, pair, cache_, empty_);
+      return;
+    case Answer::kProved:
+      s.fresh.clear();
+      s.fresh.addContact(provedContact(pair));
+      merge(pair, s);
+      if (kept(s)) keepPair(s.kind, pair, cache_, s.fresh);
+      return;
+    case Answer::kComputed:
+      s.fresh.clear();
+      fclCollide(pair.first, pair.second, request_, s.fresh);
+      merge(pair, s);
+      keepPair(s.kind, pair, cache_, s.fresh);
+      if (threads_ > 1) serial_work_ += workOf(pair) - 1;
+      return;
+  }
+}
+
+template <typename S>
+void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
+  const Contacts<S> contacts = s.kind == Answer::kCached ? Contacts<S>{&s.cached->answer, nullptr}
+                                                         : Contacts<S>{nullptr, &s.fresh};
+  if (done_ || contacts.size() == 0) return;
+  const std::size_t max_contacts = request_.num_max_contacts;
+  const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
+  if (cache_ != nullptr && result_.numContacts() == 0) cache_->last_hit = pair;
+  if (contacts.size() > room) {
+    // The budget runs out inside this pair. FCL's shape pairs then keep their deepest contacts,
+    // not their first: its own call on the accumulating result decides, as on one thread.
+    ++stats_.narrow_calls;
+    fclCollide(pair.first, pair.second, request_, result_);
+  } else {
+    for (std::size_t k = 0; k < contacts.size(); ++k) result_.addContact(contacts[k]);
+  }
+  markDone();
+}
+
+template <typename S>
+void CollideStream<S>::markDone() {
+  if (result_.isCollision() && result_.numContacts() >= request_.num_max_contacts) done_ = true;
+}
+
+template <typename S>
+void CollideStream<S>::flush() {
+  const std::size_t n = chunk_.size();
+  if (n == 0) return;
+  if (!done_) {
+    const auto run = [&](std::size_t k) {
+      Slot& s = slots_[pending_[k]];
+      const ObjectPair<S>& pair = chunk_[pending_[k]];
+      if (!s.judged) s.kind = judge(request_, pair.first, pair.second);
+      s.fresh.clear();
+      if (s.kind == Answer::kProved) s.fresh.addContact(provedContact(pair));
+      if (s.kind == Answer::kComputed) fclCollide(pair.first, pair.second, request_, s.fresh);
+    };
+    // Threads only for work that pays for waking them (a region costs about 1 us here when
+    // the other core is idle, tens of us when it is busy).
+    detail::parallelFor(pending_.size(), pending_work_ >= kParallelMinWork ? threads_ : 1, run);
+    for (std::size_t i = 0; i < n; ++i) {
+      Slot& s = slots_[i];
+      count(stats_, s.kind);
+      if (s.kind != Answer::kApart) merge(chunk_[i], s);
+    }
+    if (cache_ != nullptr)
+      for (std::size_t i = 0; i < n; ++i)
+        if (kept(slots_[i]))
+          keepPair(slots_[i].kind, chunk_[i], cache_,
+                   slots_[i].kind == Answer::kApart ? empty_ : slots_[i].fresh);
+    if (!pending_.empty()) chunk_work_ = std::min(chunk_work_ * 2, kMaxChunkWork);
+  }
+  chunk_.clear();
+  pending_.clear();
+  pending_work_ = 0;
+}
+
+template <typename S>
+fcl::CollisionResult<S> CollideStream<S>::finish() {
+  flush();
+  if (cache_ != nullptr) cache_->collide.end(*cache_);
+  addStats(stats_out_, stats_);
+  return std::move(result_);
+}
+
+template class CollideStream<double>;
+template class CollideStream<float>;
+
+}  // namespace detail
+}  // namespace cube

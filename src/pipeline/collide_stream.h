@@ -1,0 +1,102 @@
+#pragma once
+
+// The collide stream: the narrow-phase pipeline fed by a manager's walk, one pair per callback:
+// pairs are gathered in chunks, each chunk runs on the threads, and the answers merge in pair
+// order. The stream tells the walk to stop as soon as the merged answer is complete, so a request
+// for one contact still stops near the first colliding pair.
+
+#include <fcl/narrowphase/collision_object.h>
+#include <fcl/narrowphase/collision_request.h>
+#include <fcl/narrowphase/collision_result.h>
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "core/geometry.h"
+#include "cube_collision/narrow_phase.h"
+#include "pipeline/answers.h"
+#include "pipeline/pair_volumes.h"
+
+namespace cube {
+namespace detail {
+
+/// Accumulates fcl::collide answers exactly as one result passed to fcl::collide for each pair
+/// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial).
+/// Pairs are answered at once on the calling thread at first (and always for a request of one
+/// contact, and on one thread); once the query proves large, they are gathered into chunks (the
+/// cache looked up on the calling thread) whose cull and FCL calls run on the threads when there
+/// is enough work to pay for a parallel region.
+template <typename S>
+class CollideStream {
+ public:
+  CollideStream(const fcl::CollisionRequest<S>& request, const NarrowPhaseOptions<S>& options);
+  ~CollideStream();
+  CollideStream(const CollideStream&) = delete;
+  CollideStream& operator=(const CollideStream&) = delete;
+
+  /// Adds one candidate pair. True once the result is complete: the walk may stop.
+  bool push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
+  /// Where push(a, ia, b, ib) finds the pair's volumes.
+  PairVolumes<S>& volumes() { return volumes_; }
+  /// push, with the objects' ids (kNone: an object of no table): the cull reads the tables'
+  /// volumes instead of the objects, on this thread (about 20 ns a pair).
+  bool push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b, ObjectId ib);
+  /// The pair that gave the first contact of the last collide with contacts that used `cache`
+  /// (nullptrs if none, or forgotten since).
+  static ObjectPair<S> lastHit(NarrowPhaseCache<S>& cache);
+  /// push, answering this pair before any other is pushed (what is pending goes first).
+  bool pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
+  /// Runs what is pending and returns the merged result. Call once, at the end.
+  fcl::CollisionResult<S> finish();
+
+  /// An fcl::CollisionCallBack feeding the CollideStream passed as cdata.
+  static bool callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* stream);
+  /// The same for walks that give ids (manager_walks.h).
+  static bool callbackWithIds(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
+                              ObjectId ib, void* stream);
+
+ private:
+  struct Slot;
+  // The records of a pair, for pushJudged (null: cull from the objects).
+  struct Volumes {
+    const VolumeSphere* sphere;
+    const VolumeShape* shape;
+  };
+  bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
+                  const Volumes* vb);
+  static bool kept(const Slot& s);
+  void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
+  void answerNow(const ObjectPair<S>& pair, Slot& slot);
+  void merge(const ObjectPair<S>& pair, const Slot& slot);
+  void markDone();
+  void flush();
+
+  const fcl::CollisionRequest<S>& request_;
+  NarrowPhaseStats stats_;
+  NarrowPhaseStats* stats_out_;
+  typename NarrowPhaseCache<S>::Impl* cache_;
+  int threads_;
+  bool done_ = false;
+  bool serial_ = true;           // answer each pair as it comes
+  std::size_t serial_work_ = 0;  // work answered at once (collide_stream.cpp, kSerialWork)
+  std::size_t chunk_work_ = 0;   // flush once the pending work reaches this
+  std::size_t pending_work_ = 0;
+  std::vector<ObjectPair<S>> chunk_;
+  std::vector<std::size_t> pending_;  // the chunk's pairs not in the cache
+  std::vector<Slot> slots_;           // one per pair of the chunk
+  std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
+  fcl::CollisionResult<S> empty_;
+  fcl::CollisionResult<S> result_;
+  // The cull on volumes: the tables, the memo of objects without an id, the margin's rate.
+  PairVolumes<S> volumes_;
+  float rate_;
+  bool plain_;  // a request the cull may answer (not with costs or a cached GJK guess)
+  bool prove_;  // and whose touching pairs it may prove
+};
+
+extern template class CollideStream<double>;
+extern template class CollideStream<float>;
+
+}  // namespace detail
+}  // namespace cube

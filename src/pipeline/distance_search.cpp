@@ -1,0 +1,159 @@
+// The distance search (distance_search.h): FCL's own accumulating way without a cache; with one,
+// batches of `threads` pairs not in it, on the threads when they pay.
+
+#include "pipeline/distance_search.h"
+
+#include <cfloat>
+#include <limits>
+#include <vector>
+
+#include "pipeline/answers.h"
+#include "pipeline/cache.h"
+#include "pipeline/cull.h"
+#include "pipeline/fcl_narrow.h"
+#include "pipeline/parallel_for.h"
+
+namespace cube {
+namespace detail {
+
+template <typename S>
+struct DistanceSearch<S>::Slot {
+  DistanceEntry<S>* cached = nullptr;
+  fcl::DistanceResult<S> fresh;
+};
+
+template <typename S>
+DistanceSearch<S>::DistanceSearch(const fcl::DistanceRequest<S>& request,
+                                  const NarrowPhaseOptions<S>& options)
+    : request_(request),
+      stats_out_(options.stats),
+      cache_(options.cache != nullptr ? &options.cache->impl() : nullptr),
+      threads_(resolveThreads(options.threads)),
+      rate_(volumeMarginRate(S(request.distance_tolerance))) {
+  if (cache_ != nullptr) {
+    ++cache_->stamp;
+    cache_->distance.begin(*cache_, request);
+  }
+}
+
+template <typename S>
+DistanceSearch<S>::~DistanceSearch() = default;
+
+template <typename S>
+bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist) {
+  ++stats_.candidate_pairs;
+  if (result_.min_distance > 0) {
+    // A pair whose tight volumes are farther apart than the best distance so far (by more than
+    // the margin) would get a larger distance from FCL, which leaves the result as it is.
+    const Separation<S> s =
+        separation(*a, *b, S(request_.distance_tolerance), result_.min_distance);
+    if (s.lower_bound - s.margin > result_.min_distance)
+      ++stats_.culled;
+    else
+      answer(a, b);
+  }
+  dist = result_.min_distance;
+  return dist <= 0;
+}
+
+template <typename S>
+bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
+                             ObjectId ib, S& dist) {
+  const VolumeSphere *sa, *sb;
+  const VolumeShape *ha, *hb;
+  if (!volumes_.of(a, ia, b, ib, sa, ha, sb, hb)) return push(a, b, dist);
+  ++stats_.candidate_pairs;
+  if (result_.min_distance > 0) {
+    const double best = double(result_.min_distance);
+    const float enough =
+        best >= double(FLT_MAX) ? std::numeric_limits<float>::infinity() : float(best);
+    const VolumeGap g = separationOf(*sa, *ha, *sb, *hb, rate_, enough);
+    if (double(g.lower_bound) - double(g.margin) > best)
+      ++stats_.culled;
+    else
+      answer(a, b);
+  }
+  dist = result_.min_distance;
+  return dist <= 0;
+}
+
+template <typename S>
+void DistanceSearch<S>::answer(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
+  if (cache_ == nullptr) {
+    // FCL's own way, on this thread whatever the thread count: one accumulating result,
+    // which a mesh pair's search is pruned by, and which lowers the walk's bound at once.
+    // Batches on two threads made 100 distance queries among 1,000 meshes take 1.5-2x as long
+    // (68% more FCL calls and 39% more candidate pairs, from the bounds a batch holds back).
+    ++stats_.narrow_calls;
+    fclDistance(a, b, request_, result_);
+  } else {
+    batch_.emplace_back(a, b);
+    if (batch_.size() >= static_cast<std::size_t>(threads_)) flush();
+  }
+}
+
+template <typename S>
+bool DistanceSearch<S>::callbackWithIds(fcl::CollisionObject<S>* a, ObjectId ia,
+                                        fcl::CollisionObject<S>* b, ObjectId ib, void* search,
+                                        S& dist) {
+  return static_cast<DistanceSearch*>(search)->push(a, ia, b, ib, dist);
+}
+
+template <typename S>
+bool DistanceSearch<S>::callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
+                                 void* search, S& dist) {
+  return static_cast<DistanceSearch*>(search)->push(a, b, dist);
+}
+
+template <typename S>
+void DistanceSearch<S>::flush() {
+  const std::size_t n = batch_.size();
+  if (n == 0) return;
+  if (slots_.size() < n) slots_.resize(n);
+  std::size_t work = 0;
+  for (std::size_t i = 0; i < n; ++i) {  // on this thread: it compares and updates poses
+    slots_[i].cached =
+        cache_ ? cache_->distance.find(*cache_, batch_[i].first, batch_[i].second) : nullptr;
+    if (slots_[i].cached == nullptr) work += workOf(batch_[i]);
+  }
+  detail::parallelFor(n, work >= kParallelMinWork ? threads_ : 1, [&](std::size_t i) {
+    Slot& s = slots_[i];
+    const auto [a, b] = batch_[i];
+    if (s.cached == nullptr) {
+      // A fresh result per pair: its answer does not depend on the other pairs, so it can be
+      // kept and merged in any batch.
+      s.fresh = fcl::DistanceResult<S>();
+      fclDistance(a, b, request_, s.fresh);
+    }
+  });
+  for (std::size_t i = 0; i < n; ++i) {
+    Slot& s = slots_[i];
+    if (s.cached != nullptr) {
+      ++stats_.cached;
+      result_.update(s.cached->answer);
+    } else {
+      ++stats_.narrow_calls;
+      result_.update(s.fresh);
+    }
+  }
+  // After every cached answer was read: a store can move the entries.
+  if (cache_ != nullptr)
+    for (std::size_t i = 0; i < n; ++i)
+      if (slots_[i].cached == nullptr)
+        cache_->distance.store(*cache_, batch_[i].first, batch_[i].second, slots_[i].fresh);
+  batch_.clear();
+}
+
+template <typename S>
+fcl::DistanceResult<S> DistanceSearch<S>::finish() {
+  flush();
+  if (cache_ != nullptr) cache_->distance.end(*cache_);
+  addStats(stats_out_, stats_);
+  return result_;
+}
+
+template class DistanceSearch<double>;
+template class DistanceSearch<float>;
+
+}  // namespace detail
+}  // namespace cube

@@ -1,0 +1,66 @@
+#pragma once
+
+// Where the narrow-phase streams (collide_stream.h, distance_search.h) find the tight volumes of a
+// pair's objects.
+
+#include "core/geometry.h"
+#include "core/volume.h"
+#include "cube_collision/narrow_phase.h"
+
+namespace cube {
+namespace detail {
+
+/// Where a stream finds the volumes of a pair's objects: the object tables whose ids the walk
+/// gives (side a, the first id; side b), and, for an object of no table (id kNone: the query
+/// object, or the objects of another kind of manager, whose pairs come one object at a time),
+/// volumes built during the query, the last one of each side kept.
+template <typename S>
+class PairVolumes {
+ public:
+  /// The tables' records (ObjectTable::spheres(), shapes()); null: that table keeps none.
+  void use(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
+           const VolumeSphere* spheres_b, const VolumeShape* shapes_b) {
+    spheres_[0] = spheres_a;
+    shapes_[0] = shapes_a;
+    spheres_[1] = spheres_b;
+    shapes_[1] = shapes_b;
+  }
+  /// The records of objects a (id ia) and b (id ib), into the four pointers; false if a table
+  /// keeps none (a manager below kVolumeMinObjects): the pair is culled from the objects.
+  bool of(const fcl::CollisionObject<S>* a, ObjectId ia, const fcl::CollisionObject<S>* b,
+          ObjectId ib, const VolumeSphere*& sa, const VolumeShape*& ha, const VolumeSphere*& sb,
+          const VolumeShape*& hb) {
+    return side(0, a, ia, sa, ha) && side(1, b, ib, sb, hb);
+  }
+
+ private:
+  struct Built {
+    const fcl::CollisionObject<S>* obj = nullptr;
+    VolumeSphere sphere;
+    VolumeShape shape;
+  };
+  bool side(int k, const fcl::CollisionObject<S>* o, ObjectId id, const VolumeSphere*& sphere,
+            const VolumeShape*& shape) {
+    if (id != kNone) {
+      if (spheres_[k] == nullptr) return false;
+      sphere = spheres_[k] + id;
+      shape = shapes_[k] + id;
+      return true;
+    }
+    Built& e = built_[k];
+    if (e.obj != o) {
+      buildVolume(*o, e.sphere, e.shape);
+      e.obj = o;
+    }
+    sphere = &e.sphere;
+    shape = &e.shape;
+    return true;
+  }
+
+  const VolumeSphere* spheres_[2] = {nullptr, nullptr};
+  const VolumeShape* shapes_[2] = {nullptr, nullptr};
+  Built built_[2];
+};
+
+}  // namespace detail
+}  // namespace cube
