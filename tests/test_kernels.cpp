@@ -390,7 +390,7 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
       }
     Recorder<S> r;
     EXPECT_FALSE(
-        cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &r, &Recorder<S>::fn));
+        cube::detail::walkCubePairs(h.tree().view(), h.tree().view(), true, &r, &Recorder<S>::fn));
     for (auto& c : r.calls) c = {std::min(c.first, c.second), std::max(c.first, c.second)};
     std::sort(r.calls.begin(), r.calls.end());
     std::sort(expected.begin(), expected.end());
@@ -399,8 +399,8 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
     // A callback that stops the walk is obeyed there.
     Recorder<S> stop;
     stop.stop_after = 3;
-    EXPECT_TRUE(cube::detail::collidePairs(h.tree().view(), h.tree().view(), true, &stop,
-                                           &Recorder<S>::fn));
+    EXPECT_TRUE(cube::detail::walkCubePairs(h.tree().view(), h.tree().view(), true, &stop,
+                                            &Recorder<S>::fn));
     EXPECT_EQ(stop.calls.size(), 3u);
   }
   EXPECT_GT(pairs_seen, 1000u);

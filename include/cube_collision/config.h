@@ -19,13 +19,13 @@ enum class UpdatePolicy {
 
 /// Every knob of the cube hierarchy. A default-constructed Config is what most users want.
 struct Config {
-  /// The seed's Max Depth. 0 (automatic): split until every leaf holds at most `leaf_size`
+  /// The deepest level of cubes. 0 (automatic): split until every leaf holds at most `leaf_size`
   /// objects. k > 0: at most k levels below the root; cubes at level k keep all their objects,
   /// which are then tested pairwise. Trade-off: a small cap builds faster and uses less memory,
   /// but leaves get crowded and queries turn quadratic within them.
   int max_depth = 0;
 
-  /// The seed's split threshold: a cube with more than `leaf_size` objects is split (min 1).
+  /// The split threshold: a cube with more than `leaf_size` objects is split (min 1).
   /// Trade-off: small leaves prune more precisely but mean more cubes (memory, build and refit
   /// time, walk steps); large leaves test more object pairs exhaustively. Leaves of up to 8
   /// are tested against each other in one vectorised pass, so 8 gives the fastest self-collide

@@ -2,8 +2,8 @@
 
 // Pictures of a cube hierarchy: an OBJ wireframe (any 3D viewer) and, when the library was built
 // with Cairo (CUBE_COLLISION_HAS_CAIRO is defined), SVG and PNG drawings. Every cube is drawn as
-// the 12 edges of its box, coloured by level, each level 0.8 times as opaque as the one above
-// (the seed's "different levels of transparency").
+// the 12 edges of its box, coloured by level, each level 0.8 times as opaque as the one above,
+// so that deep levels show through shallow ones.
 
 #include <iosfwd>
 #include <string>

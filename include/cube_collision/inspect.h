@@ -1,8 +1,10 @@
 #pragma once
 
-// Read-only inspection of a cube hierarchy: the seed's getNumberCells / getCubeData / isLeaf /
-// getInternalChildren / getExternalChildren / getLeafIndex / getBoundingTree, plus levels and
-// statistics. For debugging, tuning `Config::max_depth` and `Config::leaf_size`, and export.
+// Read-only inspection of a cube hierarchy in the vocabulary of the cube collision model: cells
+// (getNumberCells / getCubeData / isLeaf), a cube's child cubes (getInternalChildren) and the
+// objects below it (getExternalChildren), an object's leaf (getLeafIndex), every cube's corners
+// (getBoundingTree), plus levels and statistics. For debugging, tuning `Config::max_depth` and
+// `Config::leaf_size`, and export.
 
 #include <array>
 #include <cstddef>
@@ -109,7 +111,7 @@ class HierarchyView {
   /// Snapshot of a manager's hierarchy.
   explicit HierarchyView(const CubeCollisionManager<S>& manager);
 
-  /// Number of cubes (the seed's getNumberCells).
+  /// Number of cubes.
   int getNumberCells() const { return static_cast<int>(cubes_.size()); }
   /// Cube `i` (0 <= i < getNumberCells(); out of range throws std::out_of_range).
   const CubeData& getCubeData(int i) const;
@@ -117,9 +119,10 @@ class HierarchyView {
   bool isLeaf(int i) const;
   /// Child cubes of `i` as a [begin, end) range of cube numbers; empty for a leaf.
   std::pair<int, int> getInternalChildren(int i) const;
-  /// Objects below cube `i`: a leaf's own, or every object in an internal cube's subtree.
+  /// Objects below cube `i` (the model's "external children": objects, not cubes): a leaf's own,
+  /// or every object in an internal cube's subtree.
   ObjectRange getExternalChildren(int i) const;
-  /// The leaf holding `object` (the seed's parentOf), or -1 if the object is not in the cubes
+  /// The leaf holding `object`, or -1 if the object is not in the cubes
   /// (unregistered, or kept in the unbounded list).
   int getLeafIndex(const Object* object) const;
   /// Replaces `out` with every cube's (min, max) corners, indexed by cube number.

@@ -5,6 +5,7 @@
 // through those the object, body, swept and batch queries). A new rule is a member here and a
 // line in admit(); Broadphase::gate() is where queries build it.
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <utility>
@@ -34,11 +35,15 @@ struct PairGate {
   Filter query;                       ///< side b's object when its id is kNone
   const PairPredicate<S>* predicate = nullptr;  ///< the user's predicate, if any
   const std::uint32_t* seq = nullptr;           ///< self queries: orient pairs by these numbers
+  /// Pairs ruled out by name: an n x n matrix over ids, nonzero for a pair never reported (a
+  /// body's allowed pairs, BodySet::allowPair); null: none.
+  const std::uint8_t* excluded = nullptr;
+  std::size_t excluded_n = 0;
 
   /// Whether any rule is set: a walk without one reports every pair of overlapping boxes.
   bool active() const {
     return filters_a != nullptr || filters_b != nullptr || !query.isDefault() ||
-           predicate != nullptr || seq != nullptr;
+           predicate != nullptr || seq != nullptr || excluded != nullptr;
   }
   /// The gate without the predicate: for walks on other threads, whose pairs are put to the
   /// predicate (user code) on the calling thread with predicatePasses.
@@ -87,11 +92,13 @@ struct PairGate {
     }
     return out;
   }
-  /// The rules after the bits, for a pair whose bits passed: orientation and the predicate.
+  /// The rules after the bits, for a pair whose bits passed: the excluded pairs, orientation and
+  /// the predicate.
   /// x and y are records or ids; obj(x) gives the object. Calls then(first, second) if it passes;
   /// false (the query goes on) otherwise.
   template <class T, class IdOf, class ObjOf, class Then>
   bool finish(const T& x, const T& y, IdOf&& id, ObjOf&& obj, Then&& then) const {
+    if (excluded != nullptr && excluded[std::size_t(id(x)) * excluded_n + id(y)]) return false;
     const bool swap = seq != nullptr && seq[id(y)] < seq[id(x)];
     const T& first = swap ? y : x;
     const T& second = swap ? x : y;

@@ -236,8 +236,8 @@ template <typename S, class Sink>
 }
 
 template <typename S, class Sink>
-bool collideWith(const View<S>& a, const View<S>& b, bool self, const Sink& sink, QueryStats* stats,
-                 const PairGate<S>* gate) {
+bool cubeWalk(const View<S>& a, const View<S>& b, bool self, const Sink& sink, QueryStats* stats,
+              const PairGate<S>* gate) {
   if (gate != nullptr && a.groups != nullptr) return collideGrouped(a, b, self, sink, stats, gate);
   return collideBody<false>(a, b, self, sink, stats, gate);
 }
@@ -249,7 +249,7 @@ template <typename S, class Policy>
 }
 
 template <typename S, class Policy>
-bool distanceWith(const View<S>& a, const View<S>& b, bool self, const Policy& p) {
+bool distanceWalk(const View<S>& a, const View<S>& b, bool self, const Policy& p) {
   if (p.gate != nullptr && a.groups != nullptr) return distanceGrouped(a, b, self, p);
   return descend<false>(a, b, self, p);
 }

@@ -75,7 +75,7 @@ void SplitWalk<S>::collect(std::size_t i, std::vector<std::uint64_t>& out) const
     p.slot_bits = bits_.data();
     p.slot_base = a_.items;
   }
-  // As collideWith chooses: cubes that carry filter groups are tested for them.
+  // As cubeWalk chooses: cubes that carry filter groups are tested for them.
   if (gate_ != nullptr && a_.groups != nullptr) {
     PairVisitor<S, Policy, true> v{a_, b_, p};
     walkPair(a_.nodes, b_.nodes, t.a, t.b, NoKey{}, self_, v);

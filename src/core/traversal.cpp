@@ -37,15 +37,15 @@ inline bool walkViews(const View<S>& a, const View<S>& b, bool self, std::size_t
   }
   if (gate == nullptr && !self && b.root != kNone && b.nodes[b.root].count == 1)
     return oneObject(a, b, sink, stats);
-  return collideWith(a, b, self, sink, stats, gate);
+  return cubeWalk(a, b, self, sink, stats, gate);
 }
 
 }  // namespace
 
 template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
-                  QueryStats* stats, const PairGate<S>* gate) {
-  return collideWith(a, b, self, CallFn<S>{data, fn}, stats, gate);
+bool walkCubePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
+                   QueryStats* stats, const PairGate<S>* gate) {
+  return cubeWalk(a, b, self, CallFn<S>{data, fn}, stats, gate);
 }
 
 template <typename S>
@@ -96,14 +96,14 @@ template <typename S>
 bool distancePairs(const View<S>& a, const View<S>& b, bool self, void* data, DistanceFnArg<S> fn,
                    S& best, QueryStats* stats, const PairGate<S>* gate) {
   if (stats)
-    return distanceWith(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}, gate});
-  return distanceWith(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}, gate});
+    return distanceWalk(a, b, self, DistancePolicy<S, Count>{data, fn, best, Count{stats}, gate});
+  return distanceWalk(a, b, self, DistancePolicy<S, NoCount>{data, fn, best, NoCount{}, gate});
 }
 
-template bool collidePairs<float>(const View<float>&, const View<float>&, bool, void*,
-                                  CollideFn<float>, QueryStats*, const PairGate<float>*);
-template bool collidePairs<double>(const View<double>&, const View<double>&, bool, void*,
-                                   CollideFn<double>, QueryStats*, const PairGate<double>*);
+template bool walkCubePairs<float>(const View<float>&, const View<float>&, bool, void*,
+                                   CollideFn<float>, QueryStats*, const PairGate<float>*);
+template bool walkCubePairs<double>(const View<double>&, const View<double>&, bool, void*,
+                                    CollideFn<double>, QueryStats*, const PairGate<double>*);
 template bool collideViews<float>(const View<float>&, const View<float>&, bool, std::size_t, void*,
                                   CollideFn<float>, QueryStats*, const PairGate<float>*);
 template bool collideViews<double>(const View<double>&, const View<double>&, bool, std::size_t,

@@ -80,11 +80,11 @@ struct SingleView {
 /// overlap (closed) and that pass `gate` (if given). With `self` (a and b are the same view)
 /// each unordered pair comes once. Returns true as soon as fn does (the query stops).
 template <typename S>
-bool collidePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
-                  QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
+bool walkCubePairs(const View<S>& a, const View<S>& b, bool self, void* data, CollideFnArg<S> fn,
+                   QueryStats* stats = nullptr, const PairGate<S>* gate = nullptr);
 
 /// The collide of two views every query runs (the walk chosen once, here): the pairs of
-/// collidePairs(a, b, self, data, fn, stats, gate), found by collideAllPairs where
+/// walkCubePairs(a, b, self, data, fn, stats, gate), found by collideAllPairs where
 /// allPairsFit(a, b, self, all_pairs_limit), by the walk of one object down `a` where `b` is a
 /// single object and there is no gate, else by the walk of cube pairs.
 template <typename S>
@@ -154,7 +154,7 @@ bool allPairsFit(const View<S>& a, const View<S>& b, bool self, std::size_t limi
 /// Collide of two views (with `self`, of `a` with itself) without their cubes: every pair of
 /// objects is tested, several at a time in float, and pairs that pass are tested again exactly
 /// before fn is called. Two views whose root cubes do not overlap give nothing at once. Same
-/// pairs as collidePairs(a, b, self, ...), row by row in slot order of `a`, each row in slot
+/// pairs as walkCubePairs(a, b, self, ...), row by row in slot order of `a`, each row in slot
 /// order of `b`. Requires a.slots and b.slots <= kAllPairsMax (std::logic_error otherwise, as
 /// for a kernel this CPU lacks).
 template <typename S>

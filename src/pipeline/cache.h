@@ -293,8 +293,8 @@ using DistanceEntry = typename CollideCache<S>::template Entry<fcl::DistanceResu
 // rather than the test. Only once every cached answer in hand has been read: a store can move
 // the entries.
 template <typename S>
-void keepPair(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
-              const fcl::CollisionResult<S>& fresh) {
+void storeAnswer(Answer kind, const ObjectPair<S>& pair, CollideCache<S>* cache,
+                 const fcl::CollisionResult<S>& fresh) {
   if (cache == nullptr || kind == Answer::kCached) return;
   std::vector<fcl::Contact<S>> contacts(fresh.numContacts());
   for (std::size_t k = 0; k < contacts.size(); ++k) contacts[k] = fresh.getContact(k);

@@ -69,7 +69,7 @@ struct CollideStream<S>::Slot {
 // Whether a pair's answer goes to the cache: not one the volumes gave, which they give again
 // next time for less than a lookup costs.
 template <typename S>
-bool CollideStream<S>::kept(const Slot& s) {
+bool CollideStream<S>::cacheable(const Slot& s) {
   return !(s.judged && (s.kind == Answer::kApart || s.kind == Answer::kProved));
 }
 
@@ -233,19 +233,19 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
       merge(pair, s);
       return;
     case Answer::kApart:
-      if (kept(s)) keepPair(s.kind, pair, cache_, empty_);
+      if (cacheable(s)) storeAnswer(s.kind, pair, cache_, empty_);
       return;
     case Answer::kProved:
       s.fresh.clear();
       s.fresh.addContact(provedContact(pair));
       merge(pair, s);
-      if (kept(s)) keepPair(s.kind, pair, cache_, s.fresh);
+      if (cacheable(s)) storeAnswer(s.kind, pair, cache_, s.fresh);
       return;
     case Answer::kComputed:
       s.fresh.clear();
       fclCollide(pair.first, pair.second, request_, s.fresh);
       merge(pair, s);
-      keepPair(s.kind, pair, cache_, s.fresh);
+      storeAnswer(s.kind, pair, cache_, s.fresh);
       if (threads_ > 1) serial_work_ += workOf(pair) - 1;
       return;
   }
@@ -298,9 +298,9 @@ void CollideStream<S>::flush() {
     }
     if (cache_ != nullptr)
       for (std::size_t i = 0; i < n; ++i)
-        if (kept(slots_[i]))
-          keepPair(slots_[i].kind, chunk_[i], cache_,
-                   slots_[i].kind == Answer::kApart ? empty_ : slots_[i].fresh);
+        if (cacheable(slots_[i]))
+          storeAnswer(slots_[i].kind, chunk_[i], cache_,
+                      slots_[i].kind == Answer::kApart ? empty_ : slots_[i].fresh);
     if (!pending_.empty()) chunk_work_ = std::min(chunk_work_ * 2, kMaxChunkWork);
   }
   chunk_.clear();

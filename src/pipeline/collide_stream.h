@@ -65,7 +65,7 @@ class CollideStream {
   };
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
                   const Volumes* vb);
-  static bool kept(const Slot& s);
+  static bool cacheable(const Slot& s);
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
   void merge(const ObjectPair<S>& pair, const Slot& slot);

@@ -90,7 +90,7 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
     if (kind[i] == detail::Answer::kProved) results[i].addContact(detail::provedContact(pairs[i]));
   }
   for (std::size_t i = 0; i < pairs.size(); ++i)
-    detail::keepPair(kind[i], pairs[i], cache, results[i]);
+    detail::storeAnswer(kind[i], pairs[i], cache, results[i]);
   if (cache != nullptr) cache->collide.end(*cache);
   addStats(options.stats, stats);
   return results;

@@ -68,6 +68,8 @@ class StateChecker {
         distance_rate_(volumeMarginRate(distance_request_.distance_tolerance)) {
     slots_.resize(links.size());
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
+    self_gate_.excluded = links.allowed.data();  // the pairs BodySet::allowPair rules out
+    self_gate_.excluded_n = links.size();
     for (int d = 0; d < 3; ++d) {
       c_[d].resize(links.size());
       h_[d].resize(links.size());
@@ -108,7 +110,8 @@ class StateChecker {
     }
     if (self) {
       pending_.clear();
-      collidePairs(body_.view(), body_.view(), true, this, CollideFn<S>(&StateChecker::onLinks));
+      collideViews(body_.view(), body_.view(), true, 0, this, CollideFn<S>(&StateChecker::onLinks),
+                   nullptr, &self_gate_);
       if (found() && !first_pair) return true;
       decidePending();
     }
@@ -284,8 +287,6 @@ class StateChecker {
   static bool onLinks(Object*, ObjectId x, Object*, ObjectId y, void* data) {
     StateChecker& c = *static_cast<StateChecker*>(data);
     const std::uint32_t i = std::min(x, y), j = std::max(x, y);
-    const std::size_t n = c.links_.size();
-    if (c.links_.allowed[i * n + j]) return false;
     const Slot& a = c.linkRecords(i);
     const Slot& b = c.linkRecords(j);
     return c.offer(Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
@@ -413,7 +414,8 @@ class StateChecker {
   const Links<S>& links_;
   const VolumeSphere* world_spheres_;
   const VolumeShape* world_shapes_;
-  BodyView<S> body_;  // the links' boxes (grown by their margins) for the walk
+  BodyView<S> body_;       // the links' boxes (grown by their margins) for the walk
+  PairGate<S> self_gate_;  // the links' self pairs: the body's excluded pairs
   const fcl::CollisionRequest<S> request_{};
   const fcl::DistanceRequest<S> distance_request_{};
   const float rate_;
