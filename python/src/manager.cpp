@@ -143,6 +143,7 @@ void Manager::add(const std::string& name, GeometryPtr geometry, const fcl::Tran
     bp_->setup();
   }
   if (margin >= 0) ++own_margins_;
+  if (geometry->kind == "mesh") ++meshes_;
   by_geometry_[g.get()] = e.get();
   entries_.emplace(name, std::move(e));
 }
@@ -165,6 +166,7 @@ void Manager::remove(const std::string& name) {
       }
     }
   if (e->margin >= 0) --own_margins_;
+  if (e->geometry->kind == "mesh") --meshes_;
   by_geometry_.erase(e->obj->collisionGeometry().get());
   entries_.erase(name);
   installPredicate();

@@ -84,6 +84,8 @@ class Manager {
   bool anyMargin() const { return margin_ > 0 || own_margins_ > 0; }
   double managerMargin() const { return margin_; }
   std::size_t size() const { return entries_.size(); }
+  /// Objects whose geometry is a mesh (FCL's BVH: many contacts per pair).
+  std::size_t meshes() const { return meshes_; }
   std::vector<std::pair<std::string, std::string>> ignored() const;
 
   fcl::BroadPhaseCollisionManagerd& broadphase() const { return *bp_; }
@@ -109,6 +111,7 @@ class Manager {
   std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
   double margin_ = 0;
   std::size_t own_margins_ = 0;
+  std::size_t meshes_ = 0;
   std::uint64_t next_seq_ = 0;
 };
 

@@ -112,6 +112,45 @@ CollideOut cubeCollide(const Manager& m, ObjPtr query, const Manager* other, con
     out.any = r.isCollision();
     return out;
   }
+  const bool meshes = m.meshes() > 0 || (other && other->meshes() > 0) ||
+                      (query && query->collisionGeometry()->getObjectType() == fcl::OT_BVH);
+  if (!want.data && !meshes) {
+    // Names among shapes: one pass of the pipeline over every candidate pair, culled on the
+    // manager's per-object volumes and proved touching where inscribed balls overlap. FCL gives a
+    // colliding shape pair one contact without enable_contact; its geometries name the pair
+    // (add_object keeps one object per FCL geometry in a manager). Meshes would list every
+    // touching triangle pair here: they take the per-pair path below, stopping at each pair's
+    // first contact.
+    fcl::CollisionRequestd all;
+    all.num_max_contacts = std::numeric_limits<std::size_t>::max();
+    fcl::CollisionResultd r = query   ? cube::collideAll(c, query, all, opt)
+                              : other ? cube::collideAll(c, other->broadphase(), all, opt)
+                                      : cube::collideAll(c, all, opt);
+    const Manager& mb = other ? *other : m;
+    const fcl::CollisionGeometryd* q = query ? query->collisionGeometry().get() : nullptr;
+    out.any = r.isCollision();
+    const fcl::CollisionGeometryd* last[2] = {nullptr, nullptr};
+    for (std::size_t k = 0; k < r.numContacts(); ++k) {
+      const auto& ct = r.getContact(k);
+      if (ct.o1 == last[0] && ct.o2 == last[1]) continue;  // the same pair's next contact
+      last[0] = ct.o1;
+      last[1] = ct.o2;
+      const Entry* a = nullptr;
+      const Entry* b = nullptr;
+      if (q) {
+        a = m.byGeometry(ct.o2 == q ? ct.o1 : ct.o2);
+      } else {
+        a = m.byGeometry(ct.o1);
+        b = mb.byGeometry(ct.o2);
+        if (!(a && b)) {
+          a = m.byGeometry(ct.o2);
+          b = mb.byGeometry(ct.o1);
+        }
+      }
+      out.pairs.emplace_back(a ? a->name : "?", q ? kExternal : (b ? b->name : "?"));
+    }
+    return out;
+  }
   std::vector<cube::ObjectPair<double>> pairs = query ? cube::overlappingPairs(c, query)
                                                 : other
                                                     ? cube::overlappingPairs(c, other->broadphase())
@@ -503,7 +542,13 @@ fcl::Vector3d vec3(const double* d) {
 struct Handle {
   std::string name;
   ObjPtr obj;
+  py::object geometry;  // the Geometry the object was added with (python-fcl: its userData)
 };
+
+Handle handleOf(ObjPtr o) {
+  const Entry* e = Manager::entryOf(o);
+  return {nameOf(o), o, e ? py::cast(e->geometry) : py::none()};
+}
 
 struct PyDrive {
   py::function fn;
@@ -511,7 +556,7 @@ struct PyDrive {
   static bool collideCb(ObjPtr a, ObjPtr b, void* data) {
     auto& d = *static_cast<PyDrive*>(data);
     try {
-      py::object r = d.fn(Handle{nameOf(a), a}, Handle{nameOf(b), b});
+      py::object r = d.fn(handleOf(a), handleOf(b));
       return r.cast<bool>();
     } catch (py::error_already_set& e) {
       d.error = std::move(e);
@@ -521,7 +566,7 @@ struct PyDrive {
   static bool distanceCb(ObjPtr a, ObjPtr b, void* data, double& dist) {
     auto& d = *static_cast<PyDrive*>(data);
     try {
-      py::tuple r = d.fn(Handle{nameOf(a), a}, Handle{nameOf(b), b});
+      py::tuple r = d.fn(handleOf(a), handleOf(b));
       dist = r[1].cast<double>();
       return r[0].cast<bool>();
     } catch (py::error_already_set& e) {
@@ -785,33 +830,63 @@ point or a negative or NaN radius.)doc")
 
 void bindQueries(py::module_& m) {
   py::class_<Handle>(m, "_Handle", "An object handed to a benchmark hook's callback.")
-      .def_readonly("name", &Handle::name);
+      .def_readonly("name", &Handle::name)
+      .def_readonly("geometry", &Handle::geometry);
+  // python-fcl's collide() and distance() (Cython there, C++ here): the request read from the
+  // Python request's attributes on every call, a fresh FCL result, and each contact made a
+  // Python object (numpy normal and position) appended to the Python result.
   m.def(
-      "_narrow_collide",
-      [](const Handle& a, const Handle& b, int max_contacts, bool enable_contact) {
-        fcl::CollisionRequestd req(static_cast<std::size_t>(std::max(1, max_contacts)),
-                                   enable_contact);
+      "_fcl_collide",
+      [](const Handle& a, const Handle& b, py::object request, py::object result,
+         py::object contact_type) {
+        fcl::CollisionRequestd req(request.attr("num_max_contacts").cast<std::size_t>(),
+                                   request.attr("enable_contact").cast<bool>(),
+                                   request.attr("num_max_cost_sources").cast<std::size_t>(),
+                                   request.attr("enable_cost").cast<bool>(),
+                                   request.attr("use_approximate_cost").cast<bool>());
         fcl::CollisionResultd res;
-        fcl::collide(a.obj, b.obj, req, res);
-        py::list out;
+        const std::size_t ret = fcl::collide(a.obj, b.obj, req, res);
+        result.attr("is_collision") = result.attr("is_collision").cast<bool>() || res.isCollision();
+        py::list contacts = result.attr("contacts");
+        const auto* ga = a.obj->collisionGeometry().get();
         for (std::size_t k = 0; k < res.numContacts(); ++k) {
-          const auto& c = res.getContact(k);
-          out.append(py::make_tuple(toArray(c.pos), toArray(c.normal), c.penetration_depth));
+          const auto& ct = res.getContact(k);
+          py::object c = contact_type();
+          c.attr("o1") = ct.o1 == ga ? a.geometry : b.geometry;
+          c.attr("o2") = ct.o2 == ga ? a.geometry : b.geometry;
+          c.attr("b1") = ct.b1;
+          c.attr("b2") = ct.b2;
+          c.attr("normal") = toArray(ct.normal);
+          c.attr("pos") = toArray(ct.pos);
+          c.attr("penetration_depth") = ct.penetration_depth;
+          contacts.append(c);
         }
-        return out;
+        return ret;
       },
-      py::arg("a"), py::arg("b"), py::arg("max_contacts") = 1, py::arg("enable_contact") = false,
-      "Benchmark hook: fcl::collide on two handles, one Python tuple (pos, normal, depth) per "
-      "contact, as python-fcl's collide returns its contacts.");
+      py::arg("o1"), py::arg("o2"), py::arg("request"), py::arg("result"), py::arg("contact_type"),
+      "Benchmark hook: python-fcl's fcl.collide(o1, o2, request, result) on two handles.");
   m.def(
-      "_narrow_distance",
-      [](const Handle& a, const Handle& b) {
-        fcl::DistanceRequestd req;
+      "_fcl_distance",
+      [](const Handle& a, const Handle& b, py::object request, py::object result) {
+        fcl::DistanceRequestd req(request.attr("enable_nearest_points").cast<bool>());
         fcl::DistanceResultd res;
-        fcl::distance(a.obj, b.obj, req, res);
-        return res.min_distance;
+        const double d = fcl::distance(a.obj, b.obj, req, res);
+        if (result.attr("min_distance").cast<double>() > res.min_distance) {
+          result.attr("min_distance") = res.min_distance;
+          py::list pts;
+          pts.append(toArray(res.nearest_points[0]));
+          pts.append(toArray(res.nearest_points[1]));
+          result.attr("nearest_points") = pts;
+          const auto* ga = a.obj->collisionGeometry().get();
+          result.attr("o1") = res.o1 == ga ? a.geometry : b.geometry;
+          result.attr("o2") = res.o2 == ga ? a.geometry : b.geometry;
+          result.attr("b1") = res.b1;
+          result.attr("b2") = res.b2;
+        }
+        return d;
       },
-      py::arg("a"), py::arg("b"), "Benchmark hook: fcl::distance on two handles.");
+      py::arg("o1"), py::arg("o2"), py::arg("request"), py::arg("result"),
+      "Benchmark hook: python-fcl's fcl.distance(o1, o2, request, result) on two handles.");
 
   auto pairObjects = [](py::handle ga, py::handle ta, py::handle gb, py::handle tb) {
     GeometryPtr a = geometryOf(ga), b = geometryOf(gb);
