@@ -34,6 +34,11 @@ struct Body {
     links.push_back({g, margin, category, mask});
     return i;
   }
+  std::vector<std::string> kinds() const {
+    std::vector<std::string> out;
+    for (const auto& l : links) out.push_back(l.geometry->kind);
+    return out;
+  }
   void allowPair(std::size_t i, std::size_t j) {
     if (i >= links.size() || j >= links.size() || i == j)
       throw py::value_error("allow_pair: two different link indices below " +
@@ -82,6 +87,7 @@ void bindManagerBatch(ManagerClass& cls) {
            {
              py::gil_scoped_release nogil;
              std::shared_lock lock(m.mutex);
+             refuseFclCrashes(&m, nullptr, body.kinds(), false, "check_states");
              res = cube::checkStates(*m.cube(), body.set, tfs, opt);
              objects.resize(res.size());
              for (std::size_t i = 0; i < res.size(); ++i)
@@ -156,6 +162,7 @@ TypeError (non-numeric poses).)doc")
             {
               py::gil_scoped_release nogil;
               std::shared_lock lock(m.mutex);
+              refuseFclCrashes(&m, nullptr, body.kinds(), false, "check_motions");
               if (!s.empty()) res = cube::checkMotions(*m.cube(), body.set, tfs, s, mo, opt);
             }
             py::array_t<std::int64_t> out(static_cast<py::ssize_t>(res.size()));

@@ -13,6 +13,27 @@ namespace cubepy {
 
 thread_local int in_python_callback = 0;
 
+void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
+                      bool distance, const char* what) {
+  std::size_t planes = 0, convexes = 0;
+  for (const Manager* m : {a, b})
+    if (m) {
+      planes += m->planes();
+      convexes += m->convexes();
+    }
+  for (const auto& k : kinds) {
+    planes += k == "plane";
+    convexes += k == "convex";
+  }
+  if (distance && planes)
+    throw py::value_error(std::string(what) +
+                          ": FCL 0.7 has no distance for planes (fcl::distance crashes on them)");
+  if (planes && convexes)
+    throw py::value_error(std::string(what) +
+                          ": FCL 0.7 crashes on a plane against a convex; they cannot meet in one "
+                          "query");
+}
+
 namespace {
 
 void checkMargin(double m) {
@@ -122,6 +143,7 @@ void Manager::add(const std::string& name, GeometryPtr geometry, const fcl::Tran
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   if (entries_.count(name)) throw py::value_error("an object named '" + name + "' exists");
+  refuseFclCrashes(this, nullptr, {geometry->kind}, false, "add_object");
   auto e = std::make_unique<Entry>();
   e->name = name;
   e->seq = next_seq_++;
@@ -144,6 +166,8 @@ void Manager::add(const std::string& name, GeometryPtr geometry, const fcl::Tran
   }
   if (margin >= 0) ++own_margins_;
   if (geometry->kind == "mesh") ++meshes_;
+  if (geometry->kind == "plane") ++planes_;
+  if (geometry->kind == "convex") ++convexes_;
   by_geometry_[g.get()] = e.get();
   entries_.emplace(name, std::move(e));
 }
@@ -167,6 +191,8 @@ void Manager::remove(const std::string& name) {
     }
   if (e->margin >= 0) --own_margins_;
   if (e->geometry->kind == "mesh") --meshes_;
+  if (e->geometry->kind == "plane") --planes_;
+  if (e->geometry->kind == "convex") --convexes_;
   by_geometry_.erase(e->obj->collisionGeometry().get());
   entries_.erase(name);
   installPredicate();
@@ -336,7 +362,12 @@ filter bits, ignored pairs and margins.)doc");
             const std::string n = nameOf(name);
             GeometryPtr g = geometryOf(geometry);
             const fcl::Transform3d tf = transform(transform_);
-            self.add(n, g, tf, category, mask, margin.is_none() ? -1.0 : margin.cast<double>());
+            double own = -1;  // none: the manager-wide margin
+            if (!margin.is_none()) {
+              own = margin.cast<double>();
+              checkMargin(own);
+            }
+            self.add(n, g, tf, category, mask, own);
           },
           py::arg("name"), py::arg("geometry"), py::arg("transform") = py::none(), py::kw_only(),
           py::arg("category") = 1, py::arg("mask") = ~std::uint64_t(0),

@@ -86,6 +86,8 @@ class Manager {
   std::size_t size() const { return entries_.size(); }
   /// Objects whose geometry is a mesh (FCL's BVH: many contacts per pair).
   std::size_t meshes() const { return meshes_; }
+  std::size_t planes() const { return planes_; }
+  std::size_t convexes() const { return convexes_; }
   std::vector<std::pair<std::string, std::string>> ignored() const;
 
   fcl::BroadPhaseCollisionManagerd& broadphase() const { return *bp_; }
@@ -111,9 +113,16 @@ class Manager {
   std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
   double margin_ = 0;
   std::size_t own_margins_ = 0;
-  std::size_t meshes_ = 0;
+  std::size_t meshes_ = 0, planes_ = 0, convexes_ = 0;
   std::uint64_t next_seq_ = 0;
 };
+
+/// FCL 0.7 crashes (segmentation fault) in fcl::distance with a plane, and in fcl::collide between
+/// a plane and a convex: ValueError instead, before any work. `kinds` are those a query brings
+/// besides the managers' (a query geometry, a body's links); `distance`: the query computes
+/// distances.
+void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
+                      bool distance, const char* what);
 
 /// Set while a Python callback of a private benchmark hook runs on this thread: mutations then
 /// raise instead of waiting for a lock the thread itself holds.

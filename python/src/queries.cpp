@@ -611,6 +611,7 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
+              refuseFclCrashes(&m, nullptr, {g->kind}, false, "in_collision_single");
               q.refresh(m.isCube() ? 0.0 : m.managerMargin());
               o = collide(m, &q, nullptr, w);
             }
@@ -630,6 +631,7 @@ filter bits and the manager-wide margin. TypeError / ValueError for a bad geomet
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m, &other);
+              if (&m != &other) refuseFclCrashes(&m, &other, {}, false, "in_collision_other");
               if (&m == &other)
                 o = collide(m, nullptr, nullptr, w);
               else
@@ -650,6 +652,7 @@ not. The same manager as other is in_collision_internal.)doc")
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
+              refuseFclCrashes(&m, nullptr, {}, true, "min_distance_internal");
               o = distance(m, nullptr, nullptr, data);
             }
             return distanceReturn(o, names, data, Kind::internal);
@@ -669,6 +672,7 @@ and ignored pairs apply, margins do not. Returns distance, plus (return_names) t
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
+              refuseFclCrashes(&m, nullptr, {g->kind}, true, "min_distance_single");
               o = distance(m, &q, nullptr, data);
             }
             return distanceReturn(o, name, data, Kind::single);
@@ -685,6 +689,7 @@ min_distance_internal.)doc")
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m, &other);
+              refuseFclCrashes(&m, &m == &other ? nullptr : &other, {}, true, "min_distance_other");
               o = distance(m, nullptr, &m == &other ? nullptr : &other, data);
             }
             return distanceReturn(o, names, data, &m == &other ? Kind::internal : Kind::other);
@@ -897,6 +902,8 @@ void bindQueries(py::module_& m) {
       "pair_in_collision",
       [pairObjects](py::handle ga, py::handle ta, py::handle gb, py::handle tb) {
         auto [a, b] = pairObjects(ga, ta, gb, tb);
+        refuseFclCrashes(nullptr, nullptr, {geometryOf(ga)->kind, geometryOf(gb)->kind}, false,
+                         "pair_in_collision");
         py::gil_scoped_release nogil;
         fcl::CollisionResultd res;
         fcl::collide(a.get(), b.get(), fcl::CollisionRequestd(), res);
@@ -909,6 +916,8 @@ void bindQueries(py::module_& m) {
       "pair_distance",
       [pairObjects](py::handle ga, py::handle ta, py::handle gb, py::handle tb) {
         auto [a, b] = pairObjects(ga, ta, gb, tb);
+        refuseFclCrashes(nullptr, nullptr, {geometryOf(ga)->kind, geometryOf(gb)->kind}, true,
+                         "pair_distance");
         py::gil_scoped_release nogil;
         fcl::DistanceResultd res;
         fcl::distance(a.get(), b.get(), fcl::DistanceRequestd(), res);
