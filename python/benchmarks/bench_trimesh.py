@@ -67,11 +67,22 @@ def run_scene(label, scene, repeat, threads, out):
     t_cube1, r1 = timed(lambda: cube1.in_collision_internal(return_names=True), repeat)
     t_fcl, r_fcl = timed(lambda: fcl.in_collision_internal(return_names=True), repeat)
     t_tm, r_tm = timed(lambda: trimesh.in_collision_internal(return_names=True), repeat)
-    for other in (r1, r_fcl, r_tm):
+    for other in (r1, r_fcl):
         if other[1] != names:
             raise SystemExit(f"{label}: the managers disagree on the colliding pairs")
     out.append(f"{label}: {len(scene)} objects, {len(names)} colliding pairs, the same on every "
                "manager")
+    if r_tm[1] != names:
+        # trimesh's request stops the whole query at 100,000 contacts: its answer is incomplete.
+        if not r_tm[1] <= names:
+            raise SystemExit(f"{label}: trimesh's way reports pairs that do not collide")
+        out.append(f"  trimesh's way with its 100,000-contact budget stopped early: "
+                   f"{len(r_tm[1])} of the {len(names)} pairs ({t_tm * 1e3:.2f} ms); timed "
+                   "below with the budget raised to 10**9, which finds them all")
+        trimesh = TrimeshManager(fcl, max_contacts=10**9)
+        t_tm, r_tm = timed(lambda: trimesh.in_collision_internal(return_names=True), repeat)
+        if r_tm[1] != names:
+            raise SystemExit(f"{label}: the managers disagree on the colliding pairs")
     out.append("  in_collision_internal(return_names=True)                  time   fcl+py/x   fcl/x")
     for what, t in ((f"cube, threads={threads}", t_cube), ("cube, threads=1", t_cube1),
                     ("fcl backend, narrow phase in C++", t_fcl),
