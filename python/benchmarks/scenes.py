@@ -168,7 +168,10 @@ def clash(n, seed=2, density=1.0):
 
 
 def build(scene, backend="cube", threads=0):
+    """A manager holding the scene, added in one call (one build of the tree on both backends:
+    FCL's top-down build for backend="fcl", as FCL users register a world)."""
     m = cc.CollisionManager(backend=backend, threads=threads)
-    for name, g, t in scene:
-        m.add_object(name, g, t)
+    if scene:
+        names, geometries, transforms = zip(*scene)
+        m.add_objects(list(names), list(geometries), np.stack(transforms))
     return m

@@ -88,6 +88,9 @@ class CollisionManager:
     def add_object(self, name: str, geometry: GeometryLike, transform: Transform = None, *,
                    category: int = 1, mask: int = ..., margin: Optional[float] = None) -> None:
         """Adds an object. ValueError for an existing name or a bad transform."""
+    def add_objects(self, names: Sequence[str], geometries: Sequence[GeometryLike],
+                    transforms: Optional[ArrayLike] = None) -> None:
+        """Adds many objects in one build of the tree; all checked first."""
     def remove_object(self, name: str) -> None:
         """Removes an object. KeyError if unknown."""
     def set_transform(self, name: str, transform: ArrayLike) -> None:

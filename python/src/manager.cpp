@@ -132,44 +132,73 @@ void Manager::refresh(Entry& e) {
   e.obj->refresh(cube_ ? 0.0 : marginOf(&e));
 }
 
-void Manager::add(const std::string& name, GeometryPtr geometry, const fcl::Transform3d& tf,
-                  std::uint64_t category, std::uint64_t mask, double margin) {
-  noCallback("add_object");
-  if (margin >= 0) checkMargin(margin);
-  if (!cube_ && geometry->kind == "plane")
-    throw py::value_error(
-        "add_object: the FCL backend's tree needs bounded objects; planes "
-        "only with backend='cube'");
+void Manager::add(std::vector<NewObject> objects, const char* what) {
+  noCallback(what);
+  for (const auto& o : objects) {
+    if (o.margin >= 0) checkMargin(o.margin);
+    if (!cube_ && o.geometry->kind == "plane")
+      throw py::value_error(std::string(what) +
+                            ": the FCL backend's tree needs bounded objects; planes only with "
+                            "backend='cube'");
+  }
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
-  if (entries_.count(name)) throw py::value_error("an object named '" + name + "' exists");
-  refuseFclCrashes(this, nullptr, {geometry->kind}, false, "add_object");
-  auto e = std::make_unique<Entry>();
-  e->name = name;
-  e->seq = next_seq_++;
-  e->geometry = geometry;
-  e->category = category;
-  e->mask = mask;
-  e->margin = margin;
-  // One object per FCL geometry in a manager, so that FCL's results (which name geometries)
-  // name one object: a geometry added again is copied.
-  auto g = by_geometry_.count(geometry->fcl.get()) ? cloneFcl(*geometry) : geometry->fcl;
-  e->obj = std::make_unique<Object>(g, tf);
-  e->obj->setUserData(e.get());
-  refresh(*e);
-  bp_->registerObject(e->obj.get());
-  if (cube_) {
-    if (category != 1 || mask != ~std::uint64_t(0)) cube_->setFilter(e->obj.get(), category, mask);
-    if (margin >= 0) cube_->setMargin(e->obj.get(), margin);
-  } else {
-    bp_->setup();
+  std::unordered_set<std::string> fresh;
+  std::vector<std::string> kinds;
+  for (const auto& o : objects) {
+    if (entries_.count(o.name)) throw py::value_error("an object named '" + o.name + "' exists");
+    if (!fresh.insert(o.name).second)
+      throw py::value_error(std::string(what) + ": '" + o.name + "' is named twice");
+    kinds.push_back(o.geometry->kind);
   }
-  if (margin >= 0) ++own_margins_;
-  if (geometry->kind == "mesh") ++meshes_;
-  if (geometry->kind == "plane") ++planes_;
-  if (geometry->kind == "convex") ++convexes_;
-  by_geometry_[g.get()] = e.get();
-  entries_.emplace(name, std::move(e));
+  refuseFclCrashes(this, nullptr, kinds, false, what);
+  std::vector<std::unique_ptr<Entry>> made;
+  std::vector<fcl::CollisionObjectd*> raw;
+  std::unordered_set<const fcl::CollisionGeometryd*> taken;  // by this batch
+  for (auto& o : objects) {
+    auto e = std::make_unique<Entry>();
+    e->name = o.name;
+    e->seq = next_seq_ + made.size();
+    e->geometry = o.geometry;
+    e->category = o.category;
+    e->mask = o.mask;
+    e->margin = o.margin;
+    // One object per FCL geometry in a manager, so that FCL's results (which name geometries)
+    // name one object: a geometry added again is copied.
+    const fcl::CollisionGeometryd* p = o.geometry->fcl.get();
+    const bool again = by_geometry_.count(p) || !taken.insert(p).second;
+    auto g = again ? cloneFcl(*o.geometry) : o.geometry->fcl;
+    e->obj = std::make_unique<Object>(g, o.tf);
+    e->obj->setUserData(e.get());
+    refresh(*e);
+    raw.push_back(e->obj.get());
+    made.push_back(std::move(e));
+  }
+  const bool was_empty = entries_.empty();
+  // A batch into an empty manager: the cube manager's batch build, FCL's top-down init.
+  bp_->registerObjects(raw);
+  if (cube_) {
+    for (const auto& e : made) {
+      if (e->category != 1 || e->mask != ~std::uint64_t(0))
+        cube_->setFilter(e->obj.get(), e->category, e->mask);
+      if (e->margin >= 0) cube_->setMargin(e->obj.get(), e->margin);
+    }
+  } else if (raw.size() == 1) {
+    bp_->update(raw[0]);  // FCL rebalances its tree incrementally, as after any update
+  } else if (!was_empty) {
+    bp_->update();  // objects inserted one by one: rebalance
+  }
+  next_seq_ += made.size();
+  for (auto& e : made) {
+    const std::string& kind = e->geometry->kind;
+    if (e->margin >= 0) ++own_margins_;
+    meshes_ += kind == "mesh";
+    planes_ += kind == "plane";
+    convexes_ += kind == "convex";
+    by_geometry_[e->obj->collisionGeometry().get()] = e.get();
+    std::string name = e->name;
+    entries_.emplace(std::move(name), std::move(e));
+  }
 }
 
 void Manager::remove(const std::string& name) {
@@ -322,11 +351,14 @@ std::shared_ptr<Manager> fromState(const py::dict& d) {
   auto m = std::make_shared<Manager>(d["backend"].cast<std::string>(), d["threads"].cast<int>());
   const double margin = d["margin"].cast<double>();
   if (margin > 0) m->setMargin(margin, nullptr);
+  std::vector<Manager::NewObject> objs;
   for (py::handle h : d["objects"]) {
     auto t = h.cast<py::tuple>();
-    m->add(t[0].cast<std::string>(), geometryOf(t[1]), transform(t[2]), t[3].cast<std::uint64_t>(),
-           t[4].cast<std::uint64_t>(), t[5].is_none() ? -1.0 : t[5].cast<double>());
+    objs.push_back({t[0].cast<std::string>(), geometryOf(t[1]), transform(t[2]),
+                    t[3].cast<std::uint64_t>(), t[4].cast<std::uint64_t>(),
+                    t[5].is_none() ? -1.0 : t[5].cast<double>()});
   }
+  m->add(std::move(objs), "unpickling");
   for (py::handle h : d["ignored"]) {
     auto p = h.cast<std::pair<std::string, std::string>>();
     m->ignorePair(p.first, p.second, true);
@@ -367,7 +399,7 @@ filter bits, ignored pairs and margins.)doc");
               own = margin.cast<double>();
               checkMargin(own);
             }
-            self.add(n, g, tf, category, mask, own);
+            self.add({{n, g, tf, category, mask, own}}, "add_object");
           },
           py::arg("name"), py::arg("geometry"), py::arg("transform") = py::none(), py::kw_only(),
           py::arg("category") = 1, py::arg("mask") = ~std::uint64_t(0),
@@ -379,6 +411,37 @@ is copied once per name (trimesh also builds one BVH per add_object).
 Raises TypeError (name not a str, not a geometry, non-numeric transform), ValueError (an object
 with this name exists: unlike trimesh, which replaces it; a transform that is not 4x4, finite and
 rigid; a bad margin; a plane with backend='fcl'); nothing is added then.)doc")
+      .def(
+          "add_objects",
+          [](Manager& self, py::handle names, py::handle geometries, py::handle transforms) {
+            std::vector<Manager::NewObject> objs;
+            for (py::handle h : names) {
+              objs.emplace_back();
+              objs.back().name = nameOf(h);
+            }
+            std::size_t i = 0;
+            for (py::handle h : geometries) {
+              if (i == objs.size())
+                throw py::value_error("add_objects: more geometries than names");
+              objs[i++].geometry = geometryOf(h);
+            }
+            if (i != objs.size()) throw py::value_error("add_objects: fewer geometries than names");
+            if (transforms.is_none()) {
+              for (auto& o : objs) o.tf = fcl::Transform3d::Identity();
+            } else {
+              Array a = floats(transforms, "transforms",
+                               {static_cast<py::ssize_t>(objs.size()), 4, 4}, false);
+              for (std::size_t k = 0; k < objs.size(); ++k)
+                objs[k].tf =
+                    transformFrom(a.data() + 16 * k, "transforms[" + std::to_string(k) + "]");
+            }
+            self.add(std::move(objs), "add_objects");
+          },
+          py::arg("names"), py::arg("geometries"), py::arg("transforms") = py::none(), R"doc(
+Adds many objects in one call and one build of the tree (the cube manager's batch build; FCL's
+top-down build into an empty FCL backend): names (n str), geometries (n Geometry or trimeshes),
+transforms (n, 4, 4) or None (identities). Everything is checked first and nothing is added on
+an error: as add_object, plus ValueError for a name given twice or lengths that differ.)doc")
       .def(
           "remove_object", [](Manager& self, py::handle name) { self.remove(nameOf(name)); },
           py::arg("name"),

@@ -59,8 +59,16 @@ class Manager {
   int threads() const { return threads_; }
 
   // Mutations: arguments are checked first (with the GIL); nothing changes on a bad one.
-  void add(const std::string& name, GeometryPtr geometry, const fcl::Transform3d& tf,
-           std::uint64_t category, std::uint64_t mask, double margin);
+  /// An object to add: its own margin < 0 means none.
+  struct NewObject {
+    std::string name;
+    GeometryPtr geometry;
+    fcl::Transform3d tf;
+    std::uint64_t category = 1, mask = ~std::uint64_t(0);
+    double margin = -1;
+  };
+  /// Adds every object in one registration (one build of the tree), or none if one is bad.
+  void add(std::vector<NewObject> objects, const char* what);
   void remove(const std::string& name);
   void setTransforms(const std::vector<std::string>& names,
                      const std::vector<fcl::Transform3d>& tfs);

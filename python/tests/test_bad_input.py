@@ -37,6 +37,11 @@ CASES = [
     (ValueError, lambda m: m.add_object("x", cc.sphere(1), SHEAR)),
     (ValueError, lambda m: m.add_object("x", cc.sphere(1), BAD_ROW)),
     (ValueError, lambda m: m.add_object("x", cc.sphere(1), margin=-1.0)),
+    (ValueError, lambda m: m.add_objects(["x", "x"], [cc.sphere(1)] * 2)),   # named twice
+    (ValueError, lambda m: m.add_objects(["x", "o3"], [cc.sphere(1)] * 2)),  # exists
+    (ValueError, lambda m: m.add_objects(["x", "y"], [cc.sphere(1)])),       # lengths differ
+    (ValueError, lambda m: m.add_objects(["x", "y"], [cc.sphere(1)] * 2, np.stack([np.eye(4), SCALED]))),
+    (TypeError, lambda m: m.add_objects(["x", "y"], [cc.sphere(1), "no"])),
     (KeyError, lambda m: m.remove_object("nobody")),
     (KeyError, lambda m: m.set_transform("nobody", np.eye(4))),
     (ValueError, lambda m: m.set_transform("o1", NAN)),

@@ -149,6 +149,18 @@ def test_backends_agree_after_motion_and_removal():
         assert fcl.in_collision_internal(return_names=True)[1] == expected
 
 
+def test_batches_into_a_filled_manager(backend):
+    scene = mixed_scene(90, 51)
+    m = build(scene[:30], backend)
+    for name, g, t in scene[30:45]:
+        m.add_object(name, g, t)
+    names, geoms, tfs = zip(*scene[45:])
+    m.add_objects(list(names), list(geoms), np.stack(tfs))
+    assert m.names == [n for n, _, _ in scene]
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene)
+    assert same_distance(m.min_distance_internal(), brute_min_distance(scene)[0])
+
+
 def test_same_geometry_under_several_names():
     g = cc.mesh(*scenes.uv_sphere(6, 1.0))
     scene = [(f"s{i}", g, scenes.pose(np.eye(3), [1.5 * i, 0, 0])) for i in range(6)]
