@@ -17,7 +17,10 @@ if(CUBE_COLLISION_TOP_LEVEL OR CUBE_COLLISION_BUILD_PYTHON)
   if(Python3_FOUND AND pybind11_FOUND)
     execute_process(COMMAND "${Python3_EXECUTABLE}" -c "import numpy"
                     RESULT_VARIABLE _cube_numpy OUTPUT_QUIET ERROR_QUIET)
-    if(_cube_numpy EQUAL 0 AND CUBE_COLLISION_TOP_LEVEL)
+    # Not in sanitizer or fuzzer builds: an instrumented extension needs its runtime preloaded
+    # into the interpreter.
+    if(_cube_numpy EQUAL 0 AND CUBE_COLLISION_TOP_LEVEL AND NOT CUBE_COLLISION_SANITIZE
+       AND NOT CUBE_COLLISION_BUILD_FUZZER)
       set(CUBE_COLLISION_PYTHON_DEFAULT ON)
     endif()
   endif()

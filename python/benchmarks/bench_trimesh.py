@@ -15,7 +15,8 @@ Calls timed: in_collision_internal(return_names=True) on each scene, min_distanc
 the same scene with its colliding objects removed (so that the search does not stop at the first
 touching pair). Scenes (benchmarks/scenes.py): "primitives+convex" (boxes, spheres, cylinders,
 capsules, cones, convex polytopes) and "clash" (meshes of 100-2,000 triangles). Every answer is
-checked equal across the managers before any time is printed. Median of --repeat runs each.
+checked equal across the managers before any time is printed. Median of --repeat runs each,
+after one untimed run.
 
   PYTHONPATH=build/python python3 python/benchmarks/bench_trimesh.py [--primitives 10000]
       [--meshes 5000] [--repeat 3] [--threads 0]
@@ -35,7 +36,8 @@ from trimesh_way import TrimeshManager  # noqa: E402
 
 
 def timed(fn, repeat):
-    times, result = [], None
+    """Median of `repeat` timed calls after one untimed call (caches warm for every manager)."""
+    times, result = [], fn()
     for _ in range(repeat):
         t = time.perf_counter()
         result = fn()

@@ -144,9 +144,9 @@ class TrimeshManager:
             objs_in_collision.add(tuple(sorted(names)))
         return result, objs_in_collision
 
-    def min_distance_internal(self, return_names=False):
+    def min_distance_internal(self, return_names=False, return_data=False):
         ddata = DistanceData()
-        if return_names:
+        if return_data:  # trimesh asks for nearest points only with the data
             ddata = DistanceData(DistanceRequest(enable_nearest_points=True))
         self._manager._distance_python(lambda a, b: defaultDistanceCallback(a, b, ddata))
         distance_ = ddata.result.min_distance
