@@ -37,6 +37,26 @@ def test_shapes_only_scene_equals_brute_force(backend):
         brute_colliding(scene)
 
 
+@pytest.mark.parametrize("other_backend", ["cube", "fcl"])
+def test_shapes_only_single_and_other(backend, other_backend):
+    # Shapes only: the cube backend's names come from one pipeline pass (no per-pair results).
+    a = mixed_scene(80, 61, meshes=False)
+    b = [("b" + n, g, t) for n, g, t in mixed_scene(60, 62, meshes=False)]
+    ma, mb = build(a, backend), build(b, other_backend)
+    expected = {(na, nb) for na, ga, ta in a for nb, gb, tb in b
+                if cc.pair_in_collision(ga, ta, gb, tb)}
+    assert ma.in_collision_other(mb, return_names=True) == (bool(expected), expected)
+    rng = np.random.default_rng(63)
+    # a[0][1] is also a managed object's geometry: the answers must still name objects right.
+    for probe in (cc.sphere(0.8), cc.box(1, 2, 1), scenes.random_convex(rng, 1.5), a[0][1]):
+        for k in range(4):
+            t = scenes.pose(scenes.random_rotation(rng), rng.uniform(0, 6, 3))
+            if k == 0:
+                t = a[0][2]  # on top of the object that shares its geometry
+            hits = {n for n, g, tf in a if cc.pair_in_collision(g, tf, probe, t)}
+            assert ma.in_collision_single(probe, t, return_names=True) == (bool(hits), hits)
+
+
 @pytest.mark.parametrize("seed", SEEDS)
 def test_min_distance_equals_brute_force(seed, backend):
     scene = mixed_scene(40, seed, side=14.0)  # sparse: a real search
