@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# One-stop set-up on Debian 12 as root (or with sudo): installs the missing packages, builds,
-# then runs the demo (`bash setup.sh demo`) or every test (`bash setup.sh test`).
+# One-stop set-up on Debian 12 as root (or with sudo): installs the missing packages, builds (the
+# library, its tests and examples, and the Python package under python/), then runs the demo
+# (`bash setup.sh demo`) or every test (`bash setup.sh test`, the Python tests included).
 set -euo pipefail
 cd "$(dirname "$0")"
 
 mode=${1:-demo}
 packages=(build-essential cmake pkg-config libfcl-dev libccd-dev libeigen3-dev liboctomap-dev
-          libgtest-dev libgmock-dev libbenchmark-dev libcairo2-dev libompl-dev)
+          libgtest-dev libgmock-dev libbenchmark-dev libcairo2-dev libompl-dev
+          python3-dev python3-numpy python3-pybind11 pybind11-dev python3-pytest
+          python3-distributed python3-venv)
 # CI's ThreadSanitizer stage (.ci/run) builds with clang and LLVM's OpenMP runtime, whose Archer
 # tool tells ThreadSanitizer about OpenMP's synchronisation (GCC's libgomp is not instrumented).
 [ "${1:-demo}" = test ] && packages+=(clang libomp-dev)

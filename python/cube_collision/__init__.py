@@ -1,0 +1,38 @@
+"""cube_collision: collision checking for many objects, in C++, with trimesh's vocabulary.
+
+    import cube_collision
+    m = cube_collision.CollisionManager()            # was: trimesh.collision.CollisionManager()
+    m.add_object("a", mesh, transform)               # a Trimesh, or cube_collision.mesh(v, f)
+    hit, names = m.in_collision_internal(return_names=True)
+
+Geometry: mesh, convex, box, sphere, cylinder, capsule, cone, plane (each returns a Geometry).
+The manager (CollisionManager) runs every query in C++ (broadphase, culling, FCL's narrow phase)
+with the GIL released; backend="fcl" builds it on FCL's DynamicAABBTreeCollisionManager instead.
+Batched planner checks: Body and CollisionManager.check_states / check_motions. Everything
+pickles. See README.md, section "Python".
+"""
+
+from ._core import (  # noqa: F401
+    ALL_BITS,
+    Body,
+    CollisionManager,
+    Geometry,
+    box,
+    capsule,
+    cone,
+    convex,
+    cylinder,
+    mesh,
+    pair_distance,
+    pair_in_collision,
+    plane,
+    sphere,
+)
+from ._core import _fcl_collide, _fcl_distance, _Handle  # noqa: F401  (benchmark hooks)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ALL_BITS", "Body", "CollisionManager", "Geometry", "box", "capsule", "cone", "convex",
+    "cylinder", "mesh", "pair_distance", "pair_in_collision", "plane", "sphere",
+]

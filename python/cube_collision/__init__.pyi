@@ -1,0 +1,20 @@
+from ._core import (
+    ALL_BITS as ALL_BITS,
+    Body as Body,
+    CollisionManager as CollisionManager,
+    Geometry as Geometry,
+    box as box,
+    capsule as capsule,
+    cone as cone,
+    convex as convex,
+    cylinder as cylinder,
+    mesh as mesh,
+    pair_distance as pair_distance,
+    pair_in_collision as pair_in_collision,
+    plane as plane,
+    sphere as sphere,
+)
+from ._core import _fcl_collide as _fcl_collide, _fcl_distance as _fcl_distance, _Handle as _Handle
+
+__version__: str
+__all__: list[str]

@@ -1,0 +1,146 @@
+#pragma once
+
+// The Python manager: named objects over a broadphase (the cube manager, or FCL's dynamic AABB
+// tree for backend="fcl"), with the pair rules (filter bits, ignored pairs, margins) kept so that
+// both backends and pickling see the same world.
+
+#include <cube_collision/cube_collision_manager.h>
+#include <fcl/narrowphase/collision_object.h>
+
+#include <memory>
+#include <shared_mutex>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "common.h"
+
+namespace cubepy {
+
+/// An FCL object whose AABB can be grown by a margin (the FCL backend's broadphase reads it).
+class Object : public fcl::CollisionObjectd {
+ public:
+  Object(const std::shared_ptr<fcl::CollisionGeometryd>& g, const fcl::Transform3d& tf)
+      : fcl::CollisionObjectd(g, tf) {
+    setUserData(nullptr);  // FCL leaves it uninitialised; null marks a query object
+  }
+  /// computeAABB(), then the box grown by `pad` on every side.
+  void refresh(double pad) {
+    computeAABB();
+    if (pad > 0) {
+      aabb.min_ -= fcl::Vector3d::Constant(pad);
+      aabb.max_ += fcl::Vector3d::Constant(pad);
+    }
+  }
+};
+
+/// One named object.
+struct Entry {
+  std::string name;
+  std::uint64_t seq = 0;  ///< registration number: order of names, pickling, ties
+  GeometryPtr geometry;   ///< what the user gave (its FCL geometry may be cloned into obj)
+  std::unique_ptr<Object> obj;
+  std::uint64_t category = 1, mask = ~std::uint64_t(0);
+  double margin = -1;  ///< own margin; < 0: the manager-wide one
+  int ignores = 0;     ///< how many ignored pairs name it
+};
+
+/// Reads or writes on a manager from any Python thread: queries take it shared, mutations
+/// exclusive, each with the GIL released while it waits and works.
+class Manager {
+ public:
+  Manager(const std::string& backend, int threads);
+  ~Manager();
+
+  bool isCube() const { return cube_ != nullptr; }
+  const std::string& backend() const { return backend_; }
+  int threads() const { return threads_; }
+
+  // Mutations: arguments are checked first (with the GIL); nothing changes on a bad one.
+  /// An object to add: its own margin < 0 means none.
+  struct NewObject {
+    std::string name;
+    GeometryPtr geometry;
+    fcl::Transform3d tf;
+    std::uint64_t category = 1, mask = ~std::uint64_t(0);
+    double margin = -1;
+  };
+  /// Adds every object in one registration (one build of the tree), or none if one is bad.
+  void add(std::vector<NewObject> objects, const char* what);
+  void remove(const std::string& name);
+  void setTransforms(const std::vector<std::string>& names,
+                     const std::vector<fcl::Transform3d>& tfs);
+  void setFilter(const std::string& name, std::uint64_t category, std::uint64_t mask);
+  void ignorePair(const std::string& a, const std::string& b, bool ignore);
+  void clearIgnored();
+  void setMargin(double margin, const std::string* name);
+
+  // Reads (callers hold the shared lock, or the GIL with no query running).
+  Entry* find(const std::string& name) const;  ///< KeyError if unknown
+  std::vector<const Entry*> ordered() const;   ///< by registration
+  static Entry* entryOf(const fcl::CollisionObjectd* o) {
+    return static_cast<Entry*>(o->getUserData());
+  }
+  /// The name of the object whose (possibly cloned) FCL geometry is g, or null.
+  const Entry* byGeometry(const fcl::CollisionGeometryd* g) const;
+  /// Filter bits and ignored pairs: may a and b (objects of this manager, or null for a query
+  /// object with the default bits) pair?
+  bool allowed(const Entry* a, const Entry* b) const;
+  double marginOf(const Entry* e) const { return e && e->margin >= 0 ? e->margin : margin_; }
+  bool anyMargin() const { return margin_ > 0 || own_margins_ > 0; }
+  double managerMargin() const { return margin_; }
+  std::size_t size() const { return entries_.size(); }
+  /// Objects whose geometry is a mesh (FCL's BVH: many contacts per pair).
+  std::size_t meshes() const { return meshes_; }
+  std::size_t planes() const { return planes_; }
+  std::size_t convexes() const { return convexes_; }
+  std::vector<std::pair<std::string, std::string>> ignored() const;
+
+  fcl::BroadPhaseCollisionManagerd& broadphase() const { return *bp_; }
+  cube::CubeCollisionManagerd* cube() const { return cube_; }
+
+  mutable std::shared_mutex mutex;
+
+ private:
+  static std::uint64_t key(const Entry* a, const Entry* b) {
+    const auto x = std::min(a->seq, b->seq), y = std::max(a->seq, b->seq);
+    return x * 0x9E3779B97F4A7C15ull ^ (y + (x << 20));
+  }
+  bool ignoredPair(const Entry* a, const Entry* b) const;
+  void installPredicate();
+  void refresh(Entry& e);
+
+  std::string backend_;
+  int threads_;
+  std::unique_ptr<fcl::BroadPhaseCollisionManagerd> bp_;
+  cube::CubeCollisionManagerd* cube_ = nullptr;
+  std::unordered_map<std::string, std::unique_ptr<Entry>> entries_;
+  std::unordered_map<const fcl::CollisionGeometryd*, Entry*> by_geometry_;
+  std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
+  double margin_ = 0;
+  std::size_t own_margins_ = 0;
+  std::size_t meshes_ = 0, planes_ = 0, convexes_ = 0;
+  std::uint64_t next_seq_ = 0;
+};
+
+/// FCL 0.7 crashes (segmentation fault) in fcl::distance with a plane, and in fcl::collide between
+/// a plane and a convex: ValueError instead, before any work. `kinds` are those a query brings
+/// besides the managers' (a query geometry, a body's links); `distance`: the query computes
+/// distances.
+void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
+                      bool distance, const char* what);
+
+/// Set while a Python callback of a private benchmark hook runs on this thread: mutations then
+/// raise instead of waiting for a lock the thread itself holds.
+extern thread_local int in_python_callback;
+
+}  // namespace cubepy
+
+namespace cubepy {
+using ManagerClass = py::class_<Manager, std::shared_ptr<Manager>>;
+/// Adds the queries (queries.cpp) and the batched checks (batch.cpp) to the manager's class.
+void bindManagerQueries(ManagerClass& cls);
+void bindManagerBatch(ManagerClass& cls);
+}  // namespace cubepy

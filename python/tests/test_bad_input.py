@@ -1,0 +1,110 @@
+"""Bad input: a clear exception, never a crash, and nothing changed."""
+
+import numpy as np
+import pytest
+
+import cube_collision as cc
+from conftest import build, mixed_scene
+
+
+def state(m):
+    """Everything a mutation could change, for before/after comparisons."""
+    return (m.names, [m.get_transform(n).tolist() for n in m.names],
+            [m.get_filter(n) for n in m.names], [m.get_margin(n) for n in m.names],
+            m.ignored_pairs, m.in_collision_internal(return_names=True))
+
+
+NAN = np.full((4, 4), np.nan)
+SCALED = np.diag([2.0, 1, 1, 1])
+MIRROR = np.diag([-1.0, 1, 1, 1])
+SHEAR = np.eye(4)
+SHEAR[0, 1] = 0.3
+BAD_ROW = np.eye(4)
+BAD_ROW[3, 0] = 1
+INF = np.eye(4)
+INF[0, 3] = np.inf
+
+CASES = [
+    (ValueError, lambda m: m.add_object("o0", cc.sphere(1))),                 # duplicate name
+    (TypeError, lambda m: m.add_object(7, cc.sphere(1))),                     # name not a str
+    (TypeError, lambda m: m.add_object("x", "not a geometry")),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), np.eye(3))),       # wrong shape
+    (TypeError, lambda m: m.add_object("x", cc.sphere(1), np.full((4, 4), "a"))),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), NAN)),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), INF)),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), SCALED)),          # non-rigid
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), MIRROR)),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), SHEAR)),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), BAD_ROW)),
+    (ValueError, lambda m: m.add_object("x", cc.sphere(1), margin=-1.0)),
+    (ValueError, lambda m: m.add_objects(["x", "x"], [cc.sphere(1)] * 2)),   # named twice
+    (ValueError, lambda m: m.add_objects(["x", "o3"], [cc.sphere(1)] * 2)),  # exists
+    (ValueError, lambda m: m.add_objects(["x", "y"], [cc.sphere(1)])),       # lengths differ
+    (ValueError, lambda m: m.add_objects(["x", "y"], [cc.sphere(1)] * 2, np.stack([np.eye(4), SCALED]))),
+    (TypeError, lambda m: m.add_objects(["x", "y"], [cc.sphere(1), "no"])),
+    (KeyError, lambda m: m.remove_object("nobody")),
+    (KeyError, lambda m: m.set_transform("nobody", np.eye(4))),
+    (ValueError, lambda m: m.set_transform("o1", NAN)),
+    (ValueError, lambda m: m.set_transform("o1", SCALED)),
+    (KeyError, lambda m: m.set_transforms(["o1", "nobody"], np.stack([np.eye(4)] * 2))),
+    (ValueError, lambda m: m.set_transforms(["o1", "o1"], np.stack([np.eye(4)] * 2))),
+    (ValueError, lambda m: m.set_transforms(["o1", "o2"], np.stack([np.eye(4), SCALED]))),
+    (ValueError, lambda m: m.set_transforms(["o1", "o2"], np.stack([np.eye(4)] * 3))),
+    (TypeError, lambda m: m.set_transforms(["o1", 2], np.stack([np.eye(4)] * 2))),
+    (KeyError, lambda m: m.set_filter("nobody", 1, 1)),
+    (TypeError, lambda m: m.set_filter("o1", -1, 1)),
+    (KeyError, lambda m: m.ignore_pair("o1", "nobody")),
+    (ValueError, lambda m: m.ignore_pair("o1", "o1")),
+    (ValueError, lambda m: m.set_margin(-0.1)),
+    (ValueError, lambda m: m.set_margin(float("nan"))),
+    (ValueError, lambda m: m.set_margin(float("inf"), "o1")),
+    (KeyError, lambda m: m.set_margin(0.1, "nobody")),
+    (ValueError, lambda m: m.in_collision_single(cc.sphere(1), NAN)),
+    (ValueError, lambda m: m.in_collision_single(cc.sphere(1), SCALED)),
+    (TypeError, lambda m: m.in_collision_single(None)),
+    (ValueError, lambda m: m.min_distance_single(cc.sphere(1), np.zeros((4, 4)))),
+    (ValueError, lambda m: m.in_collision_internal(return_data=True, max_contacts=0)),
+    (ValueError, lambda m: m.ray_first([[0, 0, 0]], [[np.nan, 0, 0]])),
+    (ValueError, lambda m: m.ray_first([[0, 0, 0]], [[1, 0, 0], [2, 0, 0]])),
+    (ValueError, lambda m: m.ray_all([0, 0, 0], [1, 0, 0], tolerance=-1)),
+    (ValueError, lambda m: m.objects_in_box([1, 1, 1], [0, 0, 0])),
+    (ValueError, lambda m: m.objects_in_box([np.nan, 0, 0], [1, 1, 1])),
+    (ValueError, lambda m: m.objects_near([0, 0, 0], -1)),
+    (ValueError, lambda m: m.objects_near([np.inf, 0, 0], 1)),
+    (KeyError, lambda m: m.get_transform("nobody")),
+]
+
+
+@pytest.mark.parametrize("error, call", CASES)
+def test_bad_input_raises_and_changes_nothing(backend, error, call):
+    m = build(mixed_scene(20, 3), backend)
+    m.set_margin(0.05, "o2")
+    before = state(m)
+    with pytest.raises(error):
+        call(m)
+    assert state(m) == before
+
+
+def test_unknown_backend():
+    with pytest.raises(ValueError):
+        cc.CollisionManager(backend="bullet")
+
+
+def test_removed_objects_leave_nothing_behind(backend):
+    m = build(mixed_scene(20, 3), backend)
+    m.ignore_pair("o1", "o2")
+    m.remove_object("o1")
+    assert m.ignored_pairs == [] and "o1" not in m and len(m) == 19
+    m.add_object("o1", cc.sphere(0.1))  # the name is free again
+    assert m.get_filter("o1") == (1, cc.ALL_BITS)
+
+
+def test_mutation_from_a_query_callback_is_refused():
+    m = build(mixed_scene(20, 3), "fcl")
+
+    def callback(a, b):
+        m.remove_object(a.name)
+
+    with pytest.raises(RuntimeError):
+        m._collide_python(callback)
+    assert len(m) == 20

@@ -1,0 +1,18 @@
+"""The Dask example on a LocalCluster of two workers, and the benchmark script, at tiny sizes
+(speed lives in the scripts' output, not here)."""
+
+import dask_states
+
+import bench_trimesh
+
+
+def test_dask_shards_give_the_single_process_answers():
+    equal, _, _, rebuilt = dask_states.run(states=3000, workers=2, objects=300, verbose=False)
+    assert equal
+    assert sorted(rebuilt.values()) == [1, 1]  # each worker rebuilt the world once
+
+
+def test_benchmark_runs(capsys):
+    bench_trimesh.main(["--primitives", "300", "--meshes", "40", "--repeat", "1"])
+    out = capsys.readouterr().out
+    assert "same on every manager" in out and "targets" in out

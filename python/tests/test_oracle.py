@@ -1,0 +1,230 @@
+"""Answers against brute force over every pair with FCL's narrow phase, on both backends."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+import cube_collision as cc
+import scenes
+from conftest import brute_colliding, brute_min_distance, build, mixed_scene, same_distance
+
+SEEDS = [1, 2, 3]
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_internal_collisions_equal_brute_force(seed, backend):
+    scene = mixed_scene(70, seed)
+    m = build(scene, backend)
+    expected = brute_colliding(scene)
+    hit, names = m.in_collision_internal(return_names=True)
+    assert names == expected and hit == bool(expected)
+    assert m.in_collision_internal() == bool(expected)
+    # Contacts: one or more rows per colliding pair, every row of a colliding pair.
+    hit2, names2, data = m.in_collision_internal(return_names=True, return_data=True)
+    assert names2 == expected
+    rows = {tuple(sorted(p)) for p in data["names"]}
+    assert rows == expected
+    n = len(data["names"])
+    assert data["points"].shape == (n, 3) and data["normals"].shape == (n, 3)
+    assert data["depths"].shape == (n,) and np.all(np.isfinite(data["points"]))
+
+
+def test_shapes_only_scene_equals_brute_force(backend):
+    # No meshes: the cube backend names pairs from one pipeline pass (another code path).
+    scene = mixed_scene(120, 7, meshes=False)
+    assert build(scene, backend).in_collision_internal(return_names=True)[1] == \
+        brute_colliding(scene)
+
+
+@pytest.mark.parametrize("other_backend", ["cube", "fcl"])
+def test_shapes_only_single_and_other(backend, other_backend):
+    # Shapes only: the cube backend's names come from one pipeline pass (no per-pair results).
+    a = mixed_scene(80, 61, meshes=False)
+    b = [("b" + n, g, t) for n, g, t in mixed_scene(60, 62, meshes=False)]
+    ma, mb = build(a, backend), build(b, other_backend)
+    expected = {(na, nb) for na, ga, ta in a for nb, gb, tb in b
+                if cc.pair_in_collision(ga, ta, gb, tb)}
+    assert ma.in_collision_other(mb, return_names=True) == (bool(expected), expected)
+    rng = np.random.default_rng(63)
+    # a[0][1] is also a managed object's geometry: the answers must still name objects right.
+    for probe in (cc.sphere(0.8), cc.box(1, 2, 1), scenes.random_convex(rng, 1.5), a[0][1]):
+        for k in range(4):
+            t = scenes.pose(scenes.random_rotation(rng), rng.uniform(0, 6, 3))
+            if k == 0:
+                t = a[0][2]  # on top of the object that shares its geometry
+            hits = {n for n, g, tf in a if cc.pair_in_collision(g, tf, probe, t)}
+            assert ma.in_collision_single(probe, t, return_names=True) == (bool(hits), hits)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_min_distance_equals_brute_force(seed, backend):
+    scene = mixed_scene(40, seed, side=14.0)  # sparse: a real search
+    m = build(scene, backend)
+    best, names = brute_min_distance(scene)
+    d, found, data = m.min_distance_internal(return_names=True, return_data=True)
+    assert same_distance(d, best)
+    if best > 0:
+        assert found == names
+        pts = data["points"]
+        assert pts.shape == (2, 3)
+        assert np.linalg.norm(pts[0] - pts[1]) == pytest.approx(best, rel=1e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_single_queries_equal_brute_force(seed, backend):
+    scene = mixed_scene(50, seed)
+    m = build(scene, backend)
+    rng = np.random.default_rng(seed + 100)
+    for probe in (cc.sphere(0.8), cc.mesh(*scenes.uv_sphere(6, 0.9)), cc.box(1, 2, 1)):
+        for _ in range(4):
+            t = scenes.pose(scenes.random_rotation(rng),
+                                          rng.uniform(0, 6, 3))
+            expected = {n for n, g, tf in scene if cc.pair_in_collision(g, tf, probe, t)}
+            hit, names = m.in_collision_single(probe, t, return_names=True)
+            assert names == expected and hit == bool(expected)
+            d, name = m.min_distance_single(probe, t, return_name=True)
+            dists = {n: cc.pair_distance(g, tf, probe, t) for n, g, tf in scene}
+            best = min(dists.values())
+            assert same_distance(d, best)
+            if best > 0:
+                assert dists[name] == pytest.approx(best, rel=1e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("other_backend", ["cube", "fcl"])
+def test_other_manager_equals_brute_force(backend, other_backend):
+    a = mixed_scene(40, 11)
+    b = [("b" + n, g, t) for n, g, t in mixed_scene(40, 12)]
+    ma, mb = build(a, backend), build(b, other_backend)
+    expected = {(na, nb) for na, ga, ta in a for nb, gb, tb in b
+                if cc.pair_in_collision(ga, ta, gb, tb)}
+    hit, names = ma.in_collision_other(mb, return_names=True)
+    assert names == expected and hit == bool(expected)
+    best = min(cc.pair_distance(ga, ta, gb, tb) for _, ga, ta in a for _, gb, tb in b)
+    d, pair = ma.min_distance_other(mb, return_names=True)
+    assert same_distance(d, best)
+    assert pair[0] in ma and pair[1] in mb
+
+
+def test_filters_and_ignored_pairs_equal_brute_force(backend):
+    scene = mixed_scene(70, 5)
+    m = build(scene, backend)
+    rng = np.random.default_rng(9)
+    bits = {}
+    for name, _, _ in scene:
+        cat, mask = 1 << int(rng.integers(3)), int(rng.integers(1, 8))
+        bits[name] = (cat, mask)
+        m.set_filter(name, cat, mask)
+    pairs = sorted(brute_colliding(scene))
+    ignored = {pairs[i] for i in range(0, len(pairs), 3)}
+    for a, b in ignored:
+        m.ignore_pair(a, b)
+
+    def allowed(a, b):
+        (ca, ma), (cb, mb) = bits[a], bits[b]
+        return bool(ca & mb) and bool(cb & ma) and tuple(sorted((a, b))) not in ignored
+
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene, allowed)
+    assert same_distance(m.min_distance_internal(), brute_min_distance(scene, allowed)[0])
+    m.clear_ignored()
+    assert m.ignored_pairs == []
+
+
+def test_margins_equal_brute_force(backend):
+    scene = mixed_scene(50, 21, side=9.0, meshes=True)
+    m = build(scene, backend)
+    m.set_margin(0.1)
+    own = {scene[i][0]: 0.3 for i in range(0, 50, 7)}
+    for name, margin in own.items():
+        m.set_margin(margin, name)
+
+    def margin(n):
+        return own.get(n, 0.1)
+
+    expected = set()
+    for (na, ga, ta), (nb, gb, tb) in itertools.combinations(scene, 2):
+        if cc.pair_in_collision(ga, ta, gb, tb) or \
+                cc.pair_distance(ga, ta, gb, tb) <= margin(na) + margin(nb):
+            expected.add(tuple(sorted((na, nb))))
+    hit, names, data = m.in_collision_internal(return_names=True, return_data=True)
+    assert names == expected
+    assert {tuple(sorted(p)) for p in data["names"]} == expected
+
+
+def test_backends_agree_after_motion_and_removal():
+    scene = mixed_scene(60, 31)
+    cube, fcl = build(scene), build(scene, "fcl")
+    rng = np.random.default_rng(4)
+    for step in range(3):
+        names = [n for n, _, _ in scene[step::3]]
+        tfs = np.stack([scenes.pose(scenes.random_rotation(rng),
+                                                  rng.uniform(0, 6, 3)) for _ in names])
+        cube.set_transforms(names, tfs)
+        fcl.set_transforms(names, tfs)
+        cube.remove_object(scene[step][0])
+        fcl.remove_object(scene[step][0])
+        now = [(n, cube.get_geometry(n), cube.get_transform(n)) for n in cube.names]
+        expected = brute_colliding(now)
+        assert cube.in_collision_internal(return_names=True)[1] == expected
+        assert fcl.in_collision_internal(return_names=True)[1] == expected
+
+
+def test_batches_into_a_filled_manager(backend):
+    scene = mixed_scene(90, 51)
+    m = build(scene[:30], backend)
+    for name, g, t in scene[30:45]:
+        m.add_object(name, g, t)
+    names, geoms, tfs = zip(*scene[45:])
+    m.add_objects(list(names), list(geoms), np.stack(tfs))
+    assert m.names == [n for n, _, _ in scene]
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene)
+    assert same_distance(m.min_distance_internal(), brute_min_distance(scene)[0])
+
+
+def test_same_geometry_under_several_names():
+    g = cc.mesh(*scenes.uv_sphere(6, 1.0))
+    scene = [(f"s{i}", g, scenes.pose(np.eye(3), [1.5 * i, 0, 0])) for i in range(6)]
+    m = build(scene)
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene)
+    d, names = m.min_distance_internal(return_names=True)
+    assert d <= 0 and names[0] != names[1]
+
+
+def test_planes_on_the_cube_backend():
+    scene = [s for s in mixed_scene(40, 41) if s[1].kind != "convex"]
+    floor = ("floor", cc.plane([0, 0, 1], 1.0), np.eye(4))
+    m = build(scene + [floor])
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene + [floor])
+    probe = np.eye(4)
+    probe[2, 3] = 1.2
+    expected = {n for n, g, t in scene + [floor] if cc.pair_in_collision(g, t, cc.sphere(0.5), probe)}
+    assert m.in_collision_single(cc.sphere(0.5), probe, return_names=True)[1] == expected
+    with pytest.raises(ValueError):  # FCL's tree needs bounded boxes
+        cc.CollisionManager(backend="fcl").add_object("floor", floor[1])
+
+
+def test_what_crashes_fcl_is_refused():
+    """FCL 0.7 segfaults in fcl::distance with a plane and in fcl::collide of a plane and a
+    convex: these get ValueError, and nothing changes."""
+    rng = np.random.default_rng(0)
+    hull = scenes.random_convex(rng, 1.0)
+    floor = cc.plane([0, 0, 1], 0.0)
+    m = cc.CollisionManager()
+    m.add_object("floor", floor)
+    m.add_object("ball", cc.sphere(0.5))
+    for call in (lambda: m.add_object("hull", hull), lambda: m.min_distance_internal(),
+                 lambda: m.min_distance_single(cc.sphere(1)),
+                 lambda: m.in_collision_single(hull),
+                 lambda: cc.pair_in_collision(floor, np.eye(4), hull, np.eye(4)),
+                 lambda: cc.pair_distance(floor, np.eye(4), cc.sphere(1), np.eye(4))):
+        with pytest.raises(ValueError):
+            call()
+    other = cc.CollisionManager()
+    other.add_object("hull", hull)
+    with pytest.raises(ValueError):
+        m.in_collision_other(other)
+    body = cc.Body()
+    body.add_link(hull)
+    with pytest.raises(ValueError):
+        m.check_states(body, np.eye(4)[None, None])
+    assert m.names == ["floor", "ball"] and m.in_collision_internal()

@@ -1,0 +1,52 @@
+"""Rays and regions: the cube backend against the FCL backend, which loops over every object
+with the same per-object test; spheres against the analytic answer."""
+
+import numpy as np
+import pytest
+
+import cube_collision as cc
+from conftest import build, mixed_scene
+
+
+def test_rays_equal_a_loop_over_every_object():
+    scene = mixed_scene(80, 8)
+    cube, loop = build(scene), build(scene, "fcl")
+    rng = np.random.default_rng(1)
+    o = rng.uniform(-1, 8, (40, 3))
+    e = rng.uniform(-1, 8, (40, 3))
+    for narrow in (True, False):
+        a = cube.ray_first(o, e, narrow_phase=narrow)
+        b = loop.ray_first(o, e, narrow_phase=narrow)
+        assert list(a[0]) == list(b[0])
+        np.testing.assert_array_equal(a[1], b[1])
+        np.testing.assert_array_equal(a[2], b[2])
+        for i in range(10):
+            ra = cube.ray_all(o[i], e[i], narrow_phase=narrow)
+            rb = loop.ray_all(o[i], e[i], narrow_phase=narrow)
+            assert ra[0] == rb[0]
+            np.testing.assert_array_equal(ra[1], rb[1])
+
+
+def test_ray_against_a_sphere_is_exact(backend):
+    m = cc.CollisionManager(backend=backend)
+    t = np.eye(4)
+    t[:3, 3] = [5, 0, 0]
+    m.add_object("ball", cc.sphere(1.0), t)
+    names, ts, pts = m.ray_first([[0, 0, 0], [0, 5, 0]], [[10, 0, 0], [10, 5, 0]])
+    assert names[0] == "ball" and names[1] is None
+    assert ts[0] == pytest.approx(0.4) and np.isnan(ts[1])
+    np.testing.assert_allclose(pts[0], [4, 0, 0])
+
+
+def test_regions_equal_a_loop_over_every_object():
+    scene = mixed_scene(80, 9)
+    cube, loop = build(scene), build(scene, "fcl")
+    rng = np.random.default_rng(2)
+    for _ in range(20):
+        lo = rng.uniform(0, 6, 3)
+        hi = lo + rng.uniform(0, 3, 3)
+        assert cube.objects_in_box(lo, hi) == loop.objects_in_box(lo, hi)
+        p, r = rng.uniform(0, 6, 3), rng.uniform(0, 2)
+        assert cube.objects_near(p, r) == loop.objects_near(p, r)
+    assert cube.objects_in_box([-np.inf] * 3, [np.inf] * 3) == cube.names
+    assert cube.objects_near([0, 0, 0], np.inf) == cube.names
