@@ -30,7 +30,9 @@
 #include <utility>
 #include <vector>
 
+#include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/narrow_phase.h"
 #include "cube_collision/queries.h"
 #include "pipeline/cull.h"
 
@@ -427,6 +429,75 @@ TYPED_TEST(Culling, MinimumDistanceEqualsBruteForceNarrowPhase) {
     apart_scenes += self_min > 0;
   }
   EXPECT_GE(apart_scenes, 3);
+}
+
+// FCL 0.7's fcl::distance crashes on a plane or a halfspace (a null support function in
+// libccd): minimumDistance, with and without a cache, and the default distance callback give such
+// a pair its AABBs' distance instead (queries.h). Brute force: that stand-in for the pairs with a
+// plane or halfspace, fcl::distance for the rest; an axis-aligned plane gets its exact distance.
+TYPED_TEST(Culling, MinimumDistanceWithPlanesTakesTheAabbDistance) {
+  using S = TypeParam;
+  auto kinds = allKinds<S>();
+  kinds.erase(
+      std::remove_if(kinds.begin(), kinds.end(),
+                     [](const auto& k) { return k.first == "plane" || k.first == "halfspace"; }),
+      kinds.end());
+  const auto unanswered = [](const fcl::CollisionObject<S>* o) {
+    return o->getNodeType() == fcl::GEOM_PLANE || o->getNodeType() == fcl::GEOM_HALFSPACE;
+  };
+  std::mt19937 rng(17);
+  for (bool tilted : {false, true}) {
+    std::uniform_real_distribution<double> u(-9.0, 9.0), up(2.0, 9.0);
+    std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
+    // Planes below everything (z = -1, halfspace z <= -2), and, in the second scene, a tilted
+    // plane whose AABB is unbounded.
+    objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+        std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(0, 0, 1), S(-1))));
+    objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+        std::make_shared<fcl::Halfspace<S>>(fcl::Vector3<S>(0, 0, 1), S(-2))));
+    if (tilted)
+      objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+          std::make_shared<fcl::Plane<S>>(fcl::Vector3<S>(1, 1, 1).normalized(), S(-40))));
+    for (int i = 0; i < 40; ++i)
+      objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+          kinds[std::size_t(i) % kinds.size()].second, randomRotation<S>(rng),
+          fcl::Vector3<S>(u(rng), u(rng), up(rng))));
+    for (auto& o : objs) o->computeAABB();
+    fcl::DistanceRequest<S> req;
+    S self_min = std::numeric_limits<S>::max(), plane_min = self_min;
+    for (std::size_t i = 0; i < objs.size(); ++i)
+      for (std::size_t j = i + 1; j < objs.size(); ++j) {
+        const bool stand_in = unanswered(objs[i].get()) || unanswered(objs[j].get());
+        fcl::DistanceResult<S> r;
+        const S d = stand_in ? objs[i]->getAABB().distance(objs[j]->getAABB())
+                             : fcl::distance(objs[i].get(), objs[j].get(), req, r);
+        self_min = std::min(self_min, d);
+        if (i == 0 && !unanswered(objs[j].get())) plane_min = std::min(plane_min, d);
+      }
+    // The axis-aligned plane's stand-in is the exact distance: the lowest point of each object
+    // above z = -1 (its AABB's floor, FCL's AABBs being tight for these shapes' lowest point).
+    S lowest = std::numeric_limits<S>::max();
+    for (std::size_t j = tilted ? 3 : 2; j < objs.size(); ++j)
+      lowest = std::min(lowest, objs[j]->getAABB().min_[2]);
+    EXPECT_NEAR(plane_min, lowest + 1, 1e-4);
+    cube::CubeCollisionManager<S> m;
+    std::vector<fcl::CollisionObject<S>*> ptrs;
+    for (auto& o : objs) ptrs.push_back(o.get());
+    m.registerObjects(ptrs);
+    const S tol = S(req.distance_tolerance) * (S(1) + std::abs(self_min));
+    EXPECT_NEAR(cube::minimumDistance<S>(m, req).min_distance, self_min, tol) << tilted;
+    cube::NarrowPhaseCache<S> cache;
+    cube::NarrowPhaseOptions<S> cached;
+    cached.cache = &cache;
+    cached.threads = 2;
+    EXPECT_NEAR(cube::minimumDistance<S>(m, req, cached).min_distance, self_min, tol) << tilted;
+    cube::DistanceData<S> data;
+    data.request = req;
+    m.distance(&data, cube::defaultDistanceCallback<S>);
+    EXPECT_NEAR(data.result.min_distance, self_min, tol) << tilted;
+    if (tilted) EXPECT_LE(self_min, S(0));  // the tilted plane: 0 to everything
+    ASSERT_TRUE(m.validate());
+  }
 }
 
 // A user's callback that runs the narrow phase, counting its calls.

@@ -47,6 +47,8 @@ struct DistanceData {
 
 /// Runs fcl::distance on the pair, accumulates the minimum into DistanceData::result and writes
 /// it to `dist`. Returns true (stop) once the objects touch or penetrate (dist <= 0) or `done`.
+/// A pair with a plane or a halfspace (fcl::distance crashes on it in FCL 0.7) gets its AABBs'
+/// distance and nearest points instead, as minimumDistance (queries.h) says.
 template <typename S>
 bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
                              S& dist);

@@ -88,7 +88,11 @@ void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void
 /// threads made object queries among meshes 1.5-2x slower. With a cache each pair gets a fresh
 /// fcl::distance, options.threads pairs at a time, on the threads when they hold meshes or
 /// octrees. The minimum is the same for every thread count, and its nearest points are those of
-/// the first pair in walk order that reaches it.
+/// the first pair in walk order that reaches it. A pair with a plane or a halfspace, on which FCL
+/// 0.7's fcl::distance crashes (its GJK calls a support function libccd lacks for them), gets
+/// the distance of the two objects' AABBs instead, with the AABBs' nearest points: a lower bound
+/// of the true distance, exact for an axis-aligned plane or halfspace beside the other object,
+/// 0 for a tilted one (its AABB is unbounded); FCL's own managers crash on such a pair.
 template <typename S>
 fcl::DistanceResult<S> minimumDistance(
     const fcl::BroadPhaseCollisionManager<S>& manager,

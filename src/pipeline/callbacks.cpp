@@ -3,6 +3,9 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
 
@@ -51,7 +54,7 @@ bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S
         detail::separation(*o1, *o2, S(d.request.distance_tolerance), d.result.min_distance);
     if (!(s.lower_bound - s.margin > d.result.min_distance)) {
       ++d.narrow_calls;
-      fcl::distance(o1, o2, d.request, d.result);
+      detail::fclDistance(o1, o2, d.request, d.result);
     }
   }
   dist = d.result.min_distance;
@@ -66,10 +69,46 @@ std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObj
   return fcl::collide(a, b, request, result);
 }
 
+namespace {
+
+// A coordinate of the nearest points of two AABBs that overlap on this axis: inside the overlap
+// [lo, hi], finite where the overlap allows (an unbounded side of a plane's box).
+template <typename S>
+S inOverlap(S lo, S hi) {
+  if (std::isfinite(lo) && std::isfinite(hi)) return lo + (hi - lo) / 2;
+  if (std::isfinite(lo)) return lo;
+  if (std::isfinite(hi)) return hi;
+  return S(0);
+}
+
+}  // namespace
+
 template <typename S>
 S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
               const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result) {
-  return fcl::distance(a, b, request, result);
+  if (!distanceCrashes(*a) && !distanceCrashes(*b)) return fcl::distance(a, b, request, result);
+  // FCL 0.7's fcl::distance runs its GJK on a plane or a halfspace, which give libccd no support
+  // function: a call through a null pointer. The AABBs' distance stands in, with their nearest
+  // points (each coordinate inside the overlap where the boxes overlap on that axis).
+  const fcl::AABB<S>& x = a->getAABB();
+  const fcl::AABB<S>& y = b->getAABB();
+  fcl::Vector3<S> p, q;
+  for (int k = 0; k < 3; ++k) {
+    const S lo = std::max(x.min_[k], y.min_[k]), hi = std::min(x.max_[k], y.max_[k]);
+    if (lo <= hi) {
+      p[k] = q[k] = inOverlap(lo, hi);
+    } else if (x.max_[k] < y.min_[k]) {
+      p[k] = x.max_[k];
+      q[k] = y.min_[k];
+    } else {
+      p[k] = x.min_[k];
+      q[k] = y.max_[k];
+    }
+  }
+  const S d = (p - q).norm();
+  result.update(d, a->collisionGeometry().get(), b->collisionGeometry().get(),
+                fcl::DistanceResult<S>::NONE, fcl::DistanceResult<S>::NONE, p, q);
+  return d;
 }
 
 template std::size_t fclCollide<double>(const fcl::CollisionObject<double>*,

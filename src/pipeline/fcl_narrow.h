@@ -29,7 +29,18 @@ template <typename S>
 std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
                        const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result);
 
-/// fcl::distance(a, b, request, result).
+/// Whether FCL 0.7's fcl::distance crashes on a pair with this object (a plane or a halfspace:
+/// its GJK calls a support function libccd lacks for them, a null pointer).
+template <typename S>
+bool distanceCrashes(const fcl::CollisionObject<S>& o) {
+  const fcl::NODE_TYPE t = o.getNodeType();
+  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE;
+}
+
+/// fcl::distance(a, b, request, result), except for a pair FCL 0.7 crashes on
+/// (distanceCrashes): there the distance of the objects' AABBs, with the AABBs' nearest points,
+/// into `result` as fcl::distance would put its answer (a lower bound of the true distance,
+/// exact for an axis-aligned plane or halfspace against an object beside it).
 template <typename S>
 S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
               const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result);
