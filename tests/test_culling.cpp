@@ -24,8 +24,10 @@
 #include <algorithm>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <memory>
 #include <random>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -498,6 +500,94 @@ TYPED_TEST(Culling, MinimumDistanceWithPlanesTakesTheAabbDistance) {
     if (tilted) EXPECT_LE(self_min, S(0));  // the tilted plane: 0 to everything
     ASSERT_TRUE(m.validate());
   }
+}
+
+// FCL 0.7's fcl::collide crashes on a convex polytope against a plane: the library answers such
+// a pair from the polytope's vertices (fcl_narrow.h). collideAll and the default callback, with
+// convexes among planes (one tilted, through the scene), equal brute force: a convex meets a
+// plane where its vertices lie on both sides (checked here from the vertices), fcl::collide for
+// every other pair; the contact's normal is the plane's and its depth the lesser push.
+TYPED_TEST(Culling, ConvexAgainstPlaneAnsweredFromTheVertices) {
+  using S = TypeParam;
+  const auto kinds = allKinds<S>();
+  const auto& convex_geo = std::find_if(kinds.begin(), kinds.end(), [](const auto& k) {
+                             return k.first == "convex";
+                           })->second;
+  const auto& tetra = static_cast<const fcl::Convex<S>&>(*convex_geo);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
+  const fcl::Vector3<S> normals[2] = {fcl::Vector3<S>(0, 0, 1),
+                                      fcl::Vector3<S>(1, 2, 2).normalized()};
+  for (const auto& n : normals)
+    objs.push_back(
+        std::make_unique<fcl::CollisionObject<S>>(std::make_shared<fcl::Plane<S>>(n, S(0.3))));
+  for (int i = 0; i < 60; ++i)  // each object its own geometry: contacts name the objects
+    objs.push_back(std::make_unique<fcl::CollisionObject<S>>(
+        std::make_shared<fcl::Convex<S>>(
+            std::make_shared<std::vector<fcl::Vector3<S>>>(tetra.getVertices()), 4,
+            std::make_shared<std::vector<int>>(tetra.getFaces()), true),
+        randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng))));
+  for (auto& o : objs) o->computeAABB();
+  // Brute force over every pair: plane-convex from the vertices, the rest (convex pairs, the two
+  // planes) FCL's.
+  fcl::CollisionRequest<S> req;
+  req.num_max_contacts = 100000;
+  req.enable_contact = true;
+  using Key = std::pair<const void*, const void*>;
+  std::set<Key> want;
+  std::map<Key, S> depth;
+  const auto key = [](const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b) {
+    const void* x = a->collisionGeometry().get();
+    const void* y = b->collisionGeometry().get();
+    return x < y ? Key{x, y} : Key{y, x};
+  };
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j) {
+      if (i < 2 && j >= 2) {
+        const auto& pl = static_cast<const fcl::Plane<S>&>(*objs[i]->collisionGeometry());
+        S lo = std::numeric_limits<S>::max(), hi = -lo;
+        for (const auto& v : tetra.getVertices()) {
+          const S sd = pl.n.dot(objs[j]->getTransform() * v) - pl.d;
+          lo = std::min(lo, sd);
+          hi = std::max(hi, sd);
+        }
+        if (lo <= 0 && hi >= 0) {
+          want.insert(key(objs[i].get(), objs[j].get()));
+          depth[key(objs[i].get(), objs[j].get())] = std::min(-lo, hi);
+        }
+        continue;
+      }
+      fcl::CollisionResult<S> r;  // the query's request: FCL's two planes give no contact with it
+      if (fcl::collide(objs[i].get(), objs[j].get(), req, r) > 0)
+        want.insert(key(objs[i].get(), objs[j].get()));
+    }
+  cube::CubeCollisionManager<S> m;
+  std::vector<fcl::CollisionObject<S>*> ptrs;
+  for (auto& o : objs) ptrs.push_back(o.get());
+  m.registerObjects(ptrs);
+  const fcl::CollisionResult<S> all = cube::collideAll<S>(m, req);
+  std::set<Key> got;
+  for (std::size_t c = 0; c < all.numContacts(); ++c) {
+    const auto& ct = all.getContact(c);
+    const Key k = ct.o1 < ct.o2 ? Key{ct.o1, ct.o2} : Key{ct.o2, ct.o1};
+    got.insert(k);
+    const auto d = depth.find(k);
+    if (d != depth.end()) EXPECT_NEAR(ct.penetration_depth, d->second, 1e-4);
+  }
+  EXPECT_EQ(got, want);
+  int plane_pairs = 0;
+  for (const auto& k : want) plane_pairs += depth.count(k) != 0;
+  EXPECT_GT(plane_pairs, 5);
+  cube::CollisionData<S> data;
+  data.request = req;
+  m.collide(&data, cube::defaultCollisionCallback<S>);
+  std::set<Key> by_callback;
+  for (std::size_t c = 0; c < data.result.numContacts(); ++c) {
+    const auto& ct = data.result.getContact(c);
+    by_callback.insert(ct.o1 < ct.o2 ? Key{ct.o1, ct.o2} : Key{ct.o2, ct.o1});
+  }
+  EXPECT_EQ(by_callback, want);
 }
 
 // A user's callback that runs the narrow phase, counting its calls.

@@ -31,7 +31,8 @@ struct CollisionData {
 /// Runs fcl::collide on the pair and accumulates into CollisionData::result, with the result FCL
 /// gives, unless tight volumes settle the pair first (CollisionData::narrow_calls says how).
 /// Returns true (stop) once the result holds request.num_max_contacts contacts and costs are
-/// not requested.
+/// not requested. A convex polytope against a plane (fcl::collide crashes on it in FCL 0.7) is
+/// answered from the polytope's vertices, as collideAll (queries.h) says.
 template <typename S>
 bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data);
 

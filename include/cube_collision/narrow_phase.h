@@ -90,11 +90,11 @@ struct NarrowPhaseOptions {
   /// cache is always looked up on the calling thread. On a CubeCollisionManager that keeps
   /// per-object volumes (Config::tight_volumes, 256 objects or more) the cull runs on the
   /// calling thread and only FCL's calls on meshes or octrees count towards the 1,024, so a
-  /// collide among shapes there runs on the calling thread whatever the count. So a small query (most object queries, a
-  /// robot against its surroundings) runs on the calling thread as with 1. A collide that stops at
-  /// its first contact (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any
-  /// count, never more often than on one thread; minimumDistance without a cache runs on the
-  /// calling thread (queries.h says why).
+  /// collide among shapes there runs on the calling thread whatever the count. So a small query
+  /// (most object queries, a robot against its surroundings) runs on the calling thread as with 1.
+  /// A collide that stops at its first contact (num_max_contacts == 1, FCL's default) calls FCL one
+  /// pair at a time on any count, never more often than on one thread; minimumDistance without a
+  /// cache runs on the calling thread (queries.h says why).
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;

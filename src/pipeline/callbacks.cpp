@@ -1,10 +1,13 @@
 #include "cube_collision/callbacks.h"
 
+#include <fcl/geometry/shape/convex.h>
+#include <fcl/geometry/shape/plane.h>
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
@@ -35,7 +38,7 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
     }
   }
   ++d.narrow_calls;
-  fcl::collide(o1, o2, d.request, d.result);
+  detail::fclCollide(o1, o2, d.request, d.result);
   // With costs requested every pair matters, so only a contact budget without costs stops.
   if (!d.request.enable_cost && d.result.isCollision() &&
       d.result.numContacts() >= d.request.num_max_contacts)
@@ -63,9 +66,59 @@ bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S
 
 namespace detail {
 
+namespace {
+
+// A convex polytope against a plane, which FCL 0.7's fcl::collide crashes on: they meet where
+// the polytope's vertices are on both sides of the plane or on it. The contact, as FCL gives for
+// a box and a plane: depth the lesser push to either side, normal the plane's (from a to b),
+// position the deepest vertex on that side moved half the depth towards the plane.
+template <typename S>
+std::size_t convexPlane(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
+                        const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result) {
+  const bool convex_first = a->getNodeType() == fcl::GEOM_CONVEX;
+  const fcl::CollisionObject<S>* cv = convex_first ? a : b;
+  const fcl::CollisionObject<S>* pl = convex_first ? b : a;
+  const auto& convex = static_cast<const fcl::Convex<S>&>(*cv->collisionGeometry());
+  const auto& plane = static_cast<const fcl::Plane<S>&>(*pl->collisionGeometry());
+  // The plane in the convex's frame: n . x = d.
+  const fcl::Transform3<S> rel = pl->getTransform().inverse() * cv->getTransform();
+  S lo = std::numeric_limits<S>::infinity(), hi = -lo;
+  fcl::Vector3<S> at_lo = fcl::Vector3<S>::Zero(), at_hi = at_lo;
+  for (const fcl::Vector3<S>& v : convex.getVertices()) {
+    const fcl::Vector3<S> w = rel * v;  // in the plane's frame
+    const S s = plane.n.dot(w) - plane.d;
+    if (s < lo) lo = s, at_lo = w;
+    if (s > hi) hi = s, at_hi = w;
+  }
+  if (!(lo <= 0 && hi >= 0)) return 0;
+  if (result.numContacts() >= request.num_max_contacts) return result.numContacts();
+  fcl::Contact<S> c(a->collisionGeometry().get(), b->collisionGeometry().get(),
+                    fcl::Contact<S>::NONE, fcl::Contact<S>::NONE);
+  if (request.enable_contact) {
+    // Push the convex up (its deepest vertex below the plane) or down, whichever is less.
+    const bool up = -lo <= hi;
+    const S depth = up ? -lo : hi;
+    const fcl::Vector3<S> deepest = up ? at_lo : at_hi;
+    const fcl::Vector3<S> n_world = pl->getTransform().linear() * plane.n;
+    // The normal points from a to b: from the convex into the plane's side it leaves.
+    const fcl::Vector3<S> from_convex = up ? -n_world : n_world;
+    c.normal = convex_first ? from_convex : fcl::Vector3<S>(-from_convex);
+    c.penetration_depth = depth;
+    c.pos = pl->getTransform() * (deepest + (up ? S(0.5) : S(-0.5)) * depth * plane.n);
+  }
+  result.addContact(c);
+  return result.numContacts();
+}
+
+}  // namespace
+
 template <typename S>
 std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
                        const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result) {
+  const fcl::NODE_TYPE ta = a->getNodeType(), tb = b->getNodeType();
+  if ((ta == fcl::GEOM_CONVEX && tb == fcl::GEOM_PLANE) ||
+      (ta == fcl::GEOM_PLANE && tb == fcl::GEOM_CONVEX))
+    return convexPlane(a, b, request, result);
   return fcl::collide(a, b, request, result);
 }
 

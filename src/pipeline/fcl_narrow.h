@@ -24,7 +24,10 @@ bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
   return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
 }
 
-/// fcl::collide(a, b, request, result).
+/// fcl::collide(a, b, request, result), except for a convex polytope against a plane, on which
+/// FCL 0.7 crashes (its GJK on a plane): answered here from the polytope's vertices (they meet
+/// where vertices lie on both sides of the plane or on it), with one contact as FCL gives a box
+/// and a plane (the lesser push to either side as depth, the plane's normal).
 template <typename S>
 std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
                        const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result);
