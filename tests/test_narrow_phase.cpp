@@ -48,14 +48,20 @@ cube::scenes::Scene<S> scene(Layout layout, bool meshes, std::size_t n, std::uin
 
 // FCL's own way, the reference: fcl::collide on every pair the manager hands over, in its
 // order, into one result, stopping once the result is full (FCL's DefaultCollisionFunction).
+// `colliding`: the pairs that added a contact, in turn (NarrowPhaseOptions::colliding's oracle).
 template <typename S>
 struct Accumulate {
   fcl::CollisionRequest<S> request;
   fcl::CollisionResult<S> result;
+  std::vector<cube::ObjectPair<S>> colliding;
   static bool fn(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* d) {
     auto& x = *static_cast<Accumulate*>(d);
+    const std::size_t before = x.result.numContacts();
     fcl::collide(a, b, x.request, x.result);
-    return x.result.isCollision() && x.result.numContacts() >= x.request.num_max_contacts;
+    if (x.result.numContacts() > before) x.colliding.emplace_back(a, b);
+    // With costs FCL's default callback never stops.
+    return !x.request.enable_cost && x.result.isCollision() &&
+           x.result.numContacts() >= x.request.num_max_contacts;
   }
 };
 
@@ -117,6 +123,7 @@ TYPED_TEST(NarrowPhase, CollideAllEqualsFclOnEveryThreadCount) {
       m.collide(&r, &two, &Accumulate<S>::fn);
       if (request.num_max_contacts > 100) {
         ASSERT_GT(self.result.numContacts(), 50u) << "the scene must collide a lot";
+        ASSERT_GT(self.colliding.size(), 20u);
         ASSERT_GT(two.result.numContacts(), 5u);
       }
       for (int threads : {0, 1, 2, 3, 8}) {
@@ -130,13 +137,19 @@ TYPED_TEST(NarrowPhase, CollideAllEqualsFclOnEveryThreadCount) {
                             << " contact " << request.enable_contact << " threads " << threads
                             << " round " << round;
           const bool geometry = request.enable_contact;
+          // The colliding pairs come with the contacts: a stale list must be replaced.
+          std::vector<cube::ObjectPair<S>> pairs(3, {nullptr, nullptr});
+          o.colliding = &pairs;
           EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, request, o), self.result, geometry))
               << what;
+          EXPECT_EQ(pairs, self.colliding) << what;
           EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, robot.objects[0].get(), request, o),
                                    one.result, geometry))
               << what;
+          EXPECT_EQ(pairs, one.colliding) << what;
           EXPECT_TRUE(sameContacts(cube::collideAll<S>(m, r, request, o), two.result, geometry))
               << what;
+          EXPECT_EQ(pairs, two.colliding) << what;
         }
       }
     }
@@ -625,6 +638,43 @@ TYPED_TEST(NarrowPhase, CollidePairsEqualsFclPerPair) {
       }
     }
   EXPECT_GT(colliding, 20u);
+}
+
+// NarrowPhaseOptions::colliding on the paths the stream does not take: a request with costs
+// (FCL's default callback, in turn) and collideMerged over a pair list, with and without costs,
+// on every thread count: the pairs that added a contact to FCL's accumulating result, in turn.
+TYPED_TEST(NarrowPhase, CollidingPairsOnEveryPath) {
+  using S = TypeParam;
+  auto world = scene<S>(Layout::clustered, false, 400, 23);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(world.pointers());
+  const auto pairs = cube::overlappingPairs<S>(m);
+  for (bool cost : {false, true})
+    for (std::size_t max : {std::size_t(5), std::size_t(1) << 30}) {
+      fcl::CollisionRequest<S> req;
+      req.num_max_contacts = max;
+      req.enable_cost = cost;
+      Accumulate<S> walk, list;
+      walk.request = list.request = req;
+      m.collide(&walk, &Accumulate<S>::fn);
+      for (const auto& [a, b] : pairs)
+        if (Accumulate<S>::fn(a, b, &list)) break;
+      if (max > 100) {
+        ASSERT_GT(walk.colliding.size(), 20u) << "the scene must collide";
+      }
+      for (int threads : {1, 2, 3}) {
+        const auto what = ::testing::Message()
+                          << "cost " << cost << " max " << max << " threads " << threads;
+        std::vector<cube::ObjectPair<S>> got(1, {nullptr, nullptr});
+        cube::NarrowPhaseOptions<S> o;
+        o.threads = threads;
+        o.colliding = &got;
+        cube::collideAll<S>(m, req, o);
+        EXPECT_EQ(got, walk.colliding) << what;
+        cube::collideMerged<S>(pairs, req, o);
+        EXPECT_EQ(got, list.colliding) << what;
+      }
+    }
 }
 
 // Objects for the contact-budget test: sphere pairs that touch (one contact each), a box pair

@@ -116,6 +116,15 @@ struct NarrowPhaseOptions {
   /// and on 2 cores handing every pair over costs about what the serial walk saves (see the
   /// README's figures). For machines with many idle cores and walks of 100,000 objects or more.
   bool split_walk = false;
+  /// collideAll and collideMerged only: if set, it is cleared and then given every pair that
+  /// put at least one contact into the returned result, once, in the order of its first contact
+  /// there, as the walk handed the pair over (first, second). A pair whose contacts the budget
+  /// (num_max_contacts) left out entirely is not listed. "Which pairs collide?" without a lookup
+  /// from contacts' geometries back to objects: a request with num_max_contacts at its largest
+  /// lists every colliding pair (a shape pair gives one contact without enable_contact; a mesh
+  /// pair gives every touching triangle pair, so prefer collidePairs with one contact per pair
+  /// there). Not touched by the other calls.
+  std::vector<ObjectPair<S>>* colliding = nullptr;
 };
 
 /// fcl::collide on each pair (a fresh result per pair), culled and cached as the options say, on

@@ -117,38 +117,20 @@ CollideOut cubeCollide(const Manager& m, ObjPtr query, const Manager* other, con
   if (!want.data && !meshes) {
     // Names among shapes: one pass of the pipeline over every candidate pair, culled on the
     // manager's per-object volumes and proved touching where inscribed balls overlap. FCL gives a
-    // colliding shape pair one contact without enable_contact; its geometries name the pair
-    // (add_object keeps one object per FCL geometry in a manager). Meshes would list every
-    // touching triangle pair here: they take the per-pair path below, stopping at each pair's
-    // first contact.
+    // colliding shape pair one contact without enable_contact, and the pipeline lists the pairs
+    // that gave one (options.colliding) as the walk handed them: (object here, object there or
+    // the query). Meshes would list every touching triangle pair here: they take the per-pair
+    // path below, stopping at each pair's first contact.
     fcl::CollisionRequestd all;
     all.num_max_contacts = std::numeric_limits<std::size_t>::max();
+    std::vector<cube::ObjectPair<double>> hit;
+    opt.colliding = &hit;
     fcl::CollisionResultd r = query   ? cube::collideAll(c, query, all, opt)
                               : other ? cube::collideAll(c, other->broadphase(), all, opt)
                                       : cube::collideAll(c, all, opt);
-    const Manager& mb = other ? *other : m;
-    const fcl::CollisionGeometryd* q = query ? query->collisionGeometry().get() : nullptr;
     out.any = r.isCollision();
-    const fcl::CollisionGeometryd* last[2] = {nullptr, nullptr};
-    for (std::size_t k = 0; k < r.numContacts(); ++k) {
-      const auto& ct = r.getContact(k);
-      if (ct.o1 == last[0] && ct.o2 == last[1]) continue;  // the same pair's next contact
-      last[0] = ct.o1;
-      last[1] = ct.o2;
-      const Entry* a = nullptr;
-      const Entry* b = nullptr;
-      if (q) {
-        a = m.byGeometry(ct.o2 == q ? ct.o1 : ct.o2);
-      } else {
-        a = m.byGeometry(ct.o1);
-        b = mb.byGeometry(ct.o2);
-        if (!(a && b)) {
-          a = m.byGeometry(ct.o2);
-          b = mb.byGeometry(ct.o1);
-        }
-      }
-      out.pairs.emplace_back(a ? a->name : "?", q ? kExternal : (b ? b->name : "?"));
-    }
+    out.pairs.reserve(hit.size());
+    for (const auto& [a, b] : hit) out.pairs.emplace_back(nameOf(a), nameOf(b));
     return out;
   }
   std::vector<cube::ObjectPair<double>> pairs = query ? cube::overlappingPairs(c, query)

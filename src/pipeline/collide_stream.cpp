@@ -78,6 +78,7 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
                                 const NarrowPhaseOptions<S>& options)
     : request_(request),
       stats_out_(options.stats),
+      colliding_(options.colliding),
       cache_(options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)),
       chunk_work_(kFirstChunkWork),
@@ -89,6 +90,7 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
     ++cache_->stamp;
     cache_->collide.begin(*cache_, request);
   }
+  if (colliding_ != nullptr) colliding_->clear();
 }
 
 template <typename S>
@@ -214,13 +216,17 @@ void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObjec
   if (kind == Answer::kApart) return;
   if (kind == Answer::kProved) {
     // What FCL's shape collision adds: one contact if the result has room.
-    if (result_.numContacts() < request_.num_max_contacts)
+    if (result_.numContacts() < request_.num_max_contacts) {
       result_.addContact(provedContact(ObjectPair<S>(a, b)));
+      if (colliding_ != nullptr) colliding_->emplace_back(a, b);
+    }
     markDone();
     return;
   }
   // FCL's own way, one accumulating result: FCL decides which contacts fit.
+  const std::size_t before = result_.numContacts();
   fclCollide(a, b, request_, result_);
+  noteColliding(ObjectPair<S>(a, b), before);
   markDone();
   if (threads_ > 1) serial_work_ += workOf(ObjectPair<S>(a, b)) - 1;  // one thread never leaves
 }
@@ -259,6 +265,7 @@ void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
   const std::size_t max_contacts = request_.num_max_contacts;
   const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
   if (cache_ != nullptr && result_.numContacts() == 0) cache_->last_hit = pair;
+  const std::size_t before = result_.numContacts();
   if (contacts.size() > room) {
     // The budget runs out inside this pair. FCL's shape pairs then keep their deepest contacts,
     // not their first: its own call on the accumulating result decides, as on one thread.
@@ -267,6 +274,7 @@ void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
   } else {
     for (std::size_t k = 0; k < contacts.size(); ++k) result_.addContact(contacts[k]);
   }
+  noteColliding(pair, before);
   markDone();
 }
 

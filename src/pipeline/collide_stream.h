@@ -71,10 +71,15 @@ class CollideStream {
   void merge(const ObjectPair<S>& pair, const Slot& slot);
   void markDone();
   void flush();
+  // options.colliding: the pair if the result grew past `before` contacts.
+  void noteColliding(const ObjectPair<S>& pair, std::size_t before) {
+    if (colliding_ != nullptr && result_.numContacts() > before) colliding_->push_back(pair);
+  }
 
   const fcl::CollisionRequest<S>& request_;
   NarrowPhaseStats stats_;
   NarrowPhaseStats* stats_out_;
+  std::vector<ObjectPair<S>>* colliding_;  // NarrowPhaseOptions::colliding
   typename NarrowPhaseCache<S>::Impl* cache_;
   int threads_;
   bool done_ = false;

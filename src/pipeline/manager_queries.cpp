@@ -70,10 +70,15 @@ template <typename S>
 struct CountedCollide {
   CollisionData<S> data;
   std::size_t candidates = 0;
+  std::vector<ObjectPair<S>>* colliding = nullptr;  // NarrowPhaseOptions::colliding
   static bool fn(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* self) {
     auto& c = *static_cast<CountedCollide*>(self);
     ++c.candidates;
-    return defaultCollisionCallback<S>(a, b, &c.data);
+    const std::size_t before = c.data.result.numContacts();
+    const bool stop = defaultCollisionCallback<S>(a, b, &c.data);
+    if (c.colliding != nullptr && c.data.result.numContacts() > before)
+      c.colliding->emplace_back(a, b);
+    return stop;
   }
 };
 
@@ -120,6 +125,8 @@ fcl::CollisionResult<S> collideWith(const fcl::CollisionRequest<S>& request,
   if (request.enable_cost || request.enable_cached_gjk_guess) {
     CountedCollide<S> c;
     c.data.request = request;
+    c.colliding = options.colliding;
+    if (c.colliding != nullptr) c.colliding->clear();
     walk(&c, &CountedCollide<S>::fn);
     if (NarrowPhaseStats* st = options.stats) {
       st->candidate_pairs += c.candidates;

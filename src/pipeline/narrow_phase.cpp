@@ -106,9 +106,13 @@ fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
     fcl::CollisionResult<S> result;
     NarrowPhaseStats stats;
     stats.candidate_pairs = pairs.size();
+    if (options.colliding != nullptr) options.colliding->clear();
     for (const auto& [a, b] : pairs) {
       ++stats.narrow_calls;
+      const std::size_t before = result.numContacts();
       detail::fclCollide(a, b, request, result);
+      if (options.colliding != nullptr && result.numContacts() > before)
+        options.colliding->emplace_back(a, b);
       if (!request.enable_cost && result.isCollision() &&
           result.numContacts() >= request.num_max_contacts)
         break;
