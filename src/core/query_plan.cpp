@@ -71,7 +71,7 @@ template <class Run>
 [[gnu::always_inline]] inline bool Broadphase<S>::forViews(const Against* b, Run&& run) const {
   const Scene<S> mine = scene();
   if (b == nullptr) return forSelfViews(mine, run);
-  if (b->other == nullptr) return forObjectViews(mine, b->view, run);
+  if (b->other == nullptr) return forObjectViews(mine, *b->view, run);
   return forObjectViews(mine, b->other->tree_.view(), run) ||
          forObjectViews(mine, b->other->unbounded_.view(), run);
 }
@@ -92,7 +92,7 @@ template <typename S>
         return collideObject(x, *b->one, data, fn, stats);
       });
     return forViews(b, [&](const View<S>& x, const View<S>& y, bool self) {
-      return collideViews(x, y, self, p.all_pairs_limit, data, fn, stats, g);
+      return collideViews(x, y, fn, data, self, p.all_pairs_limit, stats, g);
     });
   }
   std::vector<std::uint64_t> found;
@@ -195,9 +195,9 @@ bool Broadphase<S>::distanceRun(const Against* b, void* data, DistanceFn<S> fn, 
 
 template <typename S>
 typename Broadphase<S>::Against Broadphase<S>::objectSide(const SingleView<S>& one,
-                                                          const Filter& bits) {
+                                                          const View<S>& view, const Filter& bits) {
   Against b;
-  b.view = one.view();
+  b.view = &view;
   b.one = &one;
   b.obj = one.item.obj;
   b.bits = bits;
@@ -212,7 +212,8 @@ bool Broadphase<S>::collide(Object* obj, const Box<S>& box, void* data, CollideF
                             QueryStats* stats) const {
   const SingleView<S> one(obj, queryBox(obj, box));
   // A registered query object pairs by its own bits.
-  const Against b = objectSide(one, table_.filters() != nullptr ? filter(obj) : Filter{});
+  const View<S> view = one.view();
+  const Against b = objectSide(one, view, table_.filters() != nullptr ? filter(obj) : Filter{});
   return collideRun(&b, 1, data, fn, stats);
 }
 
@@ -220,7 +221,8 @@ template <typename S>
 bool Broadphase<S>::collide(const Probe& probe, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
   const SingleView<S> one(probe.obj, grownBy(probe.box, probe.margin));
-  const Against b = objectSide(one, probe.bits);
+  const View<S> view = one.view();
+  const Against b = objectSide(one, view, probe.bits);
   return collideRun(&b, 1, data, fn, stats);
 }
 
@@ -228,7 +230,7 @@ template <typename S>
 bool Broadphase<S>::collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
   Against b;
-  b.view = body;
+  b.view = &body;
   b.ids = bits;
   return collideRun(&b, 1, data, fn, stats);
 }
@@ -255,7 +257,8 @@ template <typename S>
 bool Broadphase<S>::distance(Object* obj, const Box<S>& box, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
   const SingleView<S> one(obj, queryBox(obj, box));
-  const Against b = objectSide(one, table_.filters() != nullptr ? filter(obj) : Filter{});
+  const View<S> view = one.view();
+  const Against b = objectSide(one, view, table_.filters() != nullptr ? filter(obj) : Filter{});
   return distanceRun(&b, data, fn, best, stats);
 }
 
@@ -263,7 +266,8 @@ template <typename S>
 bool Broadphase<S>::distance(const Probe& probe, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
   const SingleView<S> one(probe.obj, grownBy(probe.box, probe.margin));
-  const Against b = objectSide(one, probe.bits);
+  const View<S> view = one.view();
+  const Against b = objectSide(one, view, probe.bits);
   return distanceRun(&b, data, fn, best, stats);
 }
 
@@ -365,7 +369,7 @@ bool Broadphase<S>::collideMoving(const ObjectId* ids, const Box<S>* boxes, std:
   g.groups_a = g.groups_b = nullptr;
   if (g.seq != nullptr) g.seq = seq.data();
   const View<S> v = body.view();
-  if (collideViews(v, v, true, 0, &movers, CollideFn<S>(&Movers<S>::withMover), nullptr,
+  if (collideViews(v, v, CollideFn<S>(&Movers<S>::withMover), &movers, true, 0, nullptr,
                    g.active() ? &g : nullptr))
     return true;
   // Movers with the objects that stay: the body query, the world's side first.

@@ -49,8 +49,8 @@ bool walkCubePairs(const View<S>& a, const View<S>& b, bool self, void* data, Co
 }
 
 template <typename S>
-bool collideViews(const View<S>& a, const View<S>& b, bool self, std::size_t all_pairs_limit,
-                  void* data, CollideFnArg<S> fn, QueryStats* stats, const PairGate<S>* gate) {
+bool collideViews(const View<S>& a, const View<S>& b, CollideFnArg<S> fn, void* data, bool self,
+                  std::size_t all_pairs_limit, QueryStats* stats, const PairGate<S>* gate) {
   return walkViews(a, b, self, all_pairs_limit, CallFn<S>{data, fn}, stats, gate);
 }
 
@@ -104,10 +104,10 @@ template bool walkCubePairs<float>(const View<float>&, const View<float>&, bool,
                                    CollideFn<float>, QueryStats*, const PairGate<float>*);
 template bool walkCubePairs<double>(const View<double>&, const View<double>&, bool, void*,
                                     CollideFn<double>, QueryStats*, const PairGate<double>*);
-template bool collideViews<float>(const View<float>&, const View<float>&, bool, std::size_t, void*,
-                                  CollideFn<float>, QueryStats*, const PairGate<float>*);
-template bool collideViews<double>(const View<double>&, const View<double>&, bool, std::size_t,
-                                   void*, CollideFn<double>, QueryStats*, const PairGate<double>*);
+template bool collideViews<float>(const View<float>&, const View<float>&, CollideFn<float>, void*,
+                                  bool, std::size_t, QueryStats*, const PairGate<float>*);
+template bool collideViews<double>(const View<double>&, const View<double>&, CollideFn<double>,
+                                   void*, bool, std::size_t, QueryStats*, const PairGate<double>*);
 template bool collideObject<float>(const View<float>&, const SingleView<float>&, void*,
                                    CollideFn<float>, QueryStats*);
 template bool collideObject<double>(const View<double>&, const SingleView<double>&, void*,

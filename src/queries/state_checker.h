@@ -110,7 +110,7 @@ class StateChecker {
     }
     if (self) {
       pending_.clear();
-      collideViews(body_.view(), body_.view(), true, 0, this, CollideFn<S>(&StateChecker::onLinks),
+      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks), this, true, 0,
                    nullptr, &self_gate_);
       if (found() && !first_pair) return true;
       decidePending();
