@@ -497,7 +497,9 @@ TYPED_TEST(Culling, MinimumDistanceWithPlanesTakesTheAabbDistance) {
     data.request = req;
     m.distance(&data, cube::defaultDistanceCallback<S>);
     EXPECT_NEAR(data.result.min_distance, self_min, tol) << tilted;
-    if (tilted) EXPECT_LE(self_min, S(0));  // the tilted plane: 0 to everything
+    if (tilted) {
+      EXPECT_LE(self_min, S(0));  // the tilted plane: 0 to everything
+    }
     ASSERT_TRUE(m.validate());
   }
 }
@@ -573,7 +575,9 @@ TYPED_TEST(Culling, ConvexAgainstPlaneAnsweredFromTheVertices) {
     const Key k = ct.o1 < ct.o2 ? Key{ct.o1, ct.o2} : Key{ct.o2, ct.o1};
     got.insert(k);
     const auto d = depth.find(k);
-    if (d != depth.end()) EXPECT_NEAR(ct.penetration_depth, d->second, 1e-4);
+    if (d != depth.end()) {
+      EXPECT_NEAR(ct.penetration_depth, d->second, 1e-4);
+    }
   }
   EXPECT_EQ(got, want);
   int plane_pairs = 0;

@@ -49,7 +49,10 @@ template <typename S, class Policy, bool Groups>
 struct ObjectVisitor {
   using State = typename Policy::Key;
   static constexpr bool kOrdered = Policy::kOrdered;
-  const View<S> tree;  // by value, as in PairVisitor
+  // By reference, unlike PairVisitor: an object query's views were just written by its entry,
+  // and a copy's 16-byte loads of them waited for those narrower stores (object queries with
+  // the narrow phase on 32 objects took 1.06-1.10x the time).
+  const View<S>& tree;
   const Node& qn;
   const Item<S>& q;
   const Policy p;
