@@ -89,8 +89,12 @@ struct NarrowPhaseOptions {
   /// threads in chunks of at least 128 pairs (a pair with a mesh or an octree counts 64); the
   /// cache is always looked up on the calling thread. On a CubeCollisionManager that keeps
   /// per-object volumes (Config::tight_volumes, 256 objects or more) the cull runs on the
-  /// calling thread and only FCL's calls on meshes or octrees count towards the 1,024, so a
-  /// collide among shapes there runs on the calling thread whatever the count. So a small query
+  /// calling thread and only FCL's calls count towards the 1,024: 63 for a mesh or an octree, 5
+  /// for a pair of shapes that FCL 0.7 answers with GJK (any but a sphere with a sphere, box,
+  /// capsule or cylinder and a box with a box), none for those; in a chunk such a pair counts 6,
+  /// the others 1. So a collide among spheres and boxes there runs on the calling thread
+  /// whatever the count, and one among cylinders, cones or convex polytopes goes to the threads
+  /// once it has made about 200 GJK calls. So a small query
   /// (most object queries, a robot against its surroundings) runs on the calling thread as with 1.
   /// A collide that stops at its first contact (num_max_contacts == 1, FCL's default) calls FCL one
   /// pair at a time on any count, never more often than on one thread; minimumDistance without a

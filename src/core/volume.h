@@ -36,11 +36,20 @@ struct VolumeShape {
   float scale;
   float inner_r;
   float inner_z;
-  std::uint32_t flags;  ///< kVolumeSphere: the geometry is a sphere (r exact, no box needed)
+  /// kVolumeSphere: the geometry is a sphere (r exact, no box needed); kVolumeBox,
+  /// kVolumeRound, kVolumeHeavy: its kind, as the cost of FCL's call on a pair sees it
+  std::uint32_t flags;
 };
 static_assert(sizeof(VolumeShape) == 64, "one record per cache line");
 
 inline constexpr std::uint32_t kVolumeSphere = 1u;
+/// The kinds FCL 0.7 answers in closed form with a sphere (kVolumeRound: capsules, cylinders)
+/// or, for boxes, with a box too; kVolumeHeavy: a mesh (its call walks a BVH).
+inline constexpr std::uint32_t kVolumeBox = 4u;
+inline constexpr std::uint32_t kVolumeRound = 8u;
+inline constexpr std::uint32_t kVolumeHeavy = 16u;
+inline constexpr std::uint32_t kVolumeKinds =
+    kVolumeSphere | kVolumeBox | kVolumeRound | kVolumeHeavy;
 
 /// Builds `o`'s records from its transform and geometry (local AABB, kind, size): the inscribed
 /// ball only for occupied spheres, boxes, capsules, cylinders, cones and ellipsoids. Defined in

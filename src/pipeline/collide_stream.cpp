@@ -26,10 +26,13 @@ namespace {
 // collide of 1,000 uniform objects (800 pairs) took 137 us on one thread and 177 us on two when
 // it left after 8 FCL calls. Queries below kSerialWork (most object queries, robot checks, small
 // scenes of shapes) never open a region. Pairs culled on the object tables' records (about 20
-// ns a pair, on this thread) count only what an FCL call on a mesh or an octree weighs beyond
-// 1: threads share FCL's calls only, and for shapes (0.2 us a call in the clustered
-// 10,000-object scene) a chunk's bookkeeping cost more than the second thread saved (41 ms
-// on one thread, 47 on two), so queries of shapes stay on the calling thread.
+// ns a pair, on this thread) count only what their FCL call weighs beyond 1, read from the
+// records' kinds (workOf(flags)): threads share FCL's calls only, and for closed-form shape
+// pairs (0.2 us a call) a chunk's bookkeeping cost more than the second thread saved (41 ms on
+// one thread, 47 on two for 10,000 clustered boxes), so those stay on the calling thread; GJK
+// pairs (kGjkPairWork) and meshes go to the threads (compare.sh on self-collide of 10,000
+// clustered boxes, spheres and cylinders with the narrow phase on two threads: 0.76x the time
+// of counting only meshes; 10,000 primitives and convex polytopes from Python: 0.7-0.8x).
 constexpr std::size_t kSerialWork = 1024;
 constexpr std::size_t kFirstChunkWork = 256;
 constexpr std::size_t kMaxChunkWork = 4096;
@@ -123,7 +126,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   };
   if (serial_) {
     // Work that threads could share: with the cull on records it runs here, at about 20 ns a
-    // pair, and only FCL's calls on meshes or octrees weigh enough (see kSerialWork).
+    // pair, and only FCL's calls on meshes, octrees and GJK pairs weigh enough (kSerialWork).
     if (va == nullptr) ++serial_work_;
     CollideEntry<S>* cached = nullptr;
     Answer kind;
@@ -136,6 +139,13 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
         if (cached != nullptr) kind = Answer::kCached;
       }
     }
+    // What an FCL call weighs beyond the 1 above (one thread never leaves): from the records if
+    // the pair has them (no geometry touched here), else from the objects (the cull from the
+    // objects has read them).
+    if (threads_ > 1 && kind == Answer::kComputed)
+      serial_work_ += (va != nullptr ? workOf(va->shape->flags, vb->shape->flags)
+                                     : workOf(ObjectPair<S>(a, b))) -
+                      1;
     if (cache_ == nullptr) {
       answerNow(a, b, kind);
     } else {
@@ -173,7 +183,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   }
   if (s.kind == Answer::kComputed) {
     pending_.push_back(i);
-    pending_work_ += workOf(chunk_[i]);
+    pending_work_ += va != nullptr ? workOf(va->shape->flags, vb->shape->flags) : workOf(chunk_[i]);
   }
   // A cached answer is merged at once while nothing waits before it, so that a full result
   // stops the walk where it would on one thread.
@@ -228,7 +238,6 @@ void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObjec
   fclCollide(a, b, request_, result_);
   noteColliding(ObjectPair<S>(a, b), before);
   markDone();
-  if (threads_ > 1) serial_work_ += workOf(ObjectPair<S>(a, b)) - 1;  // one thread never leaves
 }
 
 template <typename S>
@@ -252,7 +261,6 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
       fclCollide(pair.first, pair.second, request_, s.fresh);
       merge(pair, s);
       storeAnswer(s.kind, pair, cache_, s.fresh);
-      if (threads_ > 1) serial_work_ += workOf(pair) - 1;
       return;
   }
 }

@@ -229,7 +229,11 @@ void localVolume(const fcl::CollisionGeometry<S>* g, VolumeSource& local) {
     local.e[k] = static_cast<float>(e[k]);
   }
   local.r = static_cast<float>(r);
-  local.flags = is_sphere ? kVolumeSphere : 0u;
+  local.flags = is_sphere                                                 ? kVolumeSphere
+                : type == fcl::GEOM_BOX                                   ? kVolumeBox
+                : type == fcl::GEOM_CAPSULE || type == fcl::GEOM_CYLINDER ? kVolumeRound
+                : g->getObjectType() == fcl::OT_BVH                       ? kVolumeHeavy
+                                                                          : 0u;
   double z = 0, inner = 0;
   // The ball's centre is given from the box's centre: only for geometries centred on their
   // frame's origin, as FCL's primitives are.
@@ -281,7 +285,7 @@ void placeVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSp
     shape.e[k] = static_cast<float>(double(local.e[k]) + slack);
   }
   shape.scale = static_cast<float>(std::max(cmax, r));
-  shape.flags = local.flags & kVolumeSphere;
+  shape.flags = local.flags & kVolumeKinds;
   if (local.inner_r > 0.f && double(local.inner_r) - slack > 0) {
     shape.inner_r = static_cast<float>(double(local.inner_r) - slack);
     shape.inner_z = local.inner_z;
