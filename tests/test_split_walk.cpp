@@ -11,8 +11,10 @@
 #include <fcl/narrowphase/collision.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <random>
@@ -213,18 +215,22 @@ TEST(SplitWalk, EarlyStopSeesTheSerialPrefix) {
     }
 }
 
-// Bit-equal contact lists (objects, primitives, position, normal, depth).
+// Bit-equal contact lists (objects, primitives, position, normal, depth). Without
+// enable_contact FCL leaves position, normal and depth unset: only objects and primitives count.
 ::testing::AssertionResult sameContacts(const fcl::CollisionResult<S>& a,
-                                        const fcl::CollisionResult<S>& b) {
+                                        const fcl::CollisionResult<S>& b,
+                                        bool with_geometry = true) {
   if (a.numContacts() != b.numContacts())
     return ::testing::AssertionFailure()
            << a.numContacts() << " contacts against " << b.numContacts();
   for (std::size_t k = 0; k < a.numContacts(); ++k) {
     const fcl::Contact<S>&x = a.getContact(k), &y = b.getContact(k);
-    if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2 ||
-        std::memcmp(x.pos.data(), y.pos.data(), sizeof(S) * 3) != 0 ||
-        std::memcmp(x.normal.data(), y.normal.data(), sizeof(S) * 3) != 0 ||
-        std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0)
+    if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2) {
+      return ::testing::AssertionFailure() << "contact " << k << ": other objects";
+    }
+    if (with_geometry && (std::memcmp(x.pos.data(), y.pos.data(), sizeof(S) * 3) != 0 ||
+                          std::memcmp(x.normal.data(), y.normal.data(), sizeof(S) * 3) != 0 ||
+                          std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0))
       return ::testing::AssertionFailure() << "contact " << k << " differs";
   }
   return ::testing::AssertionSuccess();
@@ -275,6 +281,160 @@ TEST(SplitWalk, CollideAllIsBitEqualOnEveryThreadCount) {
         }
       }
     }
+}
+
+// The core's split walk handing its tasks to a sink (Broadphase::collideSelfTasks): the tasks'
+// pairs, concatenated, are the serial walk's calls; a sink that may stop is drained task by task
+// in order and stops the walk where it says; it is refused (false, nothing handed over) on one
+// thread, with a pair predicate, in canonical order and below kSplitMin objects.
+struct RecordingSink final : cube::detail::TaskSink<S> {
+  using Handed = cube::detail::TaskSink<S>::Pair;
+  using Called = cube::oracle::Pair<S>;
+  bool may_stop = false;
+  std::size_t stop_at = ~std::size_t(0);  // drain(stop_at) stops, counting tasks of every walk
+  std::size_t walks = 0, drained = 0;
+  std::vector<std::vector<Called>> tasks;  // of the current walk
+  std::vector<Called> joined;              // drained tasks, in order
+  std::mutex mutex;
+  std::set<std::size_t> taken;
+
+  void begin(std::size_t n) override {
+    ++walks;
+    EXPECT_EQ(taken.size(), tasks.size()) << "every task of the last walk taken";
+    tasks.assign(n, {});
+    taken.clear();
+  }
+  void take(std::size_t task, const Handed* pairs, std::size_t n) override {
+    std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_TRUE(taken.insert(task).second) << "task " << task << " taken twice";
+    for (std::size_t i = 0; i < n; ++i) {
+      EXPECT_EQ(::cube::detail::coreOf(*manager).table().object(pairs[i].ia), pairs[i].a);
+      EXPECT_EQ(::cube::detail::coreOf(*manager).table().object(pairs[i].ib), pairs[i].b);
+      tasks[task].emplace_back(pairs[i].a, pairs[i].b);
+    }
+  }
+  bool drain(std::size_t task) override {
+    EXPECT_EQ(taken.count(task), 1u) << "drained before it was taken";
+    joined.insert(joined.end(), tasks[task].begin(), tasks[task].end());
+    return drained++ == stop_at;
+  }
+  bool mayStop() const override { return may_stop; }
+  const cube::CubeCollisionManager<S>* manager = nullptr;
+};
+
+TEST(SplitWalk, TasksHandedToASinkAreTheSerialWalk) {
+  for (Layout layout : {Layout::uniform, Layout::clustered}) {
+    const World w = world(layout, true, 13);
+    cube::CubeCollisionManager<S> m;
+    m.registerObjects(w.all);
+    addRules(m, w.all, false);  // filter bits: the walks test them
+    ASSERT_TRUE(m.validate());
+    const Calls serial = serialCalls(m);
+    ASSERT_GT(serial.calls.size(), kObjects / 2);
+    const auto& core = ::cube::detail::coreOf(m);
+    for (int threads : {2, 3, 8})
+      for (bool may_stop : {false, true}) {
+        RecordingSink sink;
+        sink.manager = &m;
+        sink.may_stop = may_stop;
+        ASSERT_TRUE(core.collideSelfTasks(sink, threads));
+        EXPECT_EQ(sink.walks, 3u) << "cubes, cubes with the unbounded list, the list itself";
+        EXPECT_EQ(sink.joined, serial.calls)
+            << "layout " << int(layout) << " threads " << threads << " may_stop " << may_stop;
+        // Stopped at the fifth task drained: the tasks drained are the serial walk's prefix, and
+        // nothing after the stop is drained.
+        RecordingSink stopping;
+        stopping.manager = &m;
+        stopping.may_stop = true;
+        stopping.stop_at = 4;
+        ASSERT_TRUE(core.collideSelfTasks(stopping, threads));
+        EXPECT_EQ(stopping.drained, 5u);
+        ASSERT_LE(stopping.joined.size(), serial.calls.size());
+        EXPECT_TRUE(
+            std::equal(stopping.joined.begin(), stopping.joined.end(), serial.calls.begin()));
+      }
+    // Refused: one thread, a predicate, canonical order, a small scene.
+    RecordingSink refused;
+    refused.manager = &m;
+    EXPECT_FALSE(core.collideSelfTasks(refused, 1));
+    m.setPairFilter([](Object*, Object*) { return true; });
+    EXPECT_FALSE(core.collideSelfTasks(refused, 2));
+    cube::Config canonical;
+    canonical.canonical_pairs = true;
+    cube::CubeCollisionManager<S> c(canonical);
+    c.registerObjects(w.all);
+    EXPECT_FALSE(::cube::detail::coreOf(c).collideSelfTasks(refused, 2));
+    const World small = world(layout, false, 13, 1000);
+    cube::CubeCollisionManager<S> few;
+    few.registerObjects(small.all);
+    EXPECT_FALSE(::cube::detail::coreOf(few).collideSelfTasks(refused, 2));
+    EXPECT_EQ(refused.walks, 0u);
+  }
+}
+
+// FCL's accumulation over the serial walk, with the pairs that added contacts.
+struct AccumulatePairs {
+  fcl::CollisionRequest<S> request;
+  fcl::CollisionResult<S> result;
+  std::vector<cube::ObjectPair<S>> colliding;
+  static bool fn(Object* a, Object* b, void* d) {
+    auto& x = *static_cast<AccumulatePairs*>(d);
+    const std::size_t before = x.result.numContacts();
+    fcl::collide(a, b, x.request, x.result);
+    if (x.result.numContacts() > before) x.colliding.emplace_back(a, b);
+    return x.result.isCollision() && x.result.numContacts() >= x.request.num_max_contacts;
+  }
+};
+
+// collideAll on a large scene with more than one thread answers the split walk's tasks on the
+// threads that walked them (no split_walk option needed): contacts bit-equal to FCL's
+// accumulation over the serial walk, the same colliding pairs, the counts adding up, for
+// requests that stop early (waves of tasks), that take every contact (num_max_contacts at its
+// largest: every task at once) and with or without contact geometry; one contact per query
+// and a cache keep their serial paths, with the same answers.
+TEST(SplitWalk, CollideAllInTasksEqualsFcl) {
+  for (Layout layout : {Layout::uniform, Layout::clustered}) {
+    const World w = world(layout, true, 17);
+    cube::CubeCollisionManager<S> m;
+    m.registerObjects(w.all);
+    addRules(m, w.all, false);
+    ASSERT_TRUE(m.validate());
+    const std::size_t candidates = serialCalls(m).calls.size();
+    for (std::size_t max : {std::size_t(1), std::size_t(7), std::size_t(1) << 30,
+                            std::numeric_limits<std::size_t>::max()})
+      for (bool contact : {false, true}) {
+        AccumulatePairs ref;
+        ref.request.num_max_contacts = max;
+        ref.request.enable_contact = contact;
+        m.collide(&ref, &AccumulatePairs::fn);
+        if (max > 7) {
+          ASSERT_GT(ref.colliding.size(), kObjects / 4) << "must collide a lot";
+        }
+        for (int threads : {2, 3, 8})
+          for (bool cache : {false, true}) {
+            const auto what = ::testing::Message()
+                              << "layout " << int(layout) << " max " << max << " contact "
+                              << contact << " threads " << threads << " cache " << cache;
+            cube::NarrowPhaseCache<S> c;
+            cube::NarrowPhaseStats stats;
+            std::vector<cube::ObjectPair<S>> pairs(2, {nullptr, nullptr});
+            cube::NarrowPhaseOptions<S> o;
+            o.threads = threads;
+            o.stats = &stats;
+            o.colliding = &pairs;
+            o.cache = cache ? &c : nullptr;
+            const fcl::CollisionResult<S> got = cube::collideAll<S>(m, ref.request, o);
+            EXPECT_TRUE(sameContacts(got, ref.result, contact)) << what;
+            EXPECT_EQ(pairs, ref.colliding) << what;
+            if (max > 7) {  // no stop, no budget: every pair answered once
+              EXPECT_EQ(stats.culled + stats.proved + stats.cached + stats.narrow_calls,
+                        stats.candidate_pairs)
+                  << what;
+              EXPECT_EQ(stats.candidate_pairs, candidates) << what;
+            }
+          }
+      }
+  }
 }
 
 // collideConcurrently on a split walk: every candidate pair once, and a stop ends it soon.

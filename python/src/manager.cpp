@@ -141,6 +141,11 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
                             ": the FCL backend's tree needs bounded objects; planes only with "
                             "backend='cube'");
   }
+  // Made and, on failure, dropped with the GIL (declared before it is released).
+  std::vector<py::object> pynames;
+  pynames.reserve(objects.size());
+  for (const auto& o : objects) pynames.push_back(py::str(o.name));
+  std::vector<std::unique_ptr<Entry>> made;
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   std::unordered_set<std::string> fresh;
@@ -152,12 +157,12 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
     kinds.push_back(o.geometry->kind);
   }
   refuseFclCrashes(this, nullptr, kinds, false, what);
-  std::vector<std::unique_ptr<Entry>> made;
   std::vector<fcl::CollisionObjectd*> raw;
   std::unordered_set<const fcl::CollisionGeometryd*> taken;  // by this batch
   for (auto& o : objects) {
     auto e = std::make_unique<Entry>();
     e->name = o.name;
+    e->pyname = std::move(pynames[made.size()]);
     e->seq = next_seq_ + made.size();
     e->geometry = o.geometry;
     e->category = o.category;
@@ -203,6 +208,7 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
 
 void Manager::remove(const std::string& name) {
   noCallback("remove_object");
+  std::unique_ptr<Entry> dead;  // dropped once the GIL is back (its pyname)
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   Entry* e = find(name);
@@ -223,7 +229,9 @@ void Manager::remove(const std::string& name) {
   if (e->geometry->kind == "plane") --planes_;
   if (e->geometry->kind == "convex") --convexes_;
   by_geometry_.erase(e->obj->collisionGeometry().get());
-  entries_.erase(name);
+  const auto it = entries_.find(name);
+  dead = std::move(it->second);
+  entries_.erase(it);
   installPredicate();
 }
 

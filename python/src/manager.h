@@ -39,6 +39,9 @@ class Object : public fcl::CollisionObjectd {
 /// One named object.
 struct Entry {
   std::string name;
+  /// The name as a Python str, made once (with the GIL, in add) for every result that names the
+  /// object. Dropped only with the GIL held: remove() keeps a removed entry until it has the GIL.
+  py::object pyname;
   std::uint64_t seq = 0;  ///< registration number: order of names, pickling, ties
   GeometryPtr geometry;   ///< what the user gave (its FCL geometry may be cloned into obj)
   std::unique_ptr<Object> obj;

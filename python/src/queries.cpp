@@ -31,6 +31,16 @@ std::string nameOf(const fcl::CollisionObjectd* o) {
   return e ? e->name : kExternal;
 }
 
+// A name in a result: an entry's (read under the manager's lock, which keeps the entry), or
+// kExternal for null (the query geometry). nameStr orders, pyName is what Python gets.
+const std::string& nameStr(const Entry* e) {
+  static const std::string external = kExternal;
+  return e ? e->name : external;
+}
+py::object pyName(const Entry* e) {
+  return e ? e->pyname : py::str(kExternal);
+}
+
 /// Shared locks on one or two managers (in address order), taken with the GIL released.
 struct ReadLocks {
   std::shared_lock<std::shared_mutex> a, b;
@@ -44,14 +54,16 @@ struct ReadLocks {
 };
 
 struct ContactRow {
-  std::string a, b;
+  const Entry *a, *b;  // null: the query geometry
   fcl::Vector3d pos, normal;
   double depth;
 };
 
 struct CollideOut {
   bool any = false;
-  std::vector<std::pair<std::string, std::string>> pairs;  // colliding pairs, one row each
+  // Colliding pairs, one row each (null: the query geometry). The entries live while the query
+  // holds the manager's lock: results are built before it lets go (QueryLock).
+  std::vector<std::pair<const Entry*, const Entry*>> pairs;
   std::vector<ContactRow> contacts;
 };
 
@@ -72,7 +84,7 @@ struct Want {
 void record(CollideOut& out, const Want& want, ObjPtr a, ObjPtr b, const fcl::CollisionResultd& r) {
   out.any = true;
   if (want.anyOnly()) return;
-  const std::string na = nameOf(a), nb = nameOf(b);
+  const Entry *na = Manager::entryOf(a), *nb = Manager::entryOf(b);
   if (want.data)
     for (std::size_t k = 0; k < r.numContacts(); ++k) {
       const auto& c = r.getContact(k);
@@ -87,7 +99,7 @@ void recordNear(CollideOut& out, const Want& want, ObjPtr a, ObjPtr b, double di
                 const fcl::Vector3d& pa, const fcl::Vector3d& pb) {
   out.any = true;
   if (want.anyOnly()) return;
-  const std::string na = nameOf(a), nb = nameOf(b);
+  const Entry *na = Manager::entryOf(a), *nb = Manager::entryOf(b);
   if (want.data) {
     fcl::Vector3d n = pb - pa;
     const double len = n.norm();
@@ -130,7 +142,7 @@ CollideOut cubeCollide(const Manager& m, ObjPtr query, const Manager* other, con
                                       : cube::collideAll(c, all, opt);
     out.any = r.isCollision();
     out.pairs.reserve(hit.size());
-    for (const auto& [a, b] : hit) out.pairs.emplace_back(nameOf(a), nameOf(b));
+    for (const auto& [a, b] : hit) out.pairs.emplace_back(Manager::entryOf(a), Manager::entryOf(b));
     return out;
   }
   std::vector<cube::ObjectPair<double>> pairs = query ? cube::overlappingPairs(c, query)
@@ -272,7 +284,7 @@ py::object contactsDict(const std::vector<ContactRow>& rows) {
   auto d = depths.mutable_unchecked<1>();
   for (py::ssize_t i = 0; i < n; ++i) {
     const auto& r = rows[i];
-    names.append(py::make_tuple(r.a, r.b));
+    names.append(py::make_tuple(pyName(r.a), pyName(r.b)));
     for (int k = 0; k < 3; ++k) {
       p(i, k) = r.pos[k];
       q(i, k) = r.normal[k];
@@ -298,16 +310,37 @@ py::object collideReturn(const CollideOut& o, const Want& want, Kind kind) {
     py::set names;
     for (const auto& [a, b] : o.pairs) {
       if (kind == Kind::single)
-        names.add(py::str(a));
-      else if (kind == Kind::internal)
-        names.add(a < b ? py::make_tuple(a, b) : py::make_tuple(b, a));
+        names.add(pyName(a));
+      else if (kind == Kind::internal && nameStr(b) < nameStr(a))
+        names.add(py::make_tuple(pyName(b), pyName(a)));
       else
-        names.add(py::make_tuple(a, b));
+        names.add(py::make_tuple(pyName(a), pyName(b)));
     }
     items.append(names);
   }
   if (want.data) items.append(contactsDict(o.contacts));
   return py::tuple(items);
+}
+
+// A collide query: `run` with the GIL released under the managers' read locks, then the result
+// built with the GIL while the locks still keep the entries it names. Python code that runs in
+// between (a __del__ on an allocation) may not change a manager, which would wait for these
+// locks: refused as from a query's callback (noCallback).
+template <class Run>
+py::object collideQuery(const Manager& m, const Manager* other, const Want& w, Kind kind,
+                        Run&& run) {
+  CollideOut o;
+  std::optional<ReadLocks> lock;
+  {
+    py::gil_scoped_release nogil;
+    lock.emplace(m, other);
+    o = run();
+  }
+  struct Refuse {
+    Refuse() { ++in_python_callback; }
+    ~Refuse() { --in_python_callback; }
+  } refuse;
+  return collideReturn(o, w, kind);
 }
 
 Want want(bool names, bool data, int max_contacts) {
@@ -565,13 +598,8 @@ void bindManagerQueries(ManagerClass& cls) {
          "in_collision_internal",
          [](const Manager& m, bool names, bool data, int max_contacts) {
            const Want w = want(names, data, max_contacts);
-           CollideOut o;
-           {
-             py::gil_scoped_release nogil;
-             ReadLocks lock(m);
-             o = collide(m, nullptr, nullptr, w);
-           }
-           return collideReturn(o, w, Kind::internal);
+           return collideQuery(m, nullptr, w, Kind::internal,
+                               [&] { return collide(m, nullptr, nullptr, w); });
          },
          py::arg("return_names") = false, py::arg("return_data") = false,
          py::arg("max_contacts") = 100000, R"doc(
@@ -589,15 +617,11 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
             const Want w = want(names, data, max_contacts);
             GeometryPtr g = geometryOf(geometry);
             Object q(g->fcl, transform(tf));
-            CollideOut o;
-            {
-              py::gil_scoped_release nogil;
-              ReadLocks lock(m);
+            return collideQuery(m, nullptr, w, Kind::single, [&] {
               refuseFclCrashes(&m, nullptr, {g->kind}, false, "in_collision_single");
               q.refresh(m.isCube() ? 0.0 : m.managerMargin());
-              o = collide(m, &q, nullptr, w);
-            }
-            return collideReturn(o, w, Kind::single);
+              return collide(m, &q, nullptr, w);
+            });
           },
           py::arg("geometry"), py::arg("transform") = py::none(), py::arg("return_names") = false,
           py::arg("return_data") = false, py::arg("max_contacts") = 100000, R"doc(
@@ -609,17 +633,11 @@ filter bits and the manager-wide margin. TypeError / ValueError for a bad geomet
           "in_collision_other",
           [](const Manager& m, const Manager& other, bool names, bool data, int max_contacts) {
             const Want w = want(names, data, max_contacts);
-            CollideOut o;
-            {
-              py::gil_scoped_release nogil;
-              ReadLocks lock(m, &other);
+            return collideQuery(m, &other, w, &m == &other ? Kind::internal : Kind::other, [&] {
               if (&m != &other) refuseFclCrashes(&m, &other, {}, false, "in_collision_other");
-              if (&m == &other)
-                o = collide(m, nullptr, nullptr, w);
-              else
-                o = collide(m, nullptr, &other, w);
-            }
-            return collideReturn(o, w, &m == &other ? Kind::internal : Kind::other);
+              return &m == &other ? collide(m, nullptr, nullptr, w)
+                                  : collide(m, nullptr, &other, w);
+            });
           },
           py::arg("other_manager"), py::arg("return_names") = false, py::arg("return_data") = false,
           py::arg("max_contacts") = 100000, R"doc(

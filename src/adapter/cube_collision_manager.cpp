@@ -526,6 +526,14 @@ void collideSelfOnThreadsWithIds(const CubeCollisionManager<S>& manager, void* c
 }
 
 template <typename S>
+bool collideSelfInTasks(const CubeCollisionManager<S>& manager, TaskSink<S>& sink, int threads) {
+  const Broadphase<S>& core = detail::coreOf(manager);
+  if (core.size() < 2) return true;  // no pair
+  const QueryScope scope(&core);
+  return core.collideSelfTasks(sink, threads);
+}
+
+template <typename S>
 void collideSelfOnThreads(const CubeCollisionManager<S>& manager, void* cdata,
                           fcl::CollisionCallBack<S> callback, int threads) {
   const Broadphase<S>& core = detail::coreOf(manager);
@@ -569,6 +577,7 @@ void distanceWithIds(const CubeCollisionManager<S>& manager,
 }
 
 #define CUBE_INSTANTIATE_WALKS(S)                                                                  \
+  template bool collideSelfInTasks<S>(const CubeCollisionManager<S>&, TaskSink<S>&, int);          \
   template void collideSelfOnThreadsWithIds<S>(const CubeCollisionManager<S>&, void*,              \
                                                CollideFn<S>, int);                                 \
   template void collideWithIds<S>(const CubeCollisionManager<S>&, void*, CollideFn<S>);            \

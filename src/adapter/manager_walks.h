@@ -5,6 +5,7 @@
 // tables' per-id volumes, and a self-collide whose walk runs on several threads (issue 19). Not
 // public: users get them through collideAll and collideConcurrently.
 
+#include "core/task_sink.h"
 #include "core/traversal.h"
 #include "cube_collision/cube_collision_manager.h"
 
@@ -42,6 +43,11 @@ void distanceWithIds(const CubeCollisionManager<S>& manager, fcl::CollisionObjec
 template <typename S>
 void distanceWithIds(const CubeCollisionManager<S>& manager,
                      fcl::BroadPhaseCollisionManager<S>* other, void* cdata, DistanceFn<S> fn);
+/// A self-collide whose split walk hands each task's pairs to `sink` on the thread that walked
+/// it (Broadphase::collideSelfTasks), under the query guard: false (nothing done) where the
+/// core does not split it that way; true with nothing handed over for fewer than two objects.
+template <typename S>
+bool collideSelfInTasks(const CubeCollisionManager<S>& manager, TaskSink<S>& sink, int threads);
 /// collideSelfOnThreads with such a callback, and without Config::cull_pairs.
 template <typename S>
 void collideSelfOnThreadsWithIds(const CubeCollisionManager<S>& manager, void* cdata,

@@ -18,6 +18,7 @@
 #include "core/object_table.h"
 #include "core/pair_list.h"
 #include "core/rebuild_policy.h"
+#include "core/task_sink.h"
 #include "core/traversal.h"
 #include "core/unbounded_list.h"
 #include "core/walk.h"
@@ -139,6 +140,12 @@ class Broadphase {
   /// this thread, in walk order. Serial (collideSelf) for threads <= 1, a valid pair list, or
   /// fewer than kSplitMin objects in the cubes.
   bool collideSelfSplit(void* data, CollideFn<S> fn, int threads) const;
+  /// collideSelfSplit whose tasks hand their pairs to `sink` on the threads that walked them
+  /// (TaskSink), without a callback on this thread: for the narrow-phase pipeline, which answers
+  /// them there. False (nothing done) where the walk is not split (as collideSelfSplit says), where
+  /// pairs come in registration order (Config::canonical_pairs), or with a pair predicate (user
+  /// code, asked on this thread in walk order).
+  bool collideSelfTasks(TaskSink<S>& sink, int threads) const;
   /// Objects in the cubes from which collideSelfSplit splits the walk: below, the walk takes
   /// less time than a wave's threads take to start.
   static constexpr std::size_t kSplitMin = 4096;
@@ -279,9 +286,10 @@ class Broadphase {
   /// The one distance runner.
   bool distanceRun(const Against* b, void* data, DistanceFn<S> fn, S& best,
                    QueryStats* stats) const;
-  /// A split self walk's pairs (Plan::split): delivered wave by wave, or, with `out`, gathered.
-  bool collideSplit(const Plan& p, void* data, CollideFn<S> fn,
-                    std::vector<std::uint64_t>* out) const;
+  /// A split self walk's pairs (Plan::split): delivered wave by wave, or, with `out`, gathered,
+  /// or, with `sink`, handed to it on the threads.
+  bool collideSplit(const Plan& p, void* data, CollideFn<S> fn, std::vector<std::uint64_t>* out,
+                    TaskSink<S>* sink = nullptr) const;
   /// Canonical delivery: `found` sorted by registration numbers, then to fn.
   bool callInOrder(const std::vector<std::uint64_t>& found, const Against* b, void* data,
                    CollideFn<S> fn, QueryStats* stats) const;

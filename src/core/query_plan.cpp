@@ -111,7 +111,7 @@ template <typename S>
 
 template <typename S>
 bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
-                                 std::vector<std::uint64_t>* out) const {
+                                 std::vector<std::uint64_t>* out, TaskSink<S>* sink) const {
   // The walks test the filter bits and orient the pairs; the predicate, user code, is asked here
   // on this thread, in walk order, as the serial walk asks it.
   const PairGate<S> walk_gate = p.gate ? p.gate->withoutPredicate() : PairGate<S>{};
@@ -122,15 +122,29 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
     const std::size_t n = walk.tasks();
     std::vector<std::vector<std::uint64_t>> found(n);
     std::exception_ptr error;
+    if (sink != nullptr) sink->begin(n);
+    // A task's pairs to the sink, as objects, on the thread that walked it.
+    const auto hand = [&](std::size_t i) {
+      std::vector<typename TaskSink<S>::Pair> pairs;
+      pairs.reserve(found[i].size());
+      for (const std::uint64_t pair : found[i]) {
+        const auto x = static_cast<ObjectId>(pair >> 32), y = static_cast<ObjectId>(pair);
+        pairs.push_back({table_.object(x), table_.object(y), x, y});
+      }
+      std::vector<std::uint64_t>().swap(found[i]);
+      sink->take(i, pairs.data(), pairs.size());
+    };
     // Waves of tasks (threads, then twice as many, ...): a query that stops early walks little
-    // more than the serial one. Gathering takes every task at once.
+    // more than the serial one. Gathering, or a sink that cannot stop, takes every task at once.
+    const bool at_once = out != nullptr || (sink != nullptr && !sink->mayStop());
     for (std::size_t begin = 0, wave = std::size_t(threads); begin < n; begin += wave, wave *= 2) {
-      const std::size_t end = out != nullptr ? n : std::min(n, begin + wave);
+      const std::size_t end = at_once ? n : std::min(n, begin + wave);
       // Dynamic: the tasks of a clustered scene differ by orders of magnitude.
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
       for (std::ptrdiff_t i = std::ptrdiff_t(begin); i < std::ptrdiff_t(end); ++i) {
         try {
           walk.collect(std::size_t(i), found[std::size_t(i)]);
+          if (sink != nullptr) hand(std::size_t(i));
         } catch (...) {  // std::bad_alloc: no exception may leave an OpenMP region
 #pragma omp critical(cube_split_walk_error)
           if (!error) error = std::current_exception();
@@ -138,6 +152,10 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
       }
       if (error) std::rethrow_exception(error);
       for (std::size_t i = begin; i < end; ++i) {
+        if (sink != nullptr) {
+          if (sink->drain(i)) return true;
+          continue;
+        }
         for (const std::uint64_t pair : found[i]) {
           const auto x = static_cast<ObjectId>(pair >> 32), y = static_cast<ObjectId>(pair);
           Object* const ox = table_.object(x);
@@ -150,7 +168,7 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
         }
         std::vector<std::uint64_t>().swap(found[i]);
       }
-      if (out != nullptr) break;  // gathered every task in one round
+      if (at_once) break;  // every task in one round
     }
     return false;
   });
@@ -243,6 +261,14 @@ bool Broadphase<S>::collideSelf(void* data, CollideFn<S> fn, QueryStats* stats) 
 template <typename S>
 bool Broadphase<S>::collideSelfSplit(void* data, CollideFn<S> fn, int threads) const {
   return collideRun(nullptr, threads, data, fn, nullptr);
+}
+
+template <typename S>
+bool Broadphase<S>::collideSelfTasks(TaskSink<S>& sink, int threads) const {
+  const Plan p = plan(nullptr, threads);
+  if (!p.split || p.canonical || (p.gate && p.gate->predicate != nullptr)) return false;
+  collideSplit(p, nullptr, CollideFn<S>(typename CollideFn<S>::Plain(nullptr)), nullptr, &sink);
+  return true;
 }
 
 template <typename S>

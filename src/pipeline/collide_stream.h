@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/geometry.h"
+#include "core/task_sink.h"
 #include "cube_collision/narrow_phase.h"
 #include "pipeline/answers.h"
 #include "pipeline/pair_volumes.h"
@@ -26,9 +27,11 @@ namespace detail {
 /// Pairs are answered at once on the calling thread at first (and always for a request of one
 /// contact, and on one thread); once the query proves large, they are gathered into chunks (the
 /// cache looked up on the calling thread) whose cull and FCL calls run on the threads when there
-/// is enough work to pay for a parallel region.
+/// is enough work to pay for a parallel region. A large self-collide of a cube manager may instead
+/// hand the stream its split walk's tasks (TaskSink, takesTasks): each task's pairs are culled and
+/// answered on the thread that walked them, and merged here in walk order.
 template <typename S>
-class CollideStream {
+class CollideStream final : public TaskSink<S> {
  public:
   CollideStream(const fcl::CollisionRequest<S>& request, const NarrowPhaseOptions<S>& options);
   ~CollideStream();
@@ -50,6 +53,18 @@ class CollideStream {
   /// Runs what is pending and returns the merged result. Call once, at the end.
   fcl::CollisionResult<S> finish();
 
+  /// Whether the stream takes a split walk's tasks (TaskSink) instead of pairs pushed one by one:
+  /// for a request that does not stop at its first contact, without a cache, on more threads
+  /// than one, before any pair was pushed.
+  bool takesTasks() const;
+  /// The threads the stream answers on (NarrowPhaseOptions::threads resolved).
+  int threads() const { return threads_; }
+  void begin(std::size_t tasks) override;
+  void take(std::size_t task, const typename TaskSink<S>::Pair* pairs, std::size_t n) override;
+  bool drain(std::size_t task) override;
+  /// True unless the request takes every contact (num_max_contacts at its largest).
+  bool mayStop() const override;
+
   /// An fcl::CollisionCallBack feeding the CollideStream passed as cdata.
   static bool callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* stream);
   /// The same for walks that give ids (manager_walks.h).
@@ -58,17 +73,26 @@ class CollideStream {
 
  private:
   struct Slot;
+  struct TaskAnswers;
   // The records of a pair, for pushJudged (null: cull from the objects).
   struct Volumes {
     const VolumeSphere* sphere;
     const VolumeShape* shape;
   };
+  // `stable`: va and vb point into the tables (not at records built for this query, which the
+  // next pair may overwrite), so that a chunk may read them later.
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
-                  const Volumes* vb);
+                  const Volumes* vb, bool stable = false);
+  // Answers the pairs pairs[index[k]] into slots[index[k]], k < n (at most kBlock): the cull
+  // where the slot says, then FCL. Any thread.
+  void answerBlock(const std::size_t* index, std::size_t n, const ObjectPair<S>* pairs,
+                   Slot* slots) const;
   static bool cacheable(const Slot& s);
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
   void merge(const ObjectPair<S>& pair, const Slot& slot);
+  template <class Contacts>
+  void mergeContacts(const ObjectPair<S>& pair, const Contacts& contacts);
   void markDone();
   void flush();
   // options.colliding: the pair if the result grew past `before` contacts.
@@ -91,6 +115,7 @@ class CollideStream {
   std::vector<std::size_t> pending_;  // the chunk's pairs not in the cache
   std::vector<Slot> slots_;           // one per pair of the chunk
   std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
+  std::vector<TaskAnswers> tasks_;    // a split walk's tasks, each answered on its thread
   fcl::CollisionResult<S> empty_;
   fcl::CollisionResult<S> result_;
   // The cull on volumes: the tables, the memo of objects without an id, the margin's rate.

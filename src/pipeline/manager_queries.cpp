@@ -187,6 +187,10 @@ fcl::CollisionResult<S> collideAll(const fcl::BroadPhaseCollisionManager<S>& man
         // A self query: both ids index the manager's table.
         return walkWithIds(
             manager, &manager, stream, collideIds<S>(), [&](const auto& cube, void* data, auto fn) {
+              // A large scene's walk split into tasks, each answered on the thread that walked
+              // it; else the walk on this thread feeds the stream pair by pair.
+              if (stream.takesTasks() && detail::collideSelfInTasks(cube, stream, stream.threads()))
+                return;
               if (options.split_walk)
                 detail::collideSelfOnThreadsWithIds(
                     cube, data, fn, options.threads > 0 ? options.threads : hardwareThreads());

@@ -36,6 +36,17 @@ class PairVolumes {
           const VolumeShape*& hb) {
     return side(0, a, ia, sa, ha) && side(1, b, ib, sb, hb);
   }
+  /// The tables' records of ids ia and ib (neither kNone), as `of` gives them; false if a table
+  /// keeps none. Reads only: any number of threads at once.
+  bool ofTables(ObjectId ia, ObjectId ib, const VolumeSphere*& sa, const VolumeShape*& ha,
+                const VolumeSphere*& sb, const VolumeShape*& hb) const {
+    if (spheres_[0] == nullptr || spheres_[1] == nullptr) return false;
+    sa = spheres_[0] + ia;
+    ha = shapes_[0] + ia;
+    sb = spheres_[1] + ib;
+    hb = shapes_[1] + ib;
+    return true;
+  }
 
  private:
   struct Built {

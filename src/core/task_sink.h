@@ -1,0 +1,44 @@
+#pragma once
+
+// The split self walk's hand-over to the narrow-phase pipeline: each task's pairs go to a sink on
+// the thread that walked the task (Broadphase::collideSelfTasks).
+
+#include <cstddef>
+
+#include "core/geometry.h"
+
+namespace cube {
+namespace detail {
+
+/// Where a split self walk (Broadphase::collideSelfTasks) hands each task's pairs, to be answered
+/// on the thread that walked the task: the narrow-phase pipeline's collide stream. The tasks of
+/// one walk are numbered in walk order; take() may run for several tasks at once, drain() runs
+/// on the calling thread for each task in that order after its take(), so the answers merge in
+/// the serial walk's order.
+template <typename S>
+class TaskSink {
+ public:
+  /// A pair as a task hands it over: the objects and their ids in the one object table.
+  struct Pair {
+    fcl::CollisionObject<S>* a;
+    fcl::CollisionObject<S>* b;
+    ObjectId ia, ib;
+  };
+  /// A walk of `tasks` tasks starts (the cubes with themselves, then with the unbounded list, then
+  /// the list with itself: three walks at most), numbered from 0 again. Calling thread.
+  virtual void begin(std::size_t tasks) = 0;
+  /// Task `task`'s pairs in walk order, on the thread that walked it. Must not throw out of
+  /// the sink's own state: an exception is rethrown on the calling thread after the wave.
+  virtual void take(std::size_t task, const Pair* pairs, std::size_t n) = 0;
+  /// Calling thread, each task in order once its take() has returned: true stops the query.
+  virtual bool drain(std::size_t task) = 0;
+  /// Whether drain() may stop the query before the last task: the tasks then run in waves (as a
+  /// split walk's for a callback), otherwise all at once.
+  virtual bool mayStop() const = 0;
+
+ protected:
+  ~TaskSink() = default;
+};
+
+}  // namespace detail
+}  // namespace cube
