@@ -283,14 +283,14 @@ TEST(SplitWalk, CollideAllIsBitEqualOnEveryThreadCount) {
     }
 }
 
-// The core's split walk handing its tasks to a sink (Broadphase::collideSelfTasks): the tasks'
-// pairs, concatenated, are the serial walk's calls; a sink that may stop is drained task by task
-// in order and stops the walk where it says; it is refused (false, nothing handed over) on one
-// thread, with a pair predicate, in canonical order and below kSplitMin objects.
+// The core's split walk handing its tasks to a sink (Broadphase::collideSelfTasks): every task
+// taken once, then drained in order after all have run; the tasks' pairs, concatenated, are the
+// serial walk's calls; a drain that says stop ends the draining there; the split is refused
+// (false, nothing handed over) on one thread, with a pair predicate, in canonical order and below
+// kSplitMin objects.
 struct RecordingSink final : cube::detail::TaskSink<S> {
   using Handed = cube::detail::TaskSink<S>::Pair;
   using Called = cube::oracle::Pair<S>;
-  bool may_stop = false;
   std::size_t stop_at = ~std::size_t(0);  // drain(stop_at) stops, counting tasks of every walk
   std::size_t walks = 0, drained = 0;
   std::vector<std::vector<Called>> tasks;  // of the current walk
@@ -314,11 +314,10 @@ struct RecordingSink final : cube::detail::TaskSink<S> {
     }
   }
   bool drain(std::size_t task) override {
-    EXPECT_EQ(taken.count(task), 1u) << "drained before it was taken";
+    EXPECT_EQ(taken.size(), tasks.size()) << "drained before every task ran";
     joined.insert(joined.end(), tasks[task].begin(), tasks[task].end());
     return drained++ == stop_at;
   }
-  bool mayStop() const override { return may_stop; }
   const cube::CubeCollisionManager<S>* manager = nullptr;
 };
 
@@ -332,27 +331,24 @@ TEST(SplitWalk, TasksHandedToASinkAreTheSerialWalk) {
     const Calls serial = serialCalls(m);
     ASSERT_GT(serial.calls.size(), kObjects / 2);
     const auto& core = ::cube::detail::coreOf(m);
-    for (int threads : {2, 3, 8})
-      for (bool may_stop : {false, true}) {
+    for (int threads : {2, 3, 8}) {
+      {
         RecordingSink sink;
         sink.manager = &m;
-        sink.may_stop = may_stop;
         ASSERT_TRUE(core.collideSelfTasks(sink, threads));
         EXPECT_EQ(sink.walks, 3u) << "cubes, cubes with the unbounded list, the list itself";
-        EXPECT_EQ(sink.joined, serial.calls)
-            << "layout " << int(layout) << " threads " << threads << " may_stop " << may_stop;
-        // Stopped at the fifth task drained: the tasks drained are the serial walk's prefix, and
-        // nothing after the stop is drained.
-        RecordingSink stopping;
-        stopping.manager = &m;
-        stopping.may_stop = true;
-        stopping.stop_at = 4;
-        ASSERT_TRUE(core.collideSelfTasks(stopping, threads));
-        EXPECT_EQ(stopping.drained, 5u);
-        ASSERT_LE(stopping.joined.size(), serial.calls.size());
-        EXPECT_TRUE(
-            std::equal(stopping.joined.begin(), stopping.joined.end(), serial.calls.begin()));
+        EXPECT_EQ(sink.joined, serial.calls) << "layout " << int(layout) << " threads " << threads;
       }
+      // Stopped at the fifth task drained: the tasks drained are the serial walk's prefix, and
+      // nothing after the stop is drained.
+      RecordingSink stopping;
+      stopping.manager = &m;
+      stopping.stop_at = 4;
+      ASSERT_TRUE(core.collideSelfTasks(stopping, threads));
+      EXPECT_EQ(stopping.drained, 5u);
+      ASSERT_LE(stopping.joined.size(), serial.calls.size());
+      EXPECT_TRUE(std::equal(stopping.joined.begin(), stopping.joined.end(), serial.calls.begin()));
+    }
     // Refused: one thread, a predicate, canonical order, a small scene.
     RecordingSink refused;
     refused.manager = &m;
@@ -426,6 +422,11 @@ TEST(SplitWalk, CollideAllInTasksEqualsFcl) {
             const fcl::CollisionResult<S> got = cube::collideAll<S>(m, ref.request, o);
             EXPECT_TRUE(sameContacts(got, ref.result, contact)) << what;
             EXPECT_EQ(pairs, ref.colliding) << what;
+            if (max == 7 && !cache) {
+              // Tasks whose predecessors hold 7 contacts are skipped: when a task is handed
+              // out, all before it but the other threads' are done.
+              EXPECT_LT(stats.candidate_pairs, candidates / 2) << what;
+            }
             if (max > 7) {  // no stop, no budget: every pair answered once
               EXPECT_EQ(stats.culled + stats.proved + stats.cached + stats.narrow_calls,
                         stats.candidate_pairs)

@@ -89,7 +89,9 @@ struct NarrowPhaseOptions {
   /// threads in chunks of at least 128 pairs (a pair with a mesh or an octree counts 64); the
   /// cache is always looked up on the calling thread. On a CubeCollisionManager that keeps
   /// per-object volumes (Config::tight_volumes, 256 objects or more) the cull runs on the
-  /// calling thread and only FCL's calls count towards the 1,024: 63 for a mesh or an octree, 5
+  /// calling thread while pairs are answered at once (in chunks too with a cache, whose lookup
+  /// needs its verdict; without one it runs in the chunk), and only FCL's calls count towards the
+  /// 1,024: 63 for a mesh or an octree, 5
   /// for a pair of shapes that FCL 0.7 answers with GJK (any but a sphere with a sphere, box,
   /// capsule or cylinder and a box with a box), none for those; in a chunk such a pair counts 6,
   /// the others 1. So a collide among spheres and boxes there runs on the calling thread
@@ -99,6 +101,17 @@ struct NarrowPhaseOptions {
   /// A collide that stops at its first contact (num_max_contacts == 1, FCL's default) calls FCL one
   /// pair at a time on any count, never more often than on one thread; minimumDistance without a
   /// cache runs on the calling thread (queries.h says why).
+  /// A large self-collide runs on the threads from its first pair instead: collideAll(manager)
+  /// of a CubeCollisionManager with at least 4,096 objects in its cubes and per-object volumes,
+  /// on more than one thread, for a request that may take more than one contact, without a
+  /// cache, a pair predicate or Config::canonical_pairs. Its walk is cut into tasks (as
+  /// split_walk's), and each task's pairs are culled and answered by FCL on the thread that walked
+  /// it, 16 pairs at a time (their records, objects and geometries fetched together); the calling
+  /// thread merges the tasks in the serial walk's order, so the contacts and colliding pairs are
+  /// the same. A request that takes every contact (num_max_contacts at its largest) runs every task
+  /// at once; any other runs them in waves (threads tasks, then twice as many, ...) and stops after
+  /// the wave in which its result filled: FCL may then be called for pairs of that wave after the
+  /// stop, and `stats` counts every pair of the tasks that ran.
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;
@@ -119,6 +132,8 @@ struct NarrowPhaseOptions {
   /// are the same. Off by default: the walk is about 1% of a collideAll with the narrow phase,
   /// and on 2 cores handing every pair over costs about what the serial walk saves (see the
   /// README's figures). For machines with many idle cores and walks of 100,000 objects or more.
+  /// A self-collide that the threads answer task by task (see `threads`) splits its walk
+  /// whatever this says.
   bool split_walk = false;
   /// collideAll and collideMerged only: if set, it is cleared and then given every pair that
   /// put at least one contact into the returned result, once, in the order of its first contact

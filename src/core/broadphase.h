@@ -151,6 +151,10 @@ class Broadphase {
   static constexpr std::size_t kSplitMin = 4096;
   /// The tasks a split self walk is cut into (at least; fewer in a tree of fewer leaves).
   static constexpr std::size_t kSplitTasks = 64;
+  /// The same for a walk whose tasks a TaskSink answers: they carry the narrow phase too, and a
+  /// clustered scene's tasks differ by orders of magnitude, so finer tasks balance the threads
+  /// (all run in one region: no wave to wait for).
+  static constexpr std::size_t kSinkTasks = 256;
   /// Pairs (managed object, object of `body`) whose boxes overlap and that pass the filter bits
   /// (the body's per id, null: all default) and the predicate: one walk of the cubes, then of
   /// the unbounded list, against the body's view (BodyView), in walk order whatever

@@ -118,7 +118,8 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
   const PairGate<S>* g = walk_gate.active() ? &walk_gate : nullptr;
   const int threads = p.threads;
   return forViews(nullptr, [&](const View<S>& a, const View<S>& b, bool self) {
-    const SplitWalk<S> walk(a, b, self, p.all_pairs_limit, g, kSplitTasks);
+    const SplitWalk<S> walk(a, b, self, p.all_pairs_limit, g,
+                            sink != nullptr ? kSinkTasks : kSplitTasks);
     const std::size_t n = walk.tasks();
     std::vector<std::vector<std::uint64_t>> found(n);
     std::exception_ptr error;
@@ -135,8 +136,9 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
       sink->take(i, pairs.data(), pairs.size());
     };
     // Waves of tasks (threads, then twice as many, ...): a query that stops early walks little
-    // more than the serial one. Gathering, or a sink that cannot stop, takes every task at once.
-    const bool at_once = out != nullptr || (sink != nullptr && !sink->mayStop());
+    // more than the serial one. Gathering, or a sink (which skips what it need not answer),
+    // takes every task at once.
+    const bool at_once = out != nullptr || sink != nullptr;
     for (std::size_t begin = 0, wave = std::size_t(threads); begin < n; begin += wave, wave *= 2) {
       const std::size_t end = at_once ? n : std::min(n, begin + wave);
       // Dynamic: the tasks of a clustered scene differ by orders of magnitude.

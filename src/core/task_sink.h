@@ -12,9 +12,10 @@ namespace detail {
 
 /// Where a split self walk (Broadphase::collideSelfTasks) hands each task's pairs, to be answered
 /// on the thread that walked the task: the narrow-phase pipeline's collide stream. The tasks of
-/// one walk are numbered in walk order; take() may run for several tasks at once, drain() runs
-/// on the calling thread for each task in that order after its take(), so the answers merge in
-/// the serial walk's order.
+/// one walk are numbered in walk order and all run in one parallel region, taken in that order
+/// (a sink that may stop early can skip the work of a task whose predecessors already decided
+/// the answer); then drain() runs on the calling thread for each task in order, so the answers
+/// merge in the serial walk's order.
 template <typename S>
 class TaskSink {
  public:
@@ -27,14 +28,12 @@ class TaskSink {
   /// A walk of `tasks` tasks starts (the cubes with themselves, then with the unbounded list, then
   /// the list with itself: three walks at most), numbered from 0 again. Calling thread.
   virtual void begin(std::size_t tasks) = 0;
-  /// Task `task`'s pairs in walk order, on the thread that walked it. Must not throw out of
-  /// the sink's own state: an exception is rethrown on the calling thread after the wave.
+  /// Task `task`'s pairs in walk order, on the thread that walked it. An exception is rethrown
+  /// on the calling thread once every task has run (nothing is drained then).
   virtual void take(std::size_t task, const Pair* pairs, std::size_t n) = 0;
-  /// Calling thread, each task in order once its take() has returned: true stops the query.
+  /// Calling thread, each task in order once every task's take() has returned: true stops the
+  /// query (the tasks after it are not drained).
   virtual bool drain(std::size_t task) = 0;
-  /// Whether drain() may stop the query before the last task: the tasks then run in waves (as a
-  /// split walk's for a callback), otherwise all at once.
-  virtual bool mayStop() const = 0;
 
  protected:
   ~TaskSink() = default;

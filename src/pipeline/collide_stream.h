@@ -9,6 +9,7 @@
 #include <fcl/narrowphase/collision_request.h>
 #include <fcl/narrowphase/collision_result.h>
 
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <vector>
@@ -60,10 +61,10 @@ class CollideStream final : public TaskSink<S> {
   /// The threads the stream answers on (NarrowPhaseOptions::threads resolved).
   int threads() const { return threads_; }
   void begin(std::size_t tasks) override;
+  /// Skips the work of a task whose predecessors that have run hold the budget's contacts
+  /// (num_max_contacts): the result is full before it, nothing of it would be merged.
   void take(std::size_t task, const typename TaskSink<S>::Pair* pairs, std::size_t n) override;
   bool drain(std::size_t task) override;
-  /// True unless the request takes every contact (num_max_contacts at its largest).
-  bool mayStop() const override;
 
   /// An fcl::CollisionCallBack feeding the CollideStream passed as cdata.
   static bool callback(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, void* stream);
@@ -79,10 +80,8 @@ class CollideStream final : public TaskSink<S> {
     const VolumeSphere* sphere;
     const VolumeShape* shape;
   };
-  // `stable`: va and vb point into the tables (not at records built for this query, which the
-  // next pair may overwrite), so that a chunk may read them later.
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
-                  const Volumes* vb, bool stable = false);
+                  const Volumes* vb);
   // Answers the pairs pairs[index[k]] into slots[index[k]], k < n (at most kBlock): the cull
   // where the slot says, then FCL. Any thread.
   void answerBlock(const std::size_t* index, std::size_t n, const ObjectPair<S>* pairs,
@@ -116,6 +115,11 @@ class CollideStream final : public TaskSink<S> {
   std::vector<Slot> slots_;           // one per pair of the chunk
   std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
   std::vector<TaskAnswers> tasks_;    // a split walk's tasks, each answered on its thread
+  // Per task, its contacts once it has run (kRunning before), and their sum over the tasks run:
+  // what take() reads to skip a task the result is full before.
+  std::unique_ptr<std::atomic<std::size_t>[]> task_contacts_;
+  std::atomic<std::size_t> task_found_{0};
+  std::size_t task_budget_ = 0;  // the contacts the result has room for as the walk begins
   fcl::CollisionResult<S> empty_;
   fcl::CollisionResult<S> result_;
   // The cull on volumes: the tables, the memo of objects without an id, the margin's rate.
