@@ -108,10 +108,11 @@ struct NarrowPhaseOptions {
   /// split_walk's), and each task's pairs are culled and answered by FCL on the thread that walked
   /// it, 16 pairs at a time (their records, objects and geometries fetched together); the calling
   /// thread merges the tasks in the serial walk's order, so the contacts and colliding pairs are
-  /// the same. A request that takes every contact (num_max_contacts at its largest) runs every task
-  /// at once; any other runs them in waves (threads tasks, then twice as many, ...) and stops after
-  /// the wave in which its result filled: FCL may then be called for pairs of that wave after the
-  /// stop, and `stats` counts every pair of the tasks that ran.
+  /// the same. The tasks (256 where the cubes have leaves enough) run in one parallel region,
+  /// handed out in walk order; a task is skipped when its predecessors that have run hold
+  /// num_max_contacts contacts (the result is full before it). So a request that fills its
+  /// budget early may call FCL for pairs after its stop (those of tasks started before the
+  /// budget was seen full), and `stats` counts the pairs of every task that ran.
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;
