@@ -293,19 +293,23 @@ struct RecordingSink final : cube::detail::TaskSink<S> {
   using Called = cube::oracle::Pair<S>;
   std::size_t stop_at = ~std::size_t(0);  // drain(stop_at) stops, counting tasks of every walk
   std::size_t walks = 0, drained = 0;
+  int threads = 0;
   std::vector<std::vector<Called>> tasks;  // of the current walk
   std::vector<Called> joined;              // drained tasks, in order
   std::mutex mutex;
   std::set<std::size_t> taken;
 
-  void begin(std::size_t n) override {
+  void begin(std::size_t n, int workers) override {
     ++walks;
+    EXPECT_GE(workers, 2);
+    threads = workers;
     EXPECT_EQ(taken.size(), tasks.size()) << "every task of the last walk taken";
     tasks.assign(n, {});
     taken.clear();
   }
-  void take(std::size_t task, const Handed* pairs, std::size_t n) override {
+  void take(int worker, std::size_t task, const Handed* pairs, std::size_t n) override {
     std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_TRUE(worker >= 0 && worker < threads) << "worker " << worker;
     EXPECT_TRUE(taken.insert(task).second) << "task " << task << " taken twice";
     for (std::size_t i = 0; i < n; ++i) {
       EXPECT_EQ(::cube::detail::coreOf(*manager).table().object(pairs[i].ia), pairs[i].a);

@@ -5,6 +5,8 @@
 // walked (all pairs, one object down a tree, cube pairs, or a walk cut into tasks for threads),
 // and the delivery (in walk order, or gathered and called in registration order).
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -123,17 +125,20 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
     const std::size_t n = walk.tasks();
     std::vector<std::vector<std::uint64_t>> found(n);
     std::exception_ptr error;
-    if (sink != nullptr) sink->begin(n);
-    // A task's pairs to the sink, as objects, on the thread that walked it.
+    if (sink != nullptr) sink->begin(n, threads);
+    // A task's pairs to the sink, as objects, on the thread that walked it (each worker reuses
+    // its list).
+    std::vector<std::vector<typename TaskSink<S>::Pair>> handed(sink != nullptr ? threads : 0);
     const auto hand = [&](std::size_t i) {
-      std::vector<typename TaskSink<S>::Pair> pairs;
-      pairs.reserve(found[i].size());
+      const int worker = omp_get_thread_num();
+      auto& pairs = handed[std::size_t(worker)];
+      pairs.clear();
       for (const std::uint64_t pair : found[i]) {
         const auto x = static_cast<ObjectId>(pair >> 32), y = static_cast<ObjectId>(pair);
         pairs.push_back({table_.object(x), table_.object(y), x, y});
       }
       std::vector<std::uint64_t>().swap(found[i]);
-      sink->take(i, pairs.data(), pairs.size());
+      sink->take(worker, i, pairs.data(), pairs.size());
     };
     // Waves of tasks (threads, then twice as many, ...): a query that stops early walks little
     // more than the serial one. Gathering, or a sink (which skips what it need not answer),

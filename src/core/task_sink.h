@@ -26,11 +26,12 @@ class TaskSink {
     ObjectId ia, ib;
   };
   /// A walk of `tasks` tasks starts (the cubes with themselves, then with the unbounded list, then
-  /// the list with itself: three walks at most), numbered from 0 again. Calling thread.
-  virtual void begin(std::size_t tasks) = 0;
+  /// the list with itself: three walks at most), numbered from 0 again, on `workers` threads
+  /// numbered from 0 (scratch per worker needs no lock). Calling thread.
+  virtual void begin(std::size_t tasks, int workers) = 0;
   /// Task `task`'s pairs in walk order, on the thread that walked it. An exception is rethrown
   /// on the calling thread once every task has run (nothing is drained then).
-  virtual void take(std::size_t task, const Pair* pairs, std::size_t n) = 0;
+  virtual void take(int worker, std::size_t task, const Pair* pairs, std::size_t n) = 0;
   /// Calling thread, each task in order once every task's take() has returned: true stops the
   /// query (the tasks after it are not drained).
   virtual bool drain(std::size_t task) = 0;

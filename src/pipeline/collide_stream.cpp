@@ -101,6 +101,14 @@ struct CollideStream<S>::Slot {
   fcl::CollisionResult<S> fresh;
 };
 
+// A worker's block of a task: its pairs and their slots, kept from task to task (a slot's result
+// keeps its list's memory).
+template <typename S>
+struct CollideStream<S>::TaskScratch {
+  std::array<ObjectPair<S>, kBlock> block;
+  std::array<Slot, kBlock> slots;
+};
+
 // Whether a pair's answer goes to the cache: not one the volumes gave, which they give again
 // next time for less than a lookup costs.
 template <typename S>
@@ -430,9 +438,10 @@ constexpr std::size_t kRunning = std::numeric_limits<std::size_t>::max();
 }  // namespace
 
 template <typename S>
-void CollideStream<S>::begin(std::size_t tasks) {
+void CollideStream<S>::begin(std::size_t tasks, int workers) {
   tasks_.clear();
   tasks_.resize(tasks);
+  if (workers_.size() < std::size_t(workers)) workers_.resize(std::size_t(workers));
   task_contacts_ = std::make_unique<std::atomic<std::size_t>[]>(tasks);
   for (std::size_t i = 0; i < tasks; ++i) task_contacts_[i].store(kRunning);
   task_found_.store(0);
@@ -441,7 +450,7 @@ void CollideStream<S>::begin(std::size_t tasks) {
 }
 
 template <typename S>
-void CollideStream<S>::take(std::size_t task, const typename TaskSink<S>::Pair* pairs,
+void CollideStream<S>::take(int worker, std::size_t task, const typename TaskSink<S>::Pair* pairs,
                             std::size_t n) {
   // Full before this task? Only once the tasks run so far hold the budget at all (a sum over
   // every task, one load), then over those before this one: the merge adds contacts in order
@@ -456,8 +465,8 @@ void CollideStream<S>::take(std::size_t task, const typename TaskSink<S>::Pair* 
   }
   TaskAnswers& out = tasks_[task];
   out.stats.candidate_pairs += n;
-  std::array<ObjectPair<S>, kBlock> block;
-  std::array<Slot, kBlock> slots;
+  std::array<ObjectPair<S>, kBlock>& block = workers_[std::size_t(worker)].block;
+  std::array<Slot, kBlock>& slots = workers_[std::size_t(worker)].slots;
   for (std::size_t first = 0; first < n; first += kBlock) {
     const std::size_t m = std::min(kBlock, n - first);
     for (std::size_t k = 0; k < m; ++k) {

@@ -60,10 +60,11 @@ class CollideStream final : public TaskSink<S> {
   bool takesTasks() const;
   /// The threads the stream answers on (NarrowPhaseOptions::threads resolved).
   int threads() const { return threads_; }
-  void begin(std::size_t tasks) override;
+  void begin(std::size_t tasks, int workers) override;
   /// Skips the work of a task whose predecessors that have run hold the budget's contacts
   /// (num_max_contacts): the result is full before it, nothing of it would be merged.
-  void take(std::size_t task, const typename TaskSink<S>::Pair* pairs, std::size_t n) override;
+  void take(int worker, std::size_t task, const typename TaskSink<S>::Pair* pairs,
+            std::size_t n) override;
   bool drain(std::size_t task) override;
 
   /// An fcl::CollisionCallBack feeding the CollideStream passed as cdata.
@@ -75,6 +76,7 @@ class CollideStream final : public TaskSink<S> {
  private:
   struct Slot;
   struct TaskAnswers;
+  struct TaskScratch;
   // The records of a pair, for pushJudged (null: cull from the objects).
   struct Volumes {
     const VolumeSphere* sphere;
@@ -115,6 +117,7 @@ class CollideStream final : public TaskSink<S> {
   std::vector<Slot> slots_;           // one per pair of the chunk
   std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
   std::vector<TaskAnswers> tasks_;    // a split walk's tasks, each answered on its thread
+  std::vector<TaskScratch> workers_;  // per worker of the walk: a block's pairs and slots
   // Per task, its contacts once it has run (kRunning before), and their sum over the tasks run:
   // what take() reads to skip a task the result is full before.
   std::unique_ptr<std::atomic<std::size_t>[]> task_contacts_;
