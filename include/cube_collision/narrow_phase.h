@@ -89,9 +89,7 @@ struct NarrowPhaseOptions {
   /// threads in chunks of at least 128 pairs (a pair with a mesh or an octree counts 64); the
   /// cache is always looked up on the calling thread. On a CubeCollisionManager that keeps
   /// per-object volumes (Config::tight_volumes, 256 objects or more) the cull runs on the
-  /// calling thread while pairs are answered at once (in chunks too with a cache, whose lookup
-  /// needs its verdict; without one it runs in the chunk), and only FCL's calls count towards the
-  /// 1,024: 63 for a mesh or an octree, 5
+  /// calling thread and only FCL's calls count towards the 1,024: 63 for a mesh or an octree, 5
   /// for a pair of shapes that FCL 0.7 answers with GJK (any but a sphere with a sphere, box,
   /// capsule or cylinder and a box with a box), none for those; in a chunk such a pair counts 6,
   /// the others 1. So a collide among spheres and boxes there runs on the calling thread

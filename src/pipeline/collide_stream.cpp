@@ -38,7 +38,7 @@ namespace {
 constexpr std::size_t kSerialWork = 1024;
 constexpr std::size_t kFirstChunkWork = 256;
 constexpr std::size_t kMaxChunkWork = 4096;
-// A chunk's pairs are answered in blocks of kBlock (CollideStream::answerBlock), reading the first
+// A chunk's pairs are answered in blocks of kBlock (CollideStream::cullBlock), reading the first
 // kObjectLines cache lines of an object (its geometry pointer and pose: the first 160 of 224 bytes
 // for double) and kGeometryLines of a geometry (120 bytes of base, then the shape's fields).
 constexpr std::size_t kBlock = 16;
@@ -55,17 +55,17 @@ Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
   return judge(request, a, b);
 }
 
-// A pair's contacts: a run of a list (a cached answer, a task's answers) or a fresh result (FCL
-// gives no const view of its list).
+// A pair's contacts: the run [first, first + n) of a cached answer's list or of a result (a
+// pair's own, or a task's for all its pairs; FCL gives no const view of a result's list).
 template <typename S>
 struct Contacts {
   const std::vector<fcl::Contact<S>>* list;
+  const fcl::CollisionResult<S>* result;
   std::size_t first, n;
-  const fcl::CollisionResult<S>* fresh;
 
-  std::size_t size() const { return list ? n : fresh->numContacts(); }
+  std::size_t size() const { return n; }
   const fcl::Contact<S>& operator[](std::size_t k) const {
-    return list ? (*list)[first + k] : fresh->getContact(k);
+    return list ? (*list)[first + k] : result->getContact(first + k);
   }
 };
 
@@ -79,16 +79,16 @@ constexpr std::array<std::size_t, kBlock> kInPlace = [] {
 }  // namespace
 
 // A split walk's task, answered on its thread: its counts, and the pairs that gave contacts with
-// their contacts, in walk order.
+// their contacts, in walk order, all in one result (FCL writes each pair's into it directly).
 template <typename S>
 struct CollideStream<S>::TaskAnswers {
   struct Hit {
     ObjectPair<S> pair;
-    std::size_t first, count;  // in contacts
+    std::size_t first, count;  // in result
   };
   NarrowPhaseStats stats;
   std::vector<Hit> hits;
-  std::vector<fcl::Contact<S>> contacts;
+  fcl::CollisionResult<S> result;
 };
 
 template <typename S>
@@ -311,9 +311,9 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
 template <typename S>
 void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
   if (s.kind == Answer::kCached)
-    mergeContacts(pair, Contacts<S>{&s.cached->answer, 0, s.cached->answer.size(), nullptr});
+    mergeContacts(pair, Contacts<S>{&s.cached->answer, nullptr, 0, s.cached->answer.size()});
   else
-    mergeContacts(pair, Contacts<S>{nullptr, 0, 0, &s.fresh});
+    mergeContacts(pair, Contacts<S>{nullptr, &s.fresh, 0, s.fresh.numContacts()});
 }
 
 template <typename S>
@@ -341,15 +341,15 @@ void CollideStream<S>::markDone() {
   if (result_.isCollision() && result_.numContacts() >= request_.num_max_contacts) done_ = true;
 }
 
-// A block of pairs (pairs[index[k]], k < n): the cull, then FCL on what it leaves. Each step
-// first asks for the memory it reads for the whole block (the records; then the objects, then
-// their geometries), so that the cache misses of a block overlap instead of each pair waiting on
-// its own: the first touch of an object and of its geometry was a third of FCL's time in a large
-// self-collide of shapes (10,000 objects, whose records and objects lie in registration order,
-// not in the walk's).
+// A block of pairs (pairs[index[k]], k < n): the cull, then the memory FCL reads first for the
+// pairs it leaves. Each step first asks for the memory it reads for the whole block (the records;
+// then the objects, then their geometries), so that the cache misses of a block overlap instead
+// of each pair waiting on its own: the first touch of an object and of its geometry was a third of
+// FCL's time in a large self-collide of shapes (10,000 objects, whose records and objects lie in
+// registration order, not in the walk's).
 template <typename S>
-void CollideStream<S>::answerBlock(const std::size_t* index, std::size_t n,
-                                   const ObjectPair<S>* pairs, Slot* slots) const {
+void CollideStream<S>::cullBlock(const std::size_t* index, std::size_t n,
+                                 const ObjectPair<S>* pairs, Slot* slots) const {
   const auto fetch = [](const void* p, std::size_t lines) {
     for (std::size_t l = 0; l < lines; ++l)
       __builtin_prefetch(static_cast<const char*>(p) + 64 * l);
@@ -381,14 +381,6 @@ void CollideStream<S>::answerBlock(const std::size_t* index, std::size_t n,
       fetch(pair.first->collisionGeometry().get(), kGeometryLines);
       fetch(pair.second->collisionGeometry().get(), kGeometryLines);
     }
-  for (std::size_t k = 0; k < n; ++k) {
-    Slot& s = slots[index[k]];
-    const ObjectPair<S>& pair = pairs[index[k]];
-    if (s.kind == Answer::kApart) continue;
-    s.fresh.clear();
-    if (s.kind == Answer::kProved) s.fresh.addContact(provedContact(pair));
-    if (s.kind == Answer::kComputed) fclCollide(pair.first, pair.second, request_, s.fresh);
-  }
 }
 
 template <typename S>
@@ -399,16 +391,24 @@ void CollideStream<S>::flush() {
     // Threads only for work that pays for waking them (a region costs about 1 us here when
     // the other core is idle, tens of us when it is busy).
     const int threads = pending_work_ >= kParallelMinWork ? threads_ : 1;
-    // Blocks of pending pairs, whose memory is fetched together (answerBlock), but at least 8
+    // Blocks of pending pairs, whose memory is fetched together (cullBlock), but at least 8
     // a thread: a chunk of 64 mesh pairs in 4 blocks of 16 left a thread idle (1,000 meshes on
     // two threads, 1.17x the time of pairs handed out one by one).
     const std::size_t n_pending = pending_.size();
     const std::size_t block =
         std::clamp<std::size_t>(n_pending / (8 * std::size_t(threads)), 1, kBlock);
     detail::parallelFor((n_pending + block - 1) / block, threads, [&](std::size_t k) {
-      const std::size_t first = k * block;
-      answerBlock(pending_.data() + first, std::min(block, n_pending - first), chunk_.data(),
-                  slots_.data());
+      const std::size_t* index = pending_.data() + k * block;
+      const std::size_t m = std::min(block, n_pending - k * block);
+      cullBlock(index, m, chunk_.data(), slots_.data());
+      for (std::size_t j = 0; j < m; ++j) {
+        Slot& s = slots_[index[j]];
+        const ObjectPair<S>& pair = chunk_[index[j]];
+        if (s.kind == Answer::kApart) continue;
+        s.fresh.clear();
+        if (s.kind == Answer::kProved) s.fresh.addContact(provedContact(pair));
+        if (s.kind == Answer::kComputed) fclCollide(pair.first, pair.second, request_, s.fresh);
+      }
     });
     for (std::size_t i = 0; i < n; ++i) {
       Slot& s = slots_[i];
@@ -467,6 +467,7 @@ void CollideStream<S>::take(int worker, std::size_t task, const typename TaskSin
   out.stats.candidate_pairs += n;
   std::array<ObjectPair<S>, kBlock>& block = workers_[std::size_t(worker)].block;
   std::array<Slot, kBlock>& slots = workers_[std::size_t(worker)].slots;
+  fcl::CollisionRequest<S> request = request_;
   for (std::size_t first = 0; first < n; first += kBlock) {
     const std::size_t m = std::min(kBlock, n - first);
     for (std::size_t k = 0; k < m; ++k) {
@@ -477,18 +478,28 @@ void CollideStream<S>::take(int worker, std::size_t task, const typename TaskSin
       s.judged = false;
       s.deferred = volumes_.ofTables(p.ia, p.ib, s.va.sphere, s.va.shape, s.vb.sphere, s.vb.shape);
     }
-    answerBlock(kInPlace.data(), m, block.data(), slots.data());
+    cullBlock(kInPlace.data(), m, block.data(), slots.data());
     for (std::size_t k = 0; k < m; ++k) {
       const Slot& s = slots[k];
+      const ObjectPair<S>& pair = block[k];
       count(out.stats, s.kind);
-      if (s.kind == Answer::kApart || s.fresh.numContacts() == 0) continue;
-      out.hits.push_back({block[k], out.contacts.size(), s.fresh.numContacts()});
-      for (std::size_t c = 0; c < s.fresh.numContacts(); ++c)
-        out.contacts.push_back(s.fresh.getContact(c));
+      if (s.kind == Answer::kApart) continue;
+      // Into the task's result, with room for the pair's whole budget after what it holds, as
+      // a fresh result of its own would have: the same contacts, copied once less.
+      const std::size_t before = out.result.numContacts();
+      if (s.kind == Answer::kProved) {
+        out.result.addContact(provedContact(pair));
+      } else {
+        request.num_max_contacts =
+            before + std::min(request_.num_max_contacts, kRunning - 1 - before);
+        fclCollide(pair.first, pair.second, request, out.result);
+      }
+      const std::size_t added = out.result.numContacts() - before;
+      if (added > 0) out.hits.push_back({pair, before, added});
     }
   }
-  task_contacts_[task].store(out.contacts.size(), std::memory_order_release);
-  task_found_.fetch_add(out.contacts.size(), std::memory_order_relaxed);
+  task_contacts_[task].store(out.result.numContacts(), std::memory_order_release);
+  task_found_.fetch_add(out.result.numContacts(), std::memory_order_relaxed);
 }
 
 template <typename S>
@@ -496,7 +507,7 @@ bool CollideStream<S>::drain(std::size_t task) {
   TaskAnswers& t = tasks_[task];
   addStats(&stats_, t.stats);
   for (const typename TaskAnswers::Hit& h : t.hits)
-    mergeContacts(h.pair, Contacts<S>{&t.contacts, h.first, h.count, nullptr});
+    mergeContacts(h.pair, Contacts<S>{nullptr, &t.result, h.first, h.count});
   t = TaskAnswers{};
   return done_;
 }

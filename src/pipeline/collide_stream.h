@@ -84,10 +84,10 @@ class CollideStream final : public TaskSink<S> {
   };
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
                   const Volumes* vb);
-  // Answers the pairs pairs[index[k]] into slots[index[k]], k < n (at most kBlock): the cull
-  // where the slot says, then FCL. Any thread.
-  void answerBlock(const std::size_t* index, std::size_t n, const ObjectPair<S>* pairs,
-                   Slot* slots) const;
+  // The cull of the pairs pairs[index[k]] into slots[index[k]], k < n (at most kBlock), where
+  // the slot says, then a prefetch of what FCL reads first for those it leaves. Any thread.
+  void cullBlock(const std::size_t* index, std::size_t n, const ObjectPair<S>* pairs,
+                 Slot* slots) const;
   static bool cacheable(const Slot& s);
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
