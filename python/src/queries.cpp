@@ -72,7 +72,7 @@ struct ContactRow {
 struct CollideOut {
   bool any = false;
   // Colliding pairs, one row each (null: the query geometry). The entries live while the query
-  // holds the manager's lock: results are built before it lets go (QueryLock).
+  // holds the manager's lock: results are built before it lets go (collideQuery).
   std::vector<std::pair<const Entry*, const Entry*>> pairs;
   std::vector<ContactRow> contacts;
 };
