@@ -388,8 +388,10 @@ hardware's, 1: the calling thread only); answers do not depend on it.
 
 Thread safety: any calls from several Python threads are safe. Queries run concurrently (each
 releases the GIL); a mutation (add, remove, set_transform(s), filters, margins) waits for the
-running queries and runs alone. Pickles: the copy is rebuilt from geometry, names, transforms,
-filter bits, ignored pairs and margins.)doc");
+running queries and runs alone. A mutation from Python code that runs inside a query (a
+callback of the private _collide_python hooks, or a __del__ while a collide query builds its
+result) raises RuntimeError instead of waiting for that query. Pickles: the copy is rebuilt from
+geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
   cls.def(py::init<const std::string&, int>(), py::arg("backend") = "cube", py::arg("threads") = 0,
           "An empty manager. ValueError for a backend other than 'cube' or 'fcl'.")
       .def_property_readonly("backend", &Manager::backend, "'cube' or 'fcl'.")
