@@ -305,6 +305,107 @@ TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
   EXPECT_GT(checked, 0u);
 }
 
+// The round bounds (capsules about the axes of spheres, capsules, cylinders and cones) and the
+// inner volumes (capsules and boxes inside spheres, boxes, cylinders and capsules) decide only
+// what FCL's narrow phase says: apart only where FCL reports no contact (either solver), touching
+// only where it reports one with either solver and argument order. Shapes of assorted proportions
+// (long, flat, a cone lower than wide, a capsule of length 0) slide from a common centre to where
+// FCL stops reporting contact and beyond, near the origin and 1,000 away (where the float records
+// round most). And the bounds decide pairs the spheres, boxes and inscribed balls leave to FCL.
+TYPED_TEST(Culling, RoundAndInnerBoundsAgreeWithFcl) {
+  using S = TypeParam;
+  using namespace cube::detail;
+  using namespace cube::detail::volume_detail;
+  const std::vector<std::pair<std::string, Geometry<S>>> shapes = {
+      {"sphere", std::make_shared<fcl::Sphere<S>>(0.4)},
+      {"box", std::make_shared<fcl::Box<S>>(1.0, 0.3, 0.6)},
+      {"flat box", std::make_shared<fcl::Box<S>>(1.2, 1.0, 0.1)},
+      {"capsule", std::make_shared<fcl::Capsule<S>>(0.25, 0.9)},
+      {"long capsule", std::make_shared<fcl::Capsule<S>>(0.1, 2.0)},
+      {"ball capsule", std::make_shared<fcl::Capsule<S>>(0.3, 0.0)},
+      {"cylinder", std::make_shared<fcl::Cylinder<S>>(0.3, 1.1)},
+      {"disc", std::make_shared<fcl::Cylinder<S>>(0.6, 0.1)},
+      {"cone", std::make_shared<fcl::Cone<S>>(0.4, 0.9)},
+      {"low cone", std::make_shared<fcl::Cone<S>>(0.6, 0.3)}};
+  const float rate = volumeMarginRate(defaultTolerance<S>());
+  const auto fclSays = [](fcl::CollisionObject<S>& x, fcl::CollisionObject<S>& y,
+                          fcl::GJKSolverType solver) {
+    fcl::CollisionRequest<S> req;
+    req.gjk_solver_type = solver;
+    fcl::CollisionResult<S> res;
+    return fcl::collide(&x, &y, req, res) > 0;
+  };
+  std::mt19937 rng(31);
+  std::normal_distribution<double> n(0, 1);
+  std::size_t round_apart = 0, round_only = 0, meet = 0, meet_only = 0;
+  for (const double offset : {0.0, 1000.0})
+    for (const auto& [na, ga] : shapes)
+      for (const auto& [nb, gb] : shapes) {
+        fcl::CollisionObject<S> a(ga), b(gb);
+        const fcl::Vector3<S> base(S(offset), S(-0.5 * offset), S(0.25 * offset));
+        for (int rep = 0; rep < 6; ++rep) {
+          a.setTransform(randomRotation<S>(rng), base);
+          a.computeAABB();
+          const fcl::Matrix3<S> rb = randomRotation<S>(rng);
+          fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
+          dir.normalize();
+          auto place = [&](double t) {
+            b.setTransform(rb, base + dir * S(t));
+            b.computeAABB();
+          };
+          double in, out;
+          if (!slideToTouching(a, b, place, in, out)) continue;
+          std::vector<double> ts;
+          for (int k = 0; k <= 12; ++k) ts.push_back(in * k / 12.0);
+          for (const double t : {in, out, out + 1e-9, out + 1e-3, out + 0.02, out + 0.1, out + 0.4})
+            ts.push_back(t);
+          for (const double t : ts) {
+            place(t);
+            VolumeSphere sa, sb;
+            VolumeShape ha, hb;
+            buildVolume(a, sa, ha);
+            buildVolume(b, sb, hb);
+            const float m = innerMargin(sa, ha, sb, hb, rate);
+            const AxisCapsule oa = outerCapsule(sa, ha), ob = outerCapsule(sb, hb);
+            const bool apart =
+                oa.radius >= 0.f && ob.radius >= 0.f && capsuleGap(sa, ha, oa, sb, hb, ob) > m;
+            const bool touching =
+                ha.inner_r > 0.f && hb.inner_r > 0.f && innerVolumesMeet(sa, ha, sb, hb, m);
+            const std::string what = na + " vs " + nb + " at " + std::to_string(t) +
+                                     " (contact from " + std::to_string(out) + "), offset " +
+                                     std::to_string(offset);
+            if (apart) {
+              ++round_apart;
+              const VolumeGap old = separationOf(sa, ha, sb, hb, rate, 0.f);
+              round_only += !(old.lower_bound > old.margin);
+              EXPECT_FALSE(fclSays(a, b, fcl::GST_LIBCCD)) << what;
+              EXPECT_FALSE(fclSays(b, a, fcl::GST_LIBCCD)) << what;
+              EXPECT_FALSE(fclSays(a, b, fcl::GST_INDEP)) << what << " indep";
+              EXPECT_EQ(verdictOf(sa, ha, sb, hb, rate, true), Verdict::kApart) << what;
+            }
+            if (touching) {
+              ++meet;
+              float gap2 = 0.f;  // the inscribed balls
+              for (int k = 0; k < 3; ++k) {
+                const float g = (sb.c[k] + hb.inner_z * hb.R[3 * k + 2]) -
+                                (sa.c[k] + ha.inner_z * ha.R[3 * k + 2]);
+                gap2 += g * g;
+              }
+              meet_only += std::sqrt(gap2) >= ha.inner_r + hb.inner_r;
+              for (const auto solver : {fcl::GST_LIBCCD, fcl::GST_INDEP}) {
+                EXPECT_TRUE(fclSays(a, b, solver)) << what;
+                EXPECT_TRUE(fclSays(b, a, solver)) << what;
+              }
+              EXPECT_EQ(verdictOf(sa, ha, sb, hb, rate, true), Verdict::kTouching) << what;
+              EXPECT_EQ(verdictOf(sa, ha, sb, hb, rate, false), Verdict::kUnknown) << what;
+            }
+          }
+        }
+      }
+  EXPECT_GT(round_only, 200u) << round_apart;
+  EXPECT_GT(meet_only, 500u) << meet;
+}
+
 // The default callbacks cull: collideAll on a cube manager gives exactly the contacts of
 // fcl::collide over every pair (all contacts requested), on scenes of every kind.
 TYPED_TEST(Culling, CollideAllEqualsBruteForceNarrowPhase) {

@@ -37,7 +37,8 @@ struct VolumeShape {
   float inner_r;
   float inner_z;
   /// kVolumeSphere: the geometry is a sphere (r exact, no box needed); kVolumeBox,
-  /// kVolumeRound, kVolumeHeavy: its kind, as the cost of FCL's call on a pair sees it
+  /// kVolumeRound, kVolumeHeavy: its kind, as the cost of FCL's call on a pair sees it;
+  /// kVolumeCapsule, kVolumeCylinder, kVolumeCone: the primitive, for the cull's round bounds
   std::uint32_t flags;
 };
 static_assert(sizeof(VolumeShape) == 64, "one record per cache line");
@@ -48,8 +49,16 @@ inline constexpr std::uint32_t kVolumeSphere = 1u;
 inline constexpr std::uint32_t kVolumeBox = 4u;
 inline constexpr std::uint32_t kVolumeRound = 8u;
 inline constexpr std::uint32_t kVolumeHeavy = 16u;
-inline constexpr std::uint32_t kVolumeKinds =
-    kVolumeSphere | kVolumeBox | kVolumeRound | kVolumeHeavy;
+/// The primitive, for the cull's round and inner bounds (cull.h): set only for FCL's capsules,
+/// cylinders and cones centred on their frame's origin with finite sizes >= 0 (every one FCL
+/// builds), whose local AABB then gives their sizes: (r, r, lz / 2 + r) for a capsule, (r, r,
+/// lz / 2) for a cylinder and a cone (base at -lz / 2).
+inline constexpr std::uint32_t kVolumeCapsule = 32u;
+inline constexpr std::uint32_t kVolumeCylinder = 64u;
+inline constexpr std::uint32_t kVolumeCone = 128u;
+inline constexpr std::uint32_t kVolumeKinds = kVolumeSphere | kVolumeBox | kVolumeRound |
+                                              kVolumeHeavy | kVolumeCapsule | kVolumeCylinder |
+                                              kVolumeCone;
 
 /// Builds `o`'s records from its transform and geometry (local AABB, kind, size): the inscribed
 /// ball only for occupied spheres, boxes, capsules, cylinders, cones and ellipsoids. Defined in

@@ -205,6 +205,35 @@ bool localInscribedBall(const fcl::CollisionGeometry<S>& g, double& z, double& r
   return std::isfinite(r) && r > 0;
 }
 
+// kVolumeCapsule, kVolumeCylinder or kVolumeCone for such a primitive whose sizes are finite and
+// >= 0 and whose local AABB's half extents `e` are the ones its sizes give (volume.h; not after a
+// resize in place without computeLocalAABB()), else 0.
+template <typename S>
+std::uint32_t roundKind(const fcl::CollisionGeometry<S>& g, const Eigen::Vector3d& e) {
+  const auto sized = [&e](S radius, S lz, double ez) {
+    const double r = radius, tol = 8.0 * std::numeric_limits<S>::epsilon() * (1 + r + ez);
+    return std::isfinite(r) && std::isfinite(double(lz)) && r >= 0 && lz >= S(0) &&
+           std::fabs(e[0] - r) <= tol && std::fabs(e[1] - r) <= tol && std::fabs(e[2] - ez) <= tol;
+  };
+  switch (g.getNodeType()) {
+    case fcl::GEOM_CAPSULE: {
+      const auto& cap = static_cast<const fcl::Capsule<S>&>(g);
+      return sized(cap.radius, cap.lz, 0.5 * double(cap.lz) + double(cap.radius)) ? kVolumeCapsule
+                                                                                  : 0u;
+    }
+    case fcl::GEOM_CYLINDER: {
+      const auto& cyl = static_cast<const fcl::Cylinder<S>&>(g);
+      return sized(cyl.radius, cyl.lz, 0.5 * double(cyl.lz)) ? kVolumeCylinder : 0u;
+    }
+    case fcl::GEOM_CONE: {
+      const auto& cone = static_cast<const fcl::Cone<S>&>(g);
+      return sized(cone.radius, cone.lz, 0.5 * double(cone.lz)) ? kVolumeCone : 0u;
+    }
+    default:
+      return 0u;
+  }
+}
+
 // The geometry's part of an object's records (VolumeSource).
 template <typename S>
 void localVolume(const fcl::CollisionGeometry<S>* g, VolumeSource& local) {
@@ -236,12 +265,13 @@ void localVolume(const fcl::CollisionGeometry<S>* g, VolumeSource& local) {
                                                                           : 0u;
   double z = 0, inner = 0;
   // The ball's centre is given from the box's centre: only for geometries centred on their
-  // frame's origin, as FCL's primitives are.
-  if ((is_sphere || mid.cwiseAbs().maxCoeff() <= 1e-12 * (1 + r)) &&
-      localInscribedBall(*g, z, inner)) {
+  // frame's origin, as FCL's primitives are; so are the round bounds' axes.
+  const bool centred = is_sphere || mid.cwiseAbs().maxCoeff() <= 1e-12 * (1 + r);
+  if (centred && localInscribedBall(*g, z, inner)) {
     local.inner_r = static_cast<float>(inner);
     local.inner_z = static_cast<float>(z);
   }
+  if (centred) local.flags |= roundKind(*g, e);
 }
 
 // The records from the geometry's part and the object's transform.

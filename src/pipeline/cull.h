@@ -145,6 +145,185 @@ inline float boxGap(const VolumeSphere& sa, const VolumeShape& a, const VolumeSp
   return gap;
 }
 
+// A capsule on a record's third axis: the segment from z - half to z + half along it (about the
+// record's centre) and a radius; radius < 0: none.
+struct AxisCapsule {
+  float z, half, radius;
+};
+inline constexpr AxisCapsule kNoCapsule{0.f, 0.f, -1.f};
+inline constexpr std::uint32_t kRoundKinds =
+    kVolumeSphere | kVolumeCapsule | kVolumeCylinder | kVolumeCone;
+
+// The capsule holding a sphere, capsule, cylinder or cone (the records' extents are outward
+// rounded: volume.h). A cone's (base radius r at z = -h / 2, apex at h / 2): radius r about its
+// axis from the base's centre to r below the apex (every point of it within r of that segment
+// while r <= h), or the ball of radius r about the base's centre when h < r.
+inline AxisCapsule outerCapsule(const VolumeSphere& s, const VolumeShape& h) {
+  const std::uint32_t f = h.flags;
+  if ((f & kVolumeSphere) != 0) return {0.f, 0.f, s.r};
+  if ((f & kVolumeCapsule) != 0) return {0.f, std::max(h.e[2] - h.e[0], 0.f), h.e[0]};
+  if ((f & kVolumeCylinder) != 0) return {0.f, h.e[2], h.e[0]};
+  if ((f & kVolumeCone) != 0) {
+    const float r = h.e[0], half_h = h.e[2];
+    return 2.f * half_h > r ? AxisCapsule{-0.5f * r, half_h - 0.5f * r, r}
+                            : AxisCapsule{-half_h, 0.f, r};
+  }
+  return kNoCapsule;
+}
+
+// A capsule inside a sphere, capsule or cylinder (the inscribed ball's radius, which is inward
+// rounded, about the longest segment that keeps it inside), for records with an inscribed ball.
+inline AxisCapsule innerCapsule(const VolumeShape& h) {
+  if (!(h.inner_r > 0.f)) return kNoCapsule;
+  const std::uint32_t f = h.flags;
+  if ((f & kVolumeSphere) != 0) return {0.f, 0.f, h.inner_r};
+  if ((f & kVolumeCapsule) != 0) return {0.f, std::max(h.e[2] - h.e[0], 0.f), h.inner_r};
+  if ((f & kVolumeCylinder) != 0) return {0.f, std::max(h.e[2] - h.inner_r, 0.f), h.inner_r};
+  return kNoCapsule;
+}
+
+// The half extents of a box inside a box, cylinder or capsule about its centre, on its axes (a
+// cylinder's and a capsule's square section inscribed in their circle), for records with an
+// inscribed ball; false for other records.
+inline bool innerBox(const VolumeShape& h, float* ie) {
+  if (!(h.inner_r > 0.f)) return false;
+  const std::uint32_t f = h.flags;
+  constexpr float kHalfRoot2 = 0.70710677f;  // rounded down
+  if ((f & kVolumeBox) != 0) {
+    ie[0] = h.e[0], ie[1] = h.e[1], ie[2] = h.e[2];
+  } else if ((f & (kVolumeCylinder | kVolumeCapsule)) != 0) {
+    ie[0] = h.e[0] * kHalfRoot2, ie[1] = h.e[1] * kHalfRoot2;
+    ie[2] = (f & kVolumeCylinder) != 0 ? h.e[2] : std::max(h.e[2] - h.e[0], 0.f);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+inline float dot3(const float* a, const float* b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+// Two capsules' segments (centres p = 0 and w relative to it, unit axes u and v, half lengths a
+// and b): out = the vector from a point of b's segment to a point of a's, near the closest pair
+// (exact but for rounding when the axes are not parallel; any pair of points serves the bounds).
+inline void segmentsApart(const float* w, const float* u, const float* v, float a, float b,
+                          float* out) {
+  const float uv = dot3(u, v), uw = dot3(u, w), vw = dot3(v, w);
+  const float den = 1.f - uv * uv;
+  float s = den > 1e-6f ? std::clamp((uw - uv * vw) / den, -a, a) : 0.f;
+  const float t = std::clamp(uv * s - vw, -b, b);
+  s = std::clamp(uv * t + uw, -a, a);
+  for (int k = 0; k < 3; ++k) out[k] = s * u[k] - t * v[k] - w[k];
+}
+
+// The capsules ca of record a and cb of record b: their segments' centres relative to a's
+// record centre (0 and w) and axes.
+inline void capsuleFrame(const VolumeSphere& sa, const VolumeShape& ha, const AxisCapsule& ca,
+                         const VolumeSphere& sb, const VolumeShape& hb, const AxisCapsule& cb,
+                         float* w, float* u, float* v) {
+  for (int k = 0; k < 3; ++k) {
+    u[k] = ha.R[3 * k + 2];
+    v[k] = hb.R[3 * k + 2];
+    w[k] = (sb.c[k] - sa.c[k]) + cb.z * v[k] - ca.z * u[k];
+  }
+}
+
+// A lower bound on the distance of two capsules: the gap of their segments along the direction
+// between segmentsApart's points (every direction gives one: the projection of the segments'
+// distance), less both radii. -infinity when those points meet.
+inline float capsuleGap(const VolumeSphere& sa, const VolumeShape& ha, const AxisCapsule& ca,
+                        const VolumeSphere& sb, const VolumeShape& hb, const AxisCapsule& cb) {
+  float w[3], u[3], v[3], n[3];
+  capsuleFrame(sa, ha, ca, sb, hb, cb, w, u, v);
+  segmentsApart(w, u, v, ca.half, cb.half, n);
+  const float len = std::sqrt(dot3(n, n));
+  if (!(len > 0.f)) return -std::numeric_limits<float>::infinity();
+  for (float& x : n) x /= len;
+  return -dot3(n, w) - ca.half * std::fabs(dot3(n, u)) - cb.half * std::fabs(dot3(n, v)) -
+         ca.radius - cb.radius;
+}
+
+// An upper bound on the distance of two capsules' segments, less both radii: < 0 when they meet.
+inline float capsuleReach(const VolumeSphere& sa, const VolumeShape& ha, const AxisCapsule& ca,
+                          const VolumeSphere& sb, const VolumeShape& hb, const AxisCapsule& cb) {
+  float w[3], u[3], v[3], n[3];
+  capsuleFrame(sa, ha, ca, sb, hb, cb, w, u, v);
+  segmentsApart(w, u, v, ca.half, cb.half, n);
+  return std::sqrt(dot3(n, n)) - ca.radius - cb.radius;
+}
+
+// Whether boxes a and b (centres and axes of the records, half extents ia and ib) share a point
+// with `m` to spare: a's centre clamped into b (shrunk by m) lies in a shrunk by m, or b's centre
+// clamped into a lies in b. Sufficient, not necessary: boxes crossing with both centres outside
+// the other are left to FCL.
+inline bool boxesShareAPoint(const VolumeSphere& sa, const VolumeShape& a, const float* ia,
+                             const VolumeSphere& sb, const VolumeShape& b, const float* ib,
+                             float m) {
+  const float d[3] = {sb.c[0] - sa.c[0], sb.c[1] - sa.c[1], sb.c[2] - sa.c[2]};
+  float R[3][3], t[3], u[3];  // R[i][j]: a's axis i . b's axis j; t: b's centre in a's frame
+  for (int i = 0; i < 3; ++i) {
+    t[i] = a.R[i] * d[0] + a.R[3 + i] * d[1] + a.R[6 + i] * d[2];
+    u[i] = -(b.R[i] * d[0] + b.R[3 + i] * d[1] + b.R[6 + i] * d[2]);  // a's centre in b's
+    for (int j = 0; j < 3; ++j)
+      R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
+  }
+  for (int k = 0; k < 3; ++k)
+    if (!(ia[k] > m) || !(ib[k] > m)) return false;
+  // The clamped point p minus the centre it moved from, in that box's frame (w), then in the
+  // other box's frame, relative to the other's centre: p - c_a = R_b w for a's centre clamped
+  // into b, p - c_b = R_a w for b's centre clamped into a.
+  float w[3];
+  for (int j = 0; j < 3; ++j) w[j] = std::clamp(u[j], m - ib[j], ib[j] - m) - u[j];
+  bool inside = true;
+  for (int i = 0; i < 3 && inside; ++i)
+    inside = std::fabs(R[i][0] * w[0] + R[i][1] * w[1] + R[i][2] * w[2]) < ia[i] - m;
+  if (inside) return true;
+  for (int i = 0; i < 3; ++i) w[i] = std::clamp(t[i], m - ia[i], ia[i] - m) - t[i];
+  inside = true;
+  for (int j = 0; j < 3 && inside; ++j)
+    inside = std::fabs(R[0][j] * w[0] + R[1][j] * w[1] + R[2][j] * w[2]) < ib[j] - m;
+  return inside;
+}
+
+// Distance from point p to the box of centre s.c, the record's axes and half extents ie.
+inline float pointInBox(const float* p, const VolumeSphere& s, const VolumeShape& h,
+                        const float* ie) {
+  const float d[3] = {p[0] - s.c[0], p[1] - s.c[1], p[2] - s.c[2]};
+  float out2 = 0.f;
+  for (int i = 0; i < 3; ++i) {
+    const float q = h.R[i] * d[0] + h.R[3 + i] * d[1] + h.R[6 + i] * d[2];
+    const float o = std::max(std::fabs(q) - ie[i], 0.f);
+    out2 += o * o;
+  }
+  return std::sqrt(out2);
+}
+
+// The round and inner bounds' margin: 4 rate x (1 + scale + both bounding radii), which covers
+// the records' outward (inward) rounding of sizes, near 16 float ulps of the scale each, and these
+// bounds' own arithmetic on coordinates relative to one centre (the pair's centres are within the
+// sum of the bounding radii when these run), on top of separation's margin.
+inline float innerMargin(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                         const VolumeShape& hb, float rate) {
+  return 4.f * rate * (1.f + std::max(ha.scale, hb.scale) + sa.r + sb.r);
+}
+
+// Whether the inner volumes of two records with inscribed balls overlap by more than m: both
+// inner capsules (spheres, capsules, cylinders), a sphere against an inner box (boxes,
+// cylinders, capsules), or two inner boxes sharing a point.
+inline bool innerVolumesMeet(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                             const VolumeShape& hb, float m) {
+  const AxisCapsule ca = innerCapsule(ha), cb = innerCapsule(hb);
+  if (ca.radius > 0.f && cb.radius > 0.f && capsuleReach(sa, ha, ca, sb, hb, cb) < -m) return true;
+  float ia[3], ib[3];
+  const bool box_a = innerBox(ha, ia), box_b = innerBox(hb, ib);
+  if ((ha.flags & kVolumeSphere) != 0 && box_b)
+    return pointInBox(sa.c, sb, hb, ib) < ha.inner_r - m;
+  if ((hb.flags & kVolumeSphere) != 0 && box_a)
+    return pointInBox(sb.c, sa, ha, ia) < hb.inner_r - m;
+  return box_a && box_b && boxesShareAPoint(sa, ha, ia, sb, hb, ib, m);
+}
+
 }  // namespace volume_detail
 
 /// separation() from two objects' records (buildVolume), for a distance request whose tolerance
@@ -186,6 +365,13 @@ inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const Vo
   const VolumeGap gap = separationOf(sa, ha, sb, hb, rate, 0.f);
   if (gap.lower_bound > gap.margin) return Verdict::kApart;
   if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;  // no volumes: no proof
+  using namespace volume_detail;
+  const bool round_a = (ha.flags & kRoundKinds) != 0, round_b = (hb.flags & kRoundKinds) != 0;
+  const bool sphere_pair = (ha.flags & hb.flags & kVolumeSphere) != 0;  // separationOf is exact
+  if (round_a && round_b && !sphere_pair &&
+      capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) >
+          innerMargin(sa, ha, sb, hb, rate))
+    return Verdict::kApart;
   if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f) {
     float gap2 = 0.f;
     for (int k = 0; k < 3; ++k) {
@@ -196,6 +382,8 @@ inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const Vo
     const float scale = std::max(ha.scale, hb.scale);
     const float reach_in = ha.inner_r + hb.inner_r - rate * (1.f + scale + ha.inner_r + hb.inner_r);
     if (reach_in > 0.f && gap2 < reach_in * reach_in) return Verdict::kTouching;
+    if (!sphere_pair && innerVolumesMeet(sa, ha, sb, hb, innerMargin(sa, ha, sb, hb, rate)))
+      return Verdict::kTouching;
   }
   return Verdict::kUnknown;
 }
