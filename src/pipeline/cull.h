@@ -244,6 +244,38 @@ inline float capsuleGap(const VolumeSphere& sa, const VolumeShape& ha, const Axi
          ca.radius - cb.radius;
 }
 
+// A lower bound on the distance of capsule c of record a to record b's oriented box: the gap
+// along the direction from the box's point nearest the segment to the segment's (three rounds of
+// alternate projections come near enough: every direction gives a bound), less the radius.
+// -infinity when the segment meets the box.
+inline float capsuleBoxGap(const VolumeSphere& sa, const VolumeShape& ha, const AxisCapsule& c,
+                           const VolumeSphere& sb, const VolumeShape& hb) {
+  float w[3], u[3];  // the segment's centre and axis in b's frame, from b's centre
+  for (int i = 0; i < 3; ++i) {
+    const float b_axis[3] = {hb.R[i], hb.R[3 + i], hb.R[6 + i]};
+    const float a_axis[3] = {ha.R[2], ha.R[5], ha.R[8]};
+    const float d[3] = {sa.c[0] - sb.c[0] + c.z * a_axis[0], sa.c[1] - sb.c[1] + c.z * a_axis[1],
+                        sa.c[2] - sb.c[2] + c.z * a_axis[2]};
+    w[i] = dot3(b_axis, d);
+    u[i] = dot3(b_axis, a_axis);
+  }
+  float s = 0.f, x[3], n[3];
+  for (int round = 0; round < 3; ++round) {
+    for (int i = 0; i < 3; ++i) n[i] = std::clamp(w[i] + s * u[i], -hb.e[i], hb.e[i]) - w[i];
+    s = std::clamp(dot3(u, n), -c.half, c.half);
+  }
+  for (int i = 0; i < 3; ++i) {
+    x[i] = w[i] + s * u[i];
+    n[i] = x[i] - std::clamp(x[i], -hb.e[i], hb.e[i]);
+  }
+  const float len = std::sqrt(dot3(n, n));
+  if (!(len > 0.f)) return -std::numeric_limits<float>::infinity();
+  for (float& v : n) v /= len;
+  return dot3(n, w) - c.half * std::fabs(dot3(n, u)) -
+         (hb.e[0] * std::fabs(n[0]) + hb.e[1] * std::fabs(n[1]) + hb.e[2] * std::fabs(n[2])) -
+         c.radius;
+}
+
 // An upper bound on the distance of two capsules' segments, less both radii: < 0 when they meet.
 inline float capsuleReach(const VolumeSphere& sa, const VolumeShape& ha, const AxisCapsule& ca,
                           const VolumeSphere& sb, const VolumeShape& hb, const AxisCapsule& cb) {
@@ -368,10 +400,20 @@ inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const Vo
   using namespace volume_detail;
   const bool round_a = (ha.flags & kRoundKinds) != 0, round_b = (hb.flags & kRoundKinds) != 0;
   const bool sphere_pair = (ha.flags & hb.flags & kVolumeSphere) != 0;  // separationOf is exact
-  if (round_a && round_b && !sphere_pair &&
-      capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) >
-          innerMargin(sa, ha, sb, hb, rate))
-    return Verdict::kApart;
+  if (round_a && round_b) {
+    if (!sphere_pair && capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) >
+                            innerMargin(sa, ha, sb, hb, rate))
+      return Verdict::kApart;
+  } else if (round_a || round_b) {
+    // A capsule, cylinder or cone against another's box (a sphere's gap to it was exact).
+    const bool a_round = round_a && (ha.flags & kVolumeSphere) == 0;
+    const bool b_round = round_b && (hb.flags & kVolumeSphere) == 0;
+    if ((a_round &&
+         capsuleBoxGap(sa, ha, outerCapsule(sa, ha), sb, hb) > innerMargin(sa, ha, sb, hb, rate)) ||
+        (b_round &&
+         capsuleBoxGap(sb, hb, outerCapsule(sb, hb), sa, ha) > innerMargin(sa, ha, sb, hb, rate)))
+      return Verdict::kApart;
+  }
   if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f) {
     float gap2 = 0.f;
     for (int k = 0; k < 3; ++k) {
