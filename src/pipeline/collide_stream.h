@@ -82,13 +82,16 @@ class CollideStream final : public TaskSink<S> {
     const VolumeSphere* sphere;
     const VolumeShape* shape;
   };
+  // kept: va and vb are records of the tables (valid for the whole query), which may wait in a
+  // block of pairs answered together (answerSerialBlock).
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
-                  const Volumes* vb);
+                  const Volumes* vb, bool kept);
   // The cull of the pairs pairs[index[k]] into slots[index[k]], k < n (at most kBlock), where
   // the slot says, then a prefetch of what FCL reads first for those it leaves. Any thread.
   void cullBlock(const std::size_t* index, std::size_t n, const ObjectPair<S>* pairs,
                  Slot* slots) const;
   static bool cacheable(const Slot& s);
+  void answerSerialBlock();
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
   void merge(const ObjectPair<S>& pair, const Slot& slot);
@@ -116,6 +119,9 @@ class CollideStream final : public TaskSink<S> {
   std::vector<std::size_t> pending_;  // the chunk's pairs not in the cache
   std::vector<Slot> slots_;           // one per pair of the chunk
   std::unique_ptr<Slot> scratch_;     // a pair answered at once, with a cache
+  // Pairs with records answered on this thread without a cache, in blocks: the first serial_n_.
+  std::unique_ptr<TaskScratch> serial_block_;
+  std::size_t serial_n_ = 0;
   std::vector<TaskAnswers> tasks_;    // a split walk's tasks, each answered on its thread
   std::vector<TaskScratch> workers_;  // per worker of the walk: a block's pairs and slots
   // Per task, its contacts once it has run (kRunning before), and their sum over the tasks run:
