@@ -23,7 +23,7 @@ struct CollisionData {
   bool done = false;
   /// fcl::collide calls made so far; pairs settled without it are not counted: proved apart by
   /// tight volumes, or (for a request without enable_contact, costs or a cached GJK guess)
-  /// proved touching by balls inscribed in two primitive shapes, which get the one contact FCL
+  /// proved touching by volumes inside two primitive shapes, which get the one contact FCL
   /// would give them (narrow_phase.h, NarrowPhaseStats::proved).
   std::size_t narrow_calls = 0;
 };

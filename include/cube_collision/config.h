@@ -82,9 +82,10 @@ struct Config {
 
   /// collide() in all three forms leaves out the pairs whose tight bounding volumes (the
   /// bounding sphere, exact for spheres, and the oriented box of the geometry's local AABB,
-  /// exact for boxes) are apart by more than a margin sized for FCL's default GJK tolerance
-  /// (1e-6): such pairs cannot collide, and the callback never sees them. The default callbacks
-  /// of cube_collision/callbacks.h do this anyway. Turn it on when your callback runs
+  /// exact for boxes; on the records of tight_volumes also the capsule about a capsule's,
+  /// cylinder's or cone's axis) are apart by more than a margin sized for FCL's default GJK
+  /// tolerance (1e-6): such pairs cannot collide, and the callback never sees them. The default
+  /// callbacks of cube_collision/callbacks.h do this anyway. Turn it on when your callback runs
   /// fcl::collide with gjk_tolerance <= 1e-6 and keeps only what collides: its results stay the
   /// same and it runs for fewer pairs. Leave it off if your callback counts or records
   /// broadphase pairs, grows the AABBs for a contact margin (pairs near but not touching would
@@ -96,20 +97,23 @@ struct Config {
   bool cull_pairs = false;
 
   /// Keeps each object's tight volumes (bounding sphere, oriented box of its local AABB, a ball
-  /// inside primitives) in float records per object, once the manager holds 256 objects (the
-  /// pairs of a smaller one, such as a robot's links, which move at every step, are culled from
-  /// the objects, as with this off), so that the pipeline of queries.h (collideAll,
-  /// minimumDistance) and Config::cull_pairs bound a candidate pair by reading two records
-  /// instead of two FCL objects and their geometries. Registration and update(obj) /
-  /// update(objects) build them from the geometry and the transform; update() places them anew for
-  /// each object whose box changed (reading its geometry again only if its local AABB changed) or
-  /// whose transform no longer rounds to the same floats (a rotation may leave FCL's box as it
-  /// was). So move objects, update, then query, as for the boxes; and after changing a geometry in
-  /// place in a way that leaves its local AABB as it was (another radius of a capsule of the same
-  /// box, the cost density), name its object to update(obj). Trade-off: see the README's "Measured"
-  /// under the pipeline (update() reads every object's transform; registration builds the records;
-  /// 136 bytes an object), against a cull of about 19 ns a candidate pair instead of 85 to 200.
-  /// Off: the pipeline (and Config::cull_pairs) culls from the objects, with the same answers.
+  /// inside primitives; for capsules, cylinders and cones the capsule about their axis, and
+  /// capsules and boxes inside spheres, boxes, capsules and cylinders) in float records per object,
+  /// once the manager holds 256 objects (the pairs of a smaller one, such as a robot's links, which
+  /// move at every step, are culled from the objects, as with this off), so that the pipeline of
+  /// queries.h (collideAll, minimumDistance) and Config::cull_pairs bound a candidate pair by
+  /// reading two records instead of two FCL objects and their geometries. Registration and
+  /// update(obj) / update(objects) build them from the geometry and the transform; update() places
+  /// them anew for each object whose box changed (reading its geometry again only if its local AABB
+  /// changed) or whose transform no longer rounds to the same floats (a rotation may leave FCL's
+  /// box as it was). So move objects, update, then query, as for the boxes; and after changing a
+  /// geometry in place in a way that leaves its local AABB as it was (another radius of a capsule
+  /// of the same box, the cost density), name its object to update(obj). Trade-off: see the
+  /// README's "Measured" under the pipeline (update() reads every object's transform; registration
+  /// builds the records; 136 bytes an object), against a cull of about 19 ns a candidate pair
+  /// instead of 85 to 200. Off: the pipeline (and Config::cull_pairs) culls from the objects, with
+  /// the same answers (the objects' cull has the spheres, boxes and inscribed balls only: more
+  /// pairs go to FCL).
   bool tight_volumes = true;
 
   /// Hands every pair over in an order that does not depend on the tree: in self queries as

@@ -31,10 +31,11 @@ int hardwareThreads();
 struct NarrowPhaseStats {
   std::size_t candidate_pairs = 0;  ///< pairs the broadphase handed over
   std::size_t culled = 0;           ///< proved apart by the tight volumes, no narrow phase
-  /// proved touching by balls inscribed in the shapes, no narrow phase: only for requests
-  /// without enable_contact (the contact FCL gives them names the two geometries and nothing
-  /// else), costs or a cached GJK guess, and only for spheres, boxes, capsules, cylinders,
-  /// cones and ellipsoids
+  /// proved touching by volumes inside the shapes (balls inscribed in spheres, boxes, capsules,
+  /// cylinders, cones and ellipsoids; on a manager's records, Config::tight_volumes, also
+  /// capsules and boxes inside spheres, boxes, capsules and cylinders), no narrow phase: only
+  /// for requests without enable_contact (the contact FCL gives them names the two geometries
+  /// and nothing else) and without costs or a cached GJK guess
   std::size_t proved = 0;
   std::size_t cached = 0;        ///< answered from a NarrowPhaseCache
   std::size_t narrow_calls = 0;  ///< fcl::collide / fcl::distance calls made

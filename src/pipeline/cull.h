@@ -388,10 +388,14 @@ inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, con
 }
 
 /// verdict() from two objects' records (buildVolume), for a request whose tolerance gives
-/// `rate` (volumeMarginRate): kApart when separationOf's bound (enough 0) beats its margin;
-/// kTouching, with `prove`, when the inscribed balls overlap by more than rate x (1 + scale + both
-/// inner radii); else kUnknown, and always kUnknown for a record without volumes. Inline: the
-/// stream calls it for every candidate pair.
+/// `rate` (volumeMarginRate), and tighter: kApart when separationOf's bound (enough 0) beats its
+/// margin, or, for a capsule, cylinder or cone, when the capsule about its axis (outerCapsule) is
+/// apart from the other's (a sphere's, capsule's, cylinder's or cone's) or from the other's box by
+/// more than innerMargin; kTouching, with `prove`, when the inscribed balls overlap by more than
+/// rate x (1 + scale + both inner radii), or the inner volumes meet by more than innerMargin
+/// (innerVolumesMeet: spheres, boxes, capsules, cylinders); else kUnknown, and always kUnknown
+/// for a record without volumes. Symmetric in its two records. Inline: the stream calls it for
+/// every candidate pair. verdict() on two FCL objects tests the spheres, boxes and balls only.
 inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
                          const VolumeShape& hb, float rate, bool prove) {
   const VolumeGap gap = separationOf(sa, ha, sb, hb, rate, 0.f);
