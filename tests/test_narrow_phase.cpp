@@ -157,8 +157,8 @@ TYPED_TEST(NarrowPhase, CollideAllEqualsFclOnEveryThreadCount) {
 }
 
 // What the pipeline does per pair: culled pairs skip FCL, a second query on an unchanged world
-// calls FCL for no pair and culls none (proved-apart answers are cached too), and the counts add
-// up.
+// calls FCL for no pair (FCL's answers and those of the cull's costlier part come from the
+// cache), and the counts add up.
 TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
   using S = TypeParam;
   auto world = scene<S>(Layout::uniform, false, 500, 3);
@@ -182,13 +182,17 @@ TYPED_TEST(NarrowPhase, SecondQueryOnAStillWorldCallsFclForNoPair) {
   EXPECT_GT(first.culled, 0u);
   EXPECT_GT(first.narrow_calls, 0u);
   EXPECT_EQ(second.candidate_pairs, candidates);
-  // The pairs the object tables' volumes settle are settled again (they cost less than a
-  // lookup); the others come from the cache.
+  // The pairs the cheaper part of the records' cull settles (spheres, boxes, inscribed balls) are
+  // settled again, before the lookup, which costs more; those its costlier part settled after the
+  // lookup missed (capsules, inner volumes) come from the cache with FCL's answers.
   EXPECT_EQ(second.narrow_calls, 0u);
-  EXPECT_EQ(second.culled, first.culled);
-  EXPECT_EQ(second.proved, first.proved);
-  EXPECT_EQ(second.cached, first.narrow_calls);
-  EXPECT_EQ(cache.size(), first.narrow_calls);
+  EXPECT_LE(second.culled, first.culled);
+  EXPECT_LE(second.proved, first.proved);
+  EXPECT_LT(second.culled + second.proved, first.culled + first.proved) << "some by the tight part";
+  EXPECT_EQ(second.cached,
+            first.narrow_calls + (first.culled - second.culled) + (first.proved - second.proved));
+  EXPECT_EQ(second.culled + second.proved + second.cached, candidates);
+  EXPECT_EQ(cache.size(), second.cached);
 }
 
 // A motion loop with one cache: objects move (translated, rotated, some back to where they

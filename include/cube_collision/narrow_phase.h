@@ -43,9 +43,11 @@ struct NarrowPhaseStats {
 
 /// Last narrow-phase answers per ordered pair (a, b): the contacts for a collision request (an
 /// empty list for a pair the tight volumes proved apart), the distance and nearest points for a
-/// distance request. A collide on a CubeCollisionManager keeps only the answers FCL gave: the
-/// pairs its objects' volumes (kept per object by the manager, rebuilt by update()) prove apart
-/// or touching are proved again each time, which costs less than a lookup. A pair is answered from
+/// distance request. A collide on a CubeCollisionManager keeps the answers FCL gave and those of
+/// the costlier bounds of its objects' volumes (kept per object by the manager, rebuilt by
+/// update(); the capsules and inner volumes of Config::tight_volumes, tried after the cache
+/// missed); the pairs its spheres, boxes and inscribed balls prove apart or touching are proved
+/// again each time, before the lookup, which costs more. A pair is answered from
 /// it while both of its objects keep the same transform (bit for bit), the same geometry object and
 /// the same local AABB, and the request is the same; each object is compared with its last pose
 /// once per query, not once per pair. A query keeps the entries it did not use only while they are

@@ -93,7 +93,7 @@ struct CulledCallback {
                                const detail::ObjectTable<S>* b) {
     if (!on || fn == nullptr) return detail::CollideFn<S>(fn);
     volumes.use(a.spheres(), a.shapes(), b != nullptr ? b->spheres() : nullptr,
-                b != nullptr ? b->shapes() : nullptr);
+                b != nullptr ? b->shapes() : nullptr, 0);
     cdata = this;
     return detail::CollideFn<S>(&CulledCallback::call);
   }

@@ -318,6 +318,49 @@ inline bool boxesShareAPoint(const VolumeSphere& sa, const VolumeShape& a, const
   return inside;
 }
 
+// Whether boxes a and b (centres and axes of the records, half extents ia and ib) overlap by more
+// than m along every axis of the separating-axis test: the three face normals of each and the
+// nine cross products of their edges (for boxes, all the directions that can separate them), so
+// they share a point with room to spare. Where two edges are near parallel (below a tenth of a
+// radian), their cross product is too short to trust in floats: boxesShareAPoint decides.
+inline bool boxesOverlap(const VolumeSphere& sa, const VolumeShape& a, const float* ia,
+                         const VolumeSphere& sb, const VolumeShape& b, const float* ib, float m) {
+  const float d[3] = {sb.c[0] - sa.c[0], sb.c[1] - sa.c[1], sb.c[2] - sa.c[2]};
+  float R[3][3], A[3][3], t[3];
+  for (int i = 0; i < 3; ++i) {
+    t[i] = a.R[i] * d[0] + a.R[3 + i] * d[1] + a.R[6 + i] * d[2];
+    for (int j = 0; j < 3; ++j) {
+      R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
+      A[i][j] = std::fabs(R[i][j]);
+    }
+  }
+  for (int i = 0; i < 3; ++i)
+    if (!(std::fabs(t[i]) - ia[i] - (ib[0] * A[i][0] + ib[1] * A[i][1] + ib[2] * A[i][2]) < -m))
+      return false;
+  for (int j = 0; j < 3; ++j) {
+    const float tj = t[0] * R[0][j] + t[1] * R[1][j] + t[2] * R[2][j];
+    if (!(std::fabs(tj) - (ia[0] * A[0][j] + ia[1] * A[1][j] + ia[2] * A[2][j]) - ib[j] < -m))
+      return false;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    for (int j = 0; j < 3; ++j) {
+      const float len2 = 1.f - R[i][j] * R[i][j];
+      if (!(len2 >= 1e-2f)) return boxesShareAPoint(sa, a, ia, sb, b, ib, m);
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const float ra = ia[i1] * A[i2][j] + ia[i2] * A[i1][j];
+      const float rb = ib[j1] * A[i][j2] + ib[j2] * A[i][j1];
+      // Rounded up by 16 ulps of its terms (as boxGap rounds down): the bound must hold for the
+      // exact value, which the division by a short axis would magnify.
+      const float slack = std::fabs(t[i2] * R[i1][j] - t[i1] * R[i2][j]) - ra - rb +
+                          16.f * FLT_EPSILON * (std::fabs(t[i1]) + std::fabs(t[i2]) + ra + rb);
+      // slack / sqrt(len2) < -m, without the root
+      if (!(slack < 0.f && slack * slack > m * m * len2)) return false;
+    }
+  }
+  return true;
+}
+
 // Distance from point p to the box of centre s.c, the record's axes and half extents ie.
 inline float pointInBox(const float* p, const VolumeSphere& s, const VolumeShape& h,
                         const float* ie) {
@@ -342,7 +385,7 @@ inline float innerMargin(const VolumeSphere& sa, const VolumeShape& ha, const Vo
 
 // Whether the inner volumes of two records with inscribed balls overlap by more than m: both
 // inner capsules (spheres, capsules, cylinders), a sphere against an inner box (boxes,
-// cylinders, capsules), or two inner boxes sharing a point.
+// cylinders, capsules), or two inner boxes (boxesOverlap).
 inline bool innerVolumesMeet(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
                              const VolumeShape& hb, float m) {
   const AxisCapsule ca = innerCapsule(ha), cb = innerCapsule(hb);
@@ -353,7 +396,7 @@ inline bool innerVolumesMeet(const VolumeSphere& sa, const VolumeShape& ha, cons
     return pointInBox(sa.c, sb, hb, ib) < ha.inner_r - m;
   if ((hb.flags & kVolumeSphere) != 0 && box_a)
     return pointInBox(sb.c, sa, ha, ia) < hb.inner_r - m;
-  return box_a && box_b && boxesShareAPoint(sa, ha, ia, sb, hb, ib, m);
+  return box_a && box_b && boxesOverlap(sa, ha, ia, sb, hb, ib, m);
 }
 
 }  // namespace volume_detail
@@ -388,36 +431,15 @@ inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, con
 }
 
 /// verdict() from two objects' records (buildVolume), for a request whose tolerance gives
-/// `rate` (volumeMarginRate), and tighter: kApart when separationOf's bound (enough 0) beats its
-/// margin, or, for a capsule, cylinder or cone, when the capsule about its axis (outerCapsule) is
-/// apart from the other's (a sphere's, capsule's, cylinder's or cone's) or from the other's box by
-/// more than innerMargin; kTouching, with `prove`, when the inscribed balls overlap by more than
-/// rate x (1 + scale + both inner radii), or the inner volumes meet by more than innerMargin
-/// (innerVolumesMeet: spheres, boxes, capsules, cylinders); else kUnknown, and always kUnknown
-/// for a record without volumes. Symmetric in its two records. Inline: the stream calls it for
-/// every candidate pair. verdict() on two FCL objects tests the spheres, boxes and balls only.
-inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
-                         const VolumeShape& hb, float rate, bool prove) {
+/// `rate` (volumeMarginRate): kApart when separationOf's bound (enough 0) beats its margin;
+/// kTouching, with `prove`, when the inscribed balls overlap by more than rate x (1 + scale + both
+/// inner radii); else kUnknown, and always kUnknown for a record without volumes. The first and
+/// cheaper part of verdictOf: a stream with a cache looks the pair up before the rest.
+inline Verdict looseVerdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                              const VolumeShape& hb, float rate, bool prove) {
   const VolumeGap gap = separationOf(sa, ha, sb, hb, rate, 0.f);
   if (gap.lower_bound > gap.margin) return Verdict::kApart;
   if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;  // no volumes: no proof
-  using namespace volume_detail;
-  const bool round_a = (ha.flags & kRoundKinds) != 0, round_b = (hb.flags & kRoundKinds) != 0;
-  const bool sphere_pair = (ha.flags & hb.flags & kVolumeSphere) != 0;  // separationOf is exact
-  if (round_a && round_b) {
-    if (!sphere_pair && capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) >
-                            innerMargin(sa, ha, sb, hb, rate))
-      return Verdict::kApart;
-  } else if (round_a || round_b) {
-    // A capsule, cylinder or cone against another's box (a sphere's gap to it was exact).
-    const bool a_round = round_a && (ha.flags & kVolumeSphere) == 0;
-    const bool b_round = round_b && (hb.flags & kVolumeSphere) == 0;
-    if ((a_round &&
-         capsuleBoxGap(sa, ha, outerCapsule(sa, ha), sb, hb) > innerMargin(sa, ha, sb, hb, rate)) ||
-        (b_round &&
-         capsuleBoxGap(sb, hb, outerCapsule(sb, hb), sa, ha) > innerMargin(sa, ha, sb, hb, rate)))
-      return Verdict::kApart;
-  }
   if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f) {
     float gap2 = 0.f;
     for (int k = 0; k < 3; ++k) {
@@ -428,10 +450,46 @@ inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const Vo
     const float scale = std::max(ha.scale, hb.scale);
     const float reach_in = ha.inner_r + hb.inner_r - rate * (1.f + scale + ha.inner_r + hb.inner_r);
     if (reach_in > 0.f && gap2 < reach_in * reach_in) return Verdict::kTouching;
-    if (!sphere_pair && innerVolumesMeet(sa, ha, sb, hb, innerMargin(sa, ha, sb, hb, rate)))
-      return Verdict::kTouching;
   }
   return Verdict::kUnknown;
+}
+
+/// The rest of verdictOf, for a pair looseVerdictOf left kUnknown: kApart when, for a capsule,
+/// cylinder or cone, the capsule about its axis (outerCapsule) is apart from the other's (a
+/// sphere's, capsule's, cylinder's or cone's) or from the other's box by more than innerMargin;
+/// kTouching, with `prove`, when the inner volumes meet by more than innerMargin
+/// (innerVolumesMeet: spheres, boxes, capsules, cylinders); else kUnknown.
+inline Verdict tightVerdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                              const VolumeShape& hb, float rate, bool prove) {
+  using namespace volume_detail;
+  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;
+  const bool round_a = (ha.flags & kRoundKinds) != 0, round_b = (hb.flags & kRoundKinds) != 0;
+  const bool sphere_pair = (ha.flags & hb.flags & kVolumeSphere) != 0;  // looseVerdictOf's exact
+  if (sphere_pair) return Verdict::kUnknown;
+  const float m = innerMargin(sa, ha, sb, hb, rate);
+  if (round_a && round_b) {
+    if (capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) > m)
+      return Verdict::kApart;
+  } else if (round_a || round_b) {
+    // A capsule, cylinder or cone against another's box (a sphere's gap to it was exact).
+    const bool a_round = round_a && (ha.flags & kVolumeSphere) == 0;
+    const bool b_round = round_b && (hb.flags & kVolumeSphere) == 0;
+    if ((a_round && capsuleBoxGap(sa, ha, outerCapsule(sa, ha), sb, hb) > m) ||
+        (b_round && capsuleBoxGap(sb, hb, outerCapsule(sb, hb), sa, ha) > m))
+      return Verdict::kApart;
+  }
+  if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f && innerVolumesMeet(sa, ha, sb, hb, m))
+    return Verdict::kTouching;
+  return Verdict::kUnknown;
+}
+
+/// looseVerdictOf, then tightVerdictOf where it leaves kUnknown: what the records settle about a
+/// pair. Symmetric in its two records. Inline: the streams call it for every candidate pair.
+/// verdict() on two FCL objects tests what looseVerdictOf tests.
+inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                         const VolumeShape& hb, float rate, bool prove) {
+  const Verdict v = looseVerdictOf(sa, ha, sb, hb, rate, prove);
+  return v != Verdict::kUnknown ? v : tightVerdictOf(sa, ha, sb, hb, rate, prove);
 }
 
 extern template bool surelyTouching<double>(const fcl::CollisionObject<double>&,

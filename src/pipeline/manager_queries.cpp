@@ -108,9 +108,10 @@ bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
   const auto* theirs =
       other == &manager ? cube : dynamic_cast<const CubeCollisionManager<S>*>(other);
   const auto* table_b = theirs != nullptr ? &detail::coreOf(*theirs).table() : nullptr;
-  stream.volumes().use(mine.spheres(), mine.shapes(),
-                       table_b != nullptr ? table_b->spheres() : nullptr,
-                       table_b != nullptr ? table_b->shapes() : nullptr);
+  stream.volumes().use(
+      mine.spheres(), mine.shapes(), table_b != nullptr ? table_b->spheres() : nullptr,
+      table_b != nullptr ? table_b->shapes() : nullptr,
+      mine.size() + (table_b != nullptr && table_b != &mine ? table_b->size() : 0));
   run(*cube, static_cast<void*>(&stream), fn);
   return true;
 }

@@ -22,13 +22,18 @@ class PairVolumes {
   // they are read.
   PairVolumes() {}  // NOLINT(modernize-use-equals-default)
   /// The tables' records (ObjectTable::spheres(), shapes()); null: that table keeps none.
+  /// `objects`: how many objects the tables hold together (a self query's once).
   void use(const VolumeSphere* spheres_a, const VolumeShape* shapes_a,
-           const VolumeSphere* spheres_b, const VolumeShape* shapes_b) {
+           const VolumeSphere* spheres_b, const VolumeShape* shapes_b, std::size_t objects) {
     spheres_[0] = spheres_a;
     shapes_[0] = shapes_a;
     spheres_[1] = spheres_b;
     shapes_[1] = shapes_b;
+    objects_ = objects;
   }
+  /// use()'s `objects` (0 before): whether the records and objects a query reads outgrow the
+  /// caches, which makes fetching them ahead pay.
+  std::size_t objects() const { return objects_; }
   /// The records of objects a (id ia) and b (id ib), into the four pointers; false if a table
   /// keeps none (a manager below kVolumeMinObjects): the pair is culled from the objects.
   bool of(const fcl::CollisionObject<S>* a, ObjectId ia, const fcl::CollisionObject<S>* b,
@@ -74,6 +79,7 @@ class PairVolumes {
 
   const VolumeSphere* spheres_[2] = {nullptr, nullptr};
   const VolumeShape* shapes_[2] = {nullptr, nullptr};
+  std::size_t objects_ = 0;
   Built built_[2];
 };
 
