@@ -200,10 +200,12 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
       return done_;
     }
     // What waits in the block goes first.
-    answerSerialBlock();
-    if (done_) {
-      --stats_.candidate_pairs;
-      return true;
+    if (serial_n_ != 0) {
+      answerSerialBlock();
+      if (done_) {
+        --stats_.candidate_pairs;
+        return true;
+      }
     }
     // Work that threads could share: with the cull on records it runs here, at about 20 ns a
     // pair, and only FCL's calls on meshes, octrees and GJK pairs weigh enough (kSerialWork).
