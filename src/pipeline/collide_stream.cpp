@@ -168,7 +168,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
                                   const Volumes* va, const Volumes* vb, bool kept) {
   if (done_) return true;
   ++stats_.candidate_pairs;
-  // With volumes the cull runs here, before the cache (it costs less than a lookup).
+  // With volumes the cull runs here, before the cache (its cheaper part costs less than a lookup).
   const auto cull = [&] {
     return answerOf(verdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
   };
