@@ -181,6 +181,19 @@ bool slideToTouching(fcl::CollisionObject<S>& a, fcl::CollisionObject<S>& b, Pla
   return true;
 }
 
+// Where slideToTouching moves b: rotation rb, at base + t along a random unit direction (drawn
+// from rng through n).
+template <typename S>
+auto slider(fcl::CollisionObject<S>& b, const fcl::Matrix3<S>& rb, const fcl::Vector3<S>& base,
+            std::mt19937& rng, std::normal_distribution<double>& n) {
+  fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
+  dir.normalize();
+  return [&b, rb, base, dir](double t) {
+    b.setTransform(rb, base + dir * S(t));
+    b.computeAABB();
+  };
+}
+
 // Pairs at the touching position: b slides towards a along a random direction, and bisection
 // with fcl::collide finds where FCL starts to report contact. At that first colliding position,
 // and a hair beyond, the pair must not be culled; a little way outside it may be.
@@ -201,12 +214,7 @@ TYPED_TEST(Culling, KeepsPairsAtTheTouchingPosition) {
           a.setTransform(randomRotation<S>(rng), base);
           a.computeAABB();
           const fcl::Matrix3<S> rb = randomRotation<S>(rng);
-          fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
-          dir.normalize();
-          auto place = [&](double t) {
-            b.setTransform(rb, base + dir * S(t));
-            b.computeAABB();
-          };
+          const auto place = slider(b, rb, base, rng, n);
           double in, out;
           if (!slideToTouching(a, b, place, in, out)) continue;
           place(in);
@@ -253,12 +261,7 @@ TYPED_TEST(Culling, ProvesContactOnlyWhereFclReportsIt) {
         a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(S(n(rng)), S(n(rng)), S(n(rng))));
         a.computeAABB();
         const fcl::Matrix3<S> rb = randomRotation<S>(rng);
-        fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
-        dir.normalize();
-        auto place = [&](double t) {
-          b.setTransform(rb, a.getTranslation() + dir * S(t));
-          b.computeAABB();
-        };
+        const auto place = slider(b, rb, fcl::Vector3<S>(a.getTranslation()), rng, n);
         double in, out;
         if (!slideToTouching(a, b, place, in, out)) continue;
         for (double t : {out, out + 1e-9, out + 0.01, out + 1.0}) {
@@ -357,12 +360,7 @@ TYPED_TEST(Culling, RoundAndInnerBoundsAgreeWithFcl) {
           // boxes' test then clamps a centre into the other box).
           const fcl::Matrix3<S> rb =
               rep == 0 ? fcl::Matrix3<S>(a.getRotation()) : randomRotation<S>(rng);
-          fcl::Vector3<S> dir(S(n(rng)), S(n(rng)), S(n(rng)));
-          dir.normalize();
-          auto place = [&](double t) {
-            b.setTransform(rb, base + dir * S(t));
-            b.computeAABB();
-          };
+          const auto place = slider(b, rb, base, rng, n);
           double in, out;
           if (!slideToTouching(a, b, place, in, out)) continue;
           std::vector<double> ts;

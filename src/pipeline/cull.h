@@ -100,19 +100,33 @@ inline float pointBox(const float* p, const VolumeSphere& s, const VolumeShape& 
   return std::sqrt(out2);
 }
 
+// Record b's box seen from record a's: R[i][j] = a's axis i . b's axis j, t = b's centre in a's
+// frame (d = the centres' difference), what the separating-axis tests read.
+struct BoxFrame {
+  float d[3], R[3][3], t[3];
+};
+inline BoxFrame boxFrame(const VolumeSphere& sa, const VolumeShape& a, const VolumeSphere& sb,
+                         const VolumeShape& b) {
+  BoxFrame f;
+  for (int k = 0; k < 3; ++k) f.d[k] = sb.c[k] - sa.c[k];
+  for (int i = 0; i < 3; ++i) {
+    f.t[i] = a.R[i] * f.d[0] + a.R[3 + i] * f.d[1] + a.R[6 + i] * f.d[2];
+    for (int j = 0; j < 3; ++j)
+      f.R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
+  }
+  return f;
+}
+
 // separation's boxGap on the records: the largest separating-axis gap of the two boxes, or the
 // first one above `stop`.
 inline float boxGap(const VolumeSphere& sa, const VolumeShape& a, const VolumeSphere& sb,
                     const VolumeShape& b, float stop) {
-  const float d[3] = {sb.c[0] - sa.c[0], sb.c[1] - sa.c[1], sb.c[2] - sa.c[2]};
-  float R[3][3], A[3][3], t[3];
-  for (int i = 0; i < 3; ++i) {
-    t[i] = a.R[i] * d[0] + a.R[3 + i] * d[1] + a.R[6 + i] * d[2];
-    for (int j = 0; j < 3; ++j) {
-      R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
-      A[i][j] = std::fabs(R[i][j]) + 16.f * FLT_EPSILON;
-    }
-  }
+  const BoxFrame f = boxFrame(sa, a, sb, b);
+  const auto& R = f.R;
+  const auto& t = f.t;
+  float A[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) A[i][j] = std::fabs(R[i][j]) + 16.f * FLT_EPSILON;
   float gap = -std::numeric_limits<float>::infinity();
   for (int i = 0; i < 3; ++i)
     gap = std::max(
@@ -285,21 +299,16 @@ inline float capsuleReach(const VolumeSphere& sa, const VolumeShape& ha, const A
   return std::sqrt(dot3(n, n)) - ca.radius - cb.radius;
 }
 
-// Whether boxes a and b (centres and axes of the records, half extents ia and ib) share a point
+// Whether boxes a and b (f: boxFrame of their records; half extents ia and ib) share a point
 // with `m` to spare: a's centre clamped into b (shrunk by m) lies in a shrunk by m, or b's centre
 // clamped into a lies in b. Sufficient, not necessary: boxes crossing with both centres outside
 // the other are left to FCL.
-inline bool boxesShareAPoint(const VolumeSphere& sa, const VolumeShape& a, const float* ia,
-                             const VolumeSphere& sb, const VolumeShape& b, const float* ib,
-                             float m) {
-  const float d[3] = {sb.c[0] - sa.c[0], sb.c[1] - sa.c[1], sb.c[2] - sa.c[2]};
-  float R[3][3], t[3], u[3];  // R[i][j]: a's axis i . b's axis j; t: b's centre in a's frame
-  for (int i = 0; i < 3; ++i) {
-    t[i] = a.R[i] * d[0] + a.R[3 + i] * d[1] + a.R[6 + i] * d[2];
-    u[i] = -(b.R[i] * d[0] + b.R[3 + i] * d[1] + b.R[6 + i] * d[2]);  // a's centre in b's
-    for (int j = 0; j < 3; ++j)
-      R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
-  }
+inline bool boxesShareAPoint(const BoxFrame& f, const VolumeShape& b, const float* ia,
+                             const float* ib, float m) {
+  const auto& R = f.R;
+  const auto& t = f.t;
+  float u[3];  // a's centre in b's frame
+  for (int i = 0; i < 3; ++i) u[i] = -(b.R[i] * f.d[0] + b.R[3 + i] * f.d[1] + b.R[6 + i] * f.d[2]);
   for (int k = 0; k < 3; ++k)
     if (!(ia[k] > m) || !(ib[k] > m)) return false;
   // The clamped point p minus the centre it moved from, in that box's frame (w), then in the
@@ -325,15 +334,12 @@ inline bool boxesShareAPoint(const VolumeSphere& sa, const VolumeShape& a, const
 // radian), their cross product is too short to trust in floats: boxesShareAPoint decides.
 inline bool boxesOverlap(const VolumeSphere& sa, const VolumeShape& a, const float* ia,
                          const VolumeSphere& sb, const VolumeShape& b, const float* ib, float m) {
-  const float d[3] = {sb.c[0] - sa.c[0], sb.c[1] - sa.c[1], sb.c[2] - sa.c[2]};
-  float R[3][3], A[3][3], t[3];
-  for (int i = 0; i < 3; ++i) {
-    t[i] = a.R[i] * d[0] + a.R[3 + i] * d[1] + a.R[6 + i] * d[2];
-    for (int j = 0; j < 3; ++j) {
-      R[i][j] = a.R[i] * b.R[j] + a.R[3 + i] * b.R[3 + j] + a.R[6 + i] * b.R[6 + j];
-      A[i][j] = std::fabs(R[i][j]);
-    }
-  }
+  const BoxFrame f = boxFrame(sa, a, sb, b);
+  const auto& R = f.R;
+  const auto& t = f.t;
+  float A[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) A[i][j] = std::fabs(R[i][j]);
   for (int i = 0; i < 3; ++i)
     if (!(std::fabs(t[i]) - ia[i] - (ib[0] * A[i][0] + ib[1] * A[i][1] + ib[2] * A[i][2]) < -m))
       return false;
@@ -346,7 +352,7 @@ inline bool boxesOverlap(const VolumeSphere& sa, const VolumeShape& a, const flo
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
       const float len2 = 1.f - R[i][j] * R[i][j];
-      if (!(len2 >= 1e-2f)) return boxesShareAPoint(sa, a, ia, sb, b, ib, m);
+      if (!(len2 >= 1e-2f)) return boxesShareAPoint(f, b, ia, ib, m);
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
       const float ra = ia[i1] * A[i2][j] + ia[i2] * A[i1][j];
       const float rb = ib[j1] * A[i][j2] + ib[j2] * A[i][j1];
