@@ -3,6 +3,7 @@
 
 #include <fcl/broadphase/default_broadphase_callbacks.h>
 #include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/octree/octree.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cylinder.h>
@@ -335,6 +336,68 @@ TEST(Batch, MarginsFilterBitsAndThePredicate) {
   expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, nullptr, keep, bits);
 }
 
+// Random scenes of every kind of world object (boxes, spheres, cylinders, capsules, meshes,
+// planes, halfspaces, an octree) and bodies of several links per leaf group: the first pair is
+// the documented one (lowest link, then world objects by registration number, then links) in
+// every colliding state, on every thread count.
+TEST(Batch, FirstPairIsTheDocumentedOneInRandomScenes) {
+  std::size_t colliding = 0, checked = 0;
+  for (std::uint32_t seed = 1; seed <= 12; ++seed) {
+    World w;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> coin(0, 1);
+    for (std::size_t i = 0; i < 40; ++i) {
+      const double kind = coin(rng);
+      Geometry g;
+      fcl::Transform3d tf = randomPose(rng, 6);
+      if (kind < 0.08) {
+        g = std::make_shared<fcl::Planed>(randomPose(rng, 1).linear().col(0), 8 * coin(rng) - 4);
+        tf = fcl::Transform3d::Identity();
+      } else if (kind < 0.14) {
+        g = std::make_shared<fcl::Halfspaced>(randomPose(rng, 1).linear().col(2),
+                                              -6 - 3 * coin(rng));
+        tf = fcl::Transform3d::Identity();
+      } else {
+        g = randomShape(rng, 2.0, true);
+      }
+      w.objects.push_back(std::make_unique<Object>(g, tf));
+    }
+    auto tree = std::make_shared<octomap::OcTree>(0.5);
+    for (double t = -6; t <= 6; t += 0.5) tree->updateNode(octomap::point3d(t, -t, 0.25 * t), true);
+    w.objects.insert(w.objects.begin() + std::ptrdiff_t(seed % 40),
+                     std::make_unique<Object>(std::make_shared<fcl::OcTreed>(tree),
+                                              fcl::Transform3d::Identity()));
+    for (auto& o : w.objects) o->computeAABB();
+    w.manager.registerObjects(w.pointers());
+    w.manager.setup();
+    const cube::BodySet<S> body = randomBody(5 + seed % 7, 100 + seed, seed % 2 == 0);
+    const auto poses = randomStates(300, body.size(), 200 + seed, 6);
+    cube::BatchOptions o;
+    o.first_pair = true;
+    o.self_collision = seed % 3 != 0;
+    o.threads = 1;
+    const auto one = cube::checkStates(w.manager, body, poses, o);
+    std::size_t hits = 0;
+    expectSame(one, w, body, poses, o, &hits);
+    colliding += hits;
+    checked += one.size();
+    for (const int t : {2, 3, 8}) {
+      o.threads = t;
+      const auto many = cube::checkStates(w.manager, body, poses, o);
+      ASSERT_EQ(many.size(), one.size());
+      for (std::size_t k = 0; k < one.size(); ++k) {
+        EXPECT_EQ(many[k].link, one[k].link) << "state " << k << ", " << t << " threads";
+        EXPECT_EQ(many[k].object, one[k].object) << "state " << k << ", " << t << " threads";
+        EXPECT_EQ(many[k].other_link, one[k].other_link)
+            << "state " << k << ", " << t << " threads";
+      }
+    }
+  }
+  // Enough colliding and free states that a wrong pick would show.
+  EXPECT_GT(colliding, checked / 4);
+  EXPECT_LT(colliding, checked);
+}
+
 // The serial scan of an edge in an order, from per-state answers.
 std::size_t serialScan(const std::vector<cube::StateResult<S>>& states, std::size_t begin,
                        std::size_t end, cube::MotionOrder order) {
@@ -533,6 +596,38 @@ TEST(Batch, BadInputChangesNothing) {
   expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o);
   EXPECT_TRUE(cube::checkStates(w.manager, body, {}).empty());
   EXPECT_EQ(cube::checkMotion(w.manager, body, {}), cube::kNoIndex);
+  // States with no edge belong to none: refused. No states and no edges: nothing to answer.
+  EXPECT_THROW(cube::checkMotions(w.manager, body, poses, {}), std::invalid_argument);
+  EXPECT_TRUE(cube::checkMotions(w.manager, body, {}, {}).empty());
+}
+
+// A negative thread count means the hardware's, as 0 does, with the same answers as one thread.
+TEST(Batch, NegativeThreadCountsMeanTheHardwares) {
+  World w;
+  fillWorld(w, 300, 8, false, false);
+  const cube::BodySet<S> body = randomBody(6, 2, false);
+  const auto poses = randomStates(400, body.size(), 3);
+  cube::BatchOptions o;
+  o.self_collision = true;
+  o.first_pair = true;
+  o.threads = 1;
+  const auto one = cube::checkStates(w.manager, body, poses, o);
+  std::vector<std::size_t> starts;
+  for (std::size_t k = 0; k < one.size(); k += 25) starts.push_back(k);
+  const auto one_edges =
+      cube::checkMotions(w.manager, body, poses, starts, cube::MotionOrder::bisection, o);
+  for (const int t : {-1, -8, 0}) {
+    o.threads = t;
+    const auto got = cube::checkStates(w.manager, body, poses, o);
+    ASSERT_EQ(got.size(), one.size());
+    for (std::size_t k = 0; k < one.size(); ++k) {
+      EXPECT_EQ(got[k].colliding, one[k].colliding);
+      EXPECT_EQ(got[k].link, one[k].link);
+      EXPECT_EQ(got[k].object, one[k].object);
+    }
+    EXPECT_EQ(cube::checkMotions(w.manager, body, poses, starts, cube::MotionOrder::bisection, o),
+              one_edges);
+  }
 }
 
 TEST(Batch, APredicateThatMutatesTheWorldIsRefused) {

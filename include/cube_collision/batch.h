@@ -85,10 +85,10 @@ struct BatchOptions {
   bool first_pair = false;
   /// Report each free state's clearance (StateResult::clearance).
   bool clearance = false;
-  /// Threads (OpenMP) across states; 0: the hardware's (OMP_NUM_THREADS). Answers do not depend
-  /// on it. A call with fewer than 64 states runs on the calling thread (a parallel region cost
-  /// more than it saved: the OMPL example's edges of about 40 states planned in 2.48x less time
-  /// than FCL's checker on two threads per call, in 3.0-3.1x on one).
+  /// Threads (OpenMP) across states; 0 or less: hardwareThreads() (narrow_phase.h). Answers do
+  /// not depend on it. A call with fewer than 64 states runs on the calling thread (a parallel
+  /// region cost more than it saved: the OMPL example's edges of about 40 states planned in 2.48x
+  /// less time than FCL's checker on two threads per call, in 3.0-3.1x on one).
   int threads = 0;
 };
 
@@ -151,8 +151,9 @@ enum class MotionOrder {
 /// are free: what checking the edge's states one by one in that order and stopping at the first
 /// collision gives, whatever the thread count. Once an edge's colliding state is known, its
 /// states after it in that order are not started, nor read. Only self_collision and threads of
-/// `options` apply. Throws std::invalid_argument as checkStates, and for edge_starts that do not
-/// start at 0 or do not increase strictly within the states (before any work); a pose with a NaN
+/// `options` apply. No poses and no edges: an empty answer. Throws std::invalid_argument as
+/// checkStates, and for edge_starts that do not start at 0 or do not increase strictly within
+/// the states, states with no edge_starts included (before any work); a pose with a NaN
 /// or infinite entry throws if its state comes before its edge's first colliding state in the
 /// order (where the serial scan would meet it): states after that are not read. Validating every
 /// pose first would read the whole batch, which for edges that collide early cost more than

@@ -59,6 +59,11 @@ class BodyView {
     }
     std::sort(leaves_.begin(), leaves_.end(),
               [&](std::uint32_t a, std::uint32_t b) { return nodes_[a].first < nodes_[b].first; });
+    for (const std::uint32_t leaf : leaves_) {
+      Node alone = nodes_[leaf];
+      alone.first = 0;
+      leaf_alone_.push_back(alone);
+    }
   }
 
   /// Object i, kept from state to state.
@@ -92,6 +97,11 @@ class BodyView {
         node.hi[2] = std::max(x.hi[2], y.hi[2]);
       }
     }
+    for (std::size_t k = 0; k < leaves_.size(); ++k) {
+      const Node& leaf = nodes_[leaves_[k]];
+      std::copy(leaf.lo, leaf.lo + 3, leaf_alone_[k].lo);
+      std::copy(leaf.hi, leaf.hi + 3, leaf_alone_[k].hi);
+    }
   }
   View<S> view() const {
     return View<S>{nodes_.data(), items_.data(), nodes_.empty() ? kNone : 0u,
@@ -99,15 +109,18 @@ class BodyView {
   }
   /// The leaves in the order of their ids (leaf k holds the lowest ids after leaf k - 1's).
   std::size_t leafCount() const { return leaves_.size(); }
-  /// Leaf k alone as a view (its ids as in view()).
+  /// Leaf k alone as a view: its objects only, whichever walk takes it (the all-pairs test reads
+  /// every slot of a view), with their ids as in view().
   View<S> leafView(std::size_t k) const {
-    return View<S>{nodes_.data(), items_.data(), leaves_[k], std::uint32_t(items_.size())};
+    const Node& leaf = nodes_[leaves_[k]];
+    return View<S>{&leaf_alone_[k], items_.data() + leaf.first, 0, leaf.count};
   }
 
  private:
   NodeArray nodes_;
   std::vector<Item<S>> items_;
   std::vector<std::uint32_t> leaves_;  // leaf nodes in id order
+  NodeArray leaf_alone_;               // per leaf: a copy of its cube, its range from 0
 };
 
 }  // namespace detail

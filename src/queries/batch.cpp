@@ -184,6 +184,8 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
                                       MotionOrder order, const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
   const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
+  if (edge_starts.empty() && states > 0)
+    batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
   for (std::size_t e = 0; e < edge_starts.size(); ++e)
     if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
         edge_starts[e] >= states)
