@@ -452,6 +452,66 @@ TYPED_TEST(NarrowPhase, VolumesFollowWhatUpdateSees) {
     }
 }
 
+// A manager used through FCL's interface only keeps no per-object volumes: its memory and its
+// answers are those of a manager without them. The first pipeline query builds them, updates keep
+// them, dropVolumes() frees them, and the answers stay FCL's throughout.
+TEST(NarrowPhaseVolumes, BuiltByThePipelinesFirstQueryAndDroppedOnRequest) {
+  using S = double;
+  auto world = scene<S>(Layout::uniform, false, 1000, 5);
+  cube::Config plain_config;
+  plain_config.tight_volumes = false;
+  cube::CubeCollisionManager<S> plain(plain_config), m;
+  plain.registerObjects(world.pointers());
+  m.registerObjects(world.pointers());
+  plain.setup();
+  m.setup();
+  std::string why;
+  const auto valid = [&] { EXPECT_TRUE(m.validate(&why)) << why; };
+  const std::size_t fcl_only = m.bytes();
+  EXPECT_EQ(fcl_only, plain.bytes());
+  // FCL's interface with the user's callbacks: self and object collides, distance, updates.
+  std::size_t pairs = 0;
+  m.collide(&pairs, [](fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void* d) {
+    ++*static_cast<std::size_t*>(d);
+    return false;
+  });
+  EXPECT_GT(pairs, 0u);
+  for (auto* o : world.pointers()) {
+    o->setTranslation(o->getTranslation() + fcl::Vector3<S>(0.01, 0, 0));
+    o->computeAABB();
+  }
+  m.update();
+  plain.update();
+  valid();
+  EXPECT_EQ(m.bytes(), plain.bytes());
+  fcl::CollisionRequest<S> all;
+  all.num_max_contacts = 1 << 20;
+  const auto want = cube::collideAll<S>(plain, all);
+  const auto got = cube::collideAll<S>(m, all);
+  EXPECT_EQ(got.numContacts(), want.numContacts());
+  EXPECT_GT(m.bytes(), plain.bytes());  // built by the pipeline's first query
+  valid();
+  // Kept fresh by the updates: objects moved onto one another still get FCL's answer.
+  for (std::size_t i = 0; i + 1 < world.objects.size(); i += 7) {
+    world.objects[i]->setTransform(world.objects[i + 1]->getTransform());
+    world.objects[i]->computeAABB();
+  }
+  m.update();
+  plain.update();
+  valid();
+  EXPECT_EQ(cube::collideAll<S>(m, all).numContacts(),
+            cube::collideAll<S>(plain, all).numContacts());
+  const std::size_t kept = m.bytes();
+  m.dropVolumes();
+  valid();
+  EXPECT_LT(m.bytes(), kept);
+  EXPECT_EQ(m.bytes(), plain.bytes());
+  EXPECT_EQ(cube::collideAll<S>(m, all).numContacts(),
+            cube::collideAll<S>(plain, all).numContacts());
+  EXPECT_EQ(m.bytes(), kept);  // built again
+  valid();
+}
+
 // Every kind of change sends the pairs of the changed object back to FCL: a translation by one
 // ulp, a rotation, a geometry resized in place (new local AABB), another request. Setting the same
 // transform again changes nothing. forget() and clear() drop answers. After each change the result

@@ -19,6 +19,7 @@
 
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
 #include "scenes.h"
 #include "support/oracle.h"
 
@@ -237,3 +238,38 @@ TEST(Threads, ConcurrentQueriesAfterEachUpdate) {
 }
 
 }  // namespace
+
+// The first pipeline queries of a manager build its per-object volumes: run from several threads
+// at once on a fresh manager, each gets the answer of a manager that never keeps them.
+TEST(Threads, ConcurrentFirstPipelineQueriesAgreeWithAManagerWithoutVolumes) {
+  auto scene = sceneOf(2000, 17);
+  cube::Config plain_config;
+  plain_config.tight_volumes = false;
+  cube::CubeCollisionManager<S> plain(plain_config);
+  plain.registerObjects(scene.pointers());
+  plain.setup();
+  fcl::CollisionRequest<S> all;
+  all.num_max_contacts = 1 << 20;
+  const cube::NarrowPhaseOptions<S> one{1};
+  const auto want = cube::collideAll<S>(plain, all, one);
+  const S want_distance =
+      cube::minimumDistance<S>(plain, fcl::DistanceRequest<S>(), one).min_distance;
+  ASSERT_GT(want.numContacts(), 100u);
+  for (int round = 0; round < 3; ++round) {
+    cube::CubeCollisionManager<S> m;
+    m.registerObjects(scene.pointers());
+    m.setup();
+    std::vector<std::size_t> contacts(4);
+    std::vector<S> distances(4);
+    runTogether(4, [&](int t) {
+      if (t % 2 == 0)
+        contacts[t] = cube::collideAll<S>(m, all, one).numContacts();
+      else
+        distances[t] = cube::minimumDistance<S>(m, fcl::DistanceRequest<S>(), one).min_distance;
+    });
+    for (int t = 0; t < 4; t += 2) EXPECT_EQ(contacts[t], want.numContacts());
+    for (int t = 1; t < 4; t += 2) EXPECT_EQ(distances[t], want_distance);
+    std::string why;
+    EXPECT_TRUE(m.validate(&why)) << why;
+  }
+}

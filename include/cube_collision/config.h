@@ -96,24 +96,27 @@ struct Config {
   /// benchmark's scenes). Distance queries are not affected.
   bool cull_pairs = false;
 
-  /// Keeps each object's tight volumes (bounding sphere, oriented box of its local AABB, a ball
-  /// inside primitives; for capsules, cylinders and cones the capsule about their axis, and
-  /// capsules and boxes inside spheres, boxes, capsules and cylinders) in float records per object,
-  /// once the manager holds 256 objects (the pairs of a smaller one, such as a robot's links, which
-  /// move at every step, are culled from the objects, as with this off), so that the pipeline of
-  /// queries.h (collideAll, minimumDistance) and Config::cull_pairs bound a candidate pair by
-  /// reading two records instead of two FCL objects and their geometries. Registration and
-  /// update(obj) / update(objects) build them from the geometry and the transform; update() places
-  /// them anew for each object whose box changed (reading its geometry again only if its local AABB
-  /// changed) or whose transform no longer rounds to the same floats (a rotation may leave FCL's
-  /// box as it was). So move objects, update, then query, as for the boxes; and after changing a
-  /// geometry in place in a way that leaves its local AABB as it was (another radius of a capsule
-  /// of the same box, the cost density), name its object to update(obj). Trade-off: see the
-  /// README's "Measured" under the pipeline (update() reads every object's transform; registration
-  /// builds the records; 136 bytes an object), against a cull of about 19 ns a candidate pair
-  /// instead of 85 to 200. Off: the pipeline (and Config::cull_pairs) culls from the objects, with
-  /// the same answers (the objects' cull has the spheres, boxes and inscribed balls only: more
-  /// pairs go to FCL).
+  /// Lets the manager keep each object's tight volumes (bounding sphere, oriented box of its
+  /// local AABB, a ball inside primitives; for capsules, cylinders and cones the capsule about
+  /// their axis, and capsules and boxes inside spheres, boxes, capsules and cylinders) in float
+  /// records per object, so that the pipeline (queries.h, batch.h) and Config::cull_pairs bound a
+  /// candidate pair by reading two records instead of two FCL objects and their geometries. They
+  /// are built only when needed: by the first such query of a manager that holds 256 objects or
+  /// more (or by the registration that brings a manager those queries have asked to 256), from
+  /// the objects as they are then (its cost: one pass over the objects, about the time of a
+  /// registration); a manager used only through FCL's interface with its own callbacks never
+  /// builds them. Once built, registration and update(obj) / update(objects) build an object's
+  /// records from the geometry and the transform; update() places them anew for each object whose
+  /// box changed (reading its geometry again only if its local AABB changed) or whose transform
+  /// no longer rounds to the same floats (a rotation may leave FCL's box as it was). So move
+  /// objects, update, then query, as for the boxes; and after changing a geometry in place in a
+  /// way that leaves its local AABB as it was (another radius of a capsule of the same box, the
+  /// cost density), name its object to update(obj). CubeCollisionManager::dropVolumes() frees
+  /// them. Trade-off, once built: memory per object, and update() reads every object's transform
+  /// and registration builds the records, against a cull several times cheaper per candidate pair
+  /// (figures in benchmarks/README.md). Off: the pipeline (and Config::cull_pairs) culls from the
+  /// objects, with the same answers (the objects' cull has the spheres, boxes and inscribed balls
+  /// only: more pairs go to FCL).
   bool tight_volumes = true;
 
   /// Hands every pair over in an order that does not depend on the tree: in self queries as

@@ -162,6 +162,11 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   std::size_t bytes() const;
   /// Whether the next self-collide is served from the pair list (Config::keep_pairs).
   bool pairsListed() const;
+  /// Frees the per-object volumes of Config::tight_volumes, which the first query of the
+  /// pipeline (queries.h, batch.h, Config::cull_pairs) builds and every update keeps from then
+  /// on; the next such query builds them again. Answers are the same with or without them.
+  /// Throws std::logic_error from inside one of this manager's queries.
+  void dropVolumes();
 
  private:
   friend struct detail::ManagerAccess;

@@ -44,10 +44,10 @@ std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManage
 /// request.num_max_contacts contacts (unless request.enable_cost): the default request answers
 /// "does anything collide?"; raise num_max_contacts to collect every contact. Requests with
 /// costs or a cached GJK guess run on this thread, without culling or cache. The cull reads the
-/// per-object volumes of a CubeCollisionManager that keeps them (Config::tight_volumes: as of
-/// its registration or last update()) and builds them from the objects otherwise. A convex
-/// polytope against a plane, on which FCL 0.7's fcl::collide crashes (its GJK on a plane), is
-/// answered from the polytope's vertices instead: they meet where vertices lie on both sides of
+/// per-object volumes of a CubeCollisionManager (Config::tight_volumes: built by the first such
+/// query, as of its last update() from then on) and builds them from the objects otherwise. A
+/// convex polytope against a plane, on which FCL 0.7's fcl::collide crashes (its GJK on a plane),
+/// is answered from the polytope's vertices instead: they meet where vertices lie on both sides of
 /// the plane or on it; one contact, normal the plane's, depth the lesser push to either side,
 /// position the deepest vertex on that side moved half the depth towards the plane.
 template <typename S>

@@ -92,6 +92,8 @@ struct CulledCallback {
   detail::CollideFn<S> install(bool on, void*& cdata, const detail::ObjectTable<S>& a,
                                const detail::ObjectTable<S>* b) {
     if (!on || fn == nullptr) return detail::CollideFn<S>(fn);
+    a.wantVolumes();
+    if (b != nullptr) b->wantVolumes();
     volumes.use(a.spheres(), a.shapes(), b != nullptr ? b->spheres() : nullptr,
                 b != nullptr ? b->shapes() : nullptr, 0);
     cdata = this;
@@ -493,6 +495,12 @@ bool CubeCollisionManager<S>::validate(std::string* why) const {
 template <typename S>
 std::size_t CubeCollisionManager<S>::bytes() const {
   return core_->bytes();
+}
+
+template <typename S>
+void CubeCollisionManager<S>::dropVolumes() {
+  refuseInsideQuery(core_.get(), "dropVolumes");
+  core_->dropVolumes();
 }
 
 template <typename S>

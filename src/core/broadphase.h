@@ -205,6 +205,8 @@ class Broadphase {
   const CubeTree<S>& tree() const { return tree_; }
   const ItemArray<S>& unboundedItems() const { return unbounded_.items(); }
   const ObjectTable<S>& table() const { return table_; }
+  /// Frees the table's per-object volumes until a query wants them again.
+  void dropVolumes() { table_.dropVolumes(); }
   std::size_t bytes() const;
   /// Checks every component's invariants and how they agree; on failure says why.
   bool validate(std::string* why) const;

@@ -63,9 +63,29 @@ void ObjectTable<S>::startKeeping() {
   sphere_.assign(obj_.size(), kNoVolume);
   shape_.assign(obj_.size(), VolumeShape{});
   source_.assign(obj_.size(), VolumeSource{});
-  keeping_ = true;
   for (ObjectId id = 0; id < obj_.size(); ++id)
-    if (obj_[id] != nullptr) rebuildVolume(id);
+    if (obj_[id] != nullptr) detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  keeping_.store(true, std::memory_order_release);
+}
+
+template <typename S>
+void ObjectTable<S>::wantVolumes() const {
+  if (!volumes_ || keeping_.load(std::memory_order_acquire)) return;
+  const std::lock_guard<std::mutex> lock(volume_build_);
+  wanted_.store(true, std::memory_order_relaxed);
+  // The table itself is not const (the manager owns it); only this build writes from a query.
+  if (!keeping_.load(std::memory_order_relaxed) && live_ >= kVolumeMinObjects)
+    const_cast<ObjectTable*>(this)->startKeeping();
+}
+
+template <typename S>
+void ObjectTable<S>::dropVolumes() {
+  keeping_.store(false, std::memory_order_relaxed);
+  wanted_.store(false, std::memory_order_relaxed);
+  // Swapped out: assigning {} would keep the capacity.
+  std::vector<VolumeSphere>().swap(sphere_);
+  std::vector<VolumeShape>().swap(shape_);
+  std::vector<VolumeSource>().swap(source_);
 }
 
 template <typename S>
@@ -86,7 +106,7 @@ void ObjectTable<S>::reserve(std::size_t n) {
   obj_.reserve(obj_.size() + fresh);
   seq_.reserve(seq_.size() + fresh);
   loc_.reserve(loc_.size() + fresh);
-  if (keeping_) {
+  if (keeping_.load(std::memory_order_relaxed)) {
     sphere_.reserve(sphere_.size() + fresh);
     shape_.reserve(shape_.size() + fresh);
     source_.reserve(source_.size() + fresh);
@@ -202,7 +222,8 @@ void ObjectTable<S>::clear() {
   obj_ = {};
   seq_ = {};
   loc_ = {};
-  keeping_ = false;
+  keeping_.store(false, std::memory_order_relaxed);
+  wanted_.store(false, std::memory_order_relaxed);
   sphere_ = {};
   shape_ = {};
   source_ = {};
@@ -249,8 +270,8 @@ bool ObjectTable<S>::validate(std::string* why) const {
   };
   const bool filters = !filter_.empty(), margins = !margin_.empty();
   if (seq_.size() != obj_.size() || loc_.size() != obj_.size() ||
-      (keeping_ && (!volumes_ || sphere_.size() != obj_.size() || shape_.size() != obj_.size() ||
-                    source_.size() != obj_.size())) ||
+      (keeping_ && (!volumes_ || !wanted_ || sphere_.size() != obj_.size() ||
+                    shape_.size() != obj_.size() || source_.size() != obj_.size())) ||
       (!keeping_ && !(sphere_.empty() && shape_.empty() && source_.empty())) ||
       (filters && (filter_.size() != obj_.size() || group_.size() != obj_.size())) ||
       (!filters && (!group_.empty() || !group_filter_.empty())) ||

@@ -6,8 +6,10 @@
 // unregistering are O(1), and nothing ever renumbers them, so the pair list and anything else
 // keyed by id survives rebuilds and compactions of the cubes untouched.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -83,26 +85,41 @@ class ObjectTable {
   /// Sets it; the first call since clear() allocates the per-id margins.
   void setOwnMargin(ObjectId id, S margin);
 
-  /// Whether the table keeps the volumes below (Config::tight_volumes): from the moment it
-  /// holds kVolumeMinObjects objects at once until clear(). Set before the first registration.
+  /// Whether the table may keep the volumes below (Config::tight_volumes). Set before the
+  /// first registration.
   void keepVolumes(bool on) { volumes_ = on; }
+  /// Asks for the volumes below: from now until dropVolumes() or clear() they are kept whenever
+  /// the table holds kVolumeMinObjects objects or more (if keepVolumes), built here if they are
+  /// not yet. The one const member that writes: the pipeline's queries, which take the manager
+  /// as const, call it before they read spheres(); concurrent callers wait for the one that
+  /// builds, and queries that never call it read nothing it writes.
+  void wantVolumes() const;
+  /// Stops keeping the volumes and frees them, until the next wantVolumes().
+  void dropVolumes();
   /// Per id: the tight volumes of the object as of its registration or its last refresh
   /// (refreshVolume), for the cull; null while not kept. Entries of free ids are stale.
-  const VolumeSphere* spheres() const { return keeping_ ? sphere_.data() : nullptr; }
-  const VolumeShape* shapes() const { return keeping_ ? shape_.data() : nullptr; }
+  const VolumeSphere* spheres() const {
+    return keeping_.load(std::memory_order_acquire) ? sphere_.data() : nullptr;
+  }
+  const VolumeShape* shapes() const {
+    return keeping_.load(std::memory_order_acquire) ? shape_.data() : nullptr;
+  }
   /// Rebuilds a live id's volumes from its object's geometry and transform.
   void rebuildVolume(ObjectId id) {
-    if (keeping_) detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    if (keeping_.load(std::memory_order_relaxed))
+      detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
   }
   /// Places them anew for the object's transform (its geometry read again only if its local
   /// AABB changed): an object moved.
   void moveVolume(ObjectId id) {
-    if (keeping_) detail::moveVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    if (keeping_.load(std::memory_order_relaxed))
+      detail::moveVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
   }
   /// Places them anew if its object's transform changed since (update() calls it for every
   /// object whose box stands: a rotation may leave FCL's box of an object as it was).
   void refreshVolume(ObjectId id) {
-    if (keeping_) detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    if (keeping_.load(std::memory_order_relaxed))
+      detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
   }
 
   /// Registered objects in registration order.
@@ -134,8 +151,11 @@ class ObjectTable {
   std::vector<VolumeShape> shape_;
   std::vector<VolumeSource> source_;  // per id: what its volumes were built from
   bool volumes_ = true;               // Config::tight_volumes
-  bool keeping_ = false;  // the three above are kept (else empty): volumes_ and, since the
-                          // last clear(), kVolumeMinObjects live ids at once
+  // The three above are kept (else empty): volumes_, wanted_, and kVolumeMinObjects live ids
+  // at once since they were wanted. Atomic: wantVolumes() publishes them to concurrent queries.
+  std::atomic<bool> keeping_{false};
+  mutable std::atomic<bool> wanted_{false};  // asked for by a query since the last drop
+  mutable std::mutex volume_build_;          // one wantVolumes() builds, the others wait
   // The properties most managers never set are allocated by their first use (then kept until
   // clear()): 25 bytes per id that registration and memory would otherwise pay for nothing.
   std::vector<Filter> filter_;              // per id: filter bits; empty: all default
@@ -168,7 +188,7 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
     obj_.push_back(obj);
     seq_.push_back(seq);
     loc_.push_back(kNone);
-    if (keeping_) {
+    if (keeping_.load(std::memory_order_relaxed)) {
       sphere_.emplace_back();
       shape_.emplace_back();
       source_.emplace_back();
@@ -192,9 +212,9 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
   }
   if (!filter_.empty()) ++group_users_[0];
   ++live_;
-  if (keeping_)
+  if (keeping_.load(std::memory_order_relaxed))
     rebuildVolume(id);
-  else if (volumes_ && live_ >= kVolumeMinObjects)
+  else if (volumes_ && live_ >= kVolumeMinObjects && wanted_.load(std::memory_order_relaxed))
     startKeeping();
   return id;
 }

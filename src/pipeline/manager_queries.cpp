@@ -108,6 +108,8 @@ bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,
   const auto* theirs =
       other == &manager ? cube : dynamic_cast<const CubeCollisionManager<S>*>(other);
   const auto* table_b = theirs != nullptr ? &detail::coreOf(*theirs).table() : nullptr;
+  mine.wantVolumes();
+  if (table_b != nullptr) table_b->wantVolumes();
   stream.volumes().use(
       mine.spheres(), mine.shapes(), table_b != nullptr ? table_b->spheres() : nullptr,
       table_b != nullptr ? table_b->shapes() : nullptr,

@@ -80,6 +80,7 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
   const std::size_t states = detail::checkedStates(links, poses, "checkStates");
   std::vector<StateResult<S>> out(states);
   const detail::Broadphase<S>& core = detail::coreOf(world);
+  core.table().wantVolumes();
   const int threads = detail::batchThreads(states, options.threads);
   const std::size_t n = links.size();
   detail::parallelForWith(
@@ -119,6 +120,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   const std::size_t edges = edge_starts.size();
   std::vector<std::size_t> first(edges, kNoIndex);
   if (edges == 0) return first;
+  core.table().wantVolumes();
   // Items in edge order, each edge's states in visiting order: edge e's take the places of
   // its states, edge_starts[e] ...
   struct Item {
