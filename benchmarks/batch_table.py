@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The batched-check tables of the README from a cube_bench JSON run of the batch_ cases
+"""The batched-check tables of benchmarks/README.md from a cube_bench JSON run of the batch_ cases
 (--benchmark_filter=batch_ --benchmark_repetitions=3 --benchmark_out=run.json
 --benchmark_out_format=json). Per case and world: best FCL manager's time / cube's on one thread
 and on two (medians of the repetitions), and the microseconds per state of cube (one thread)
