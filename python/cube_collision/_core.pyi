@@ -94,7 +94,7 @@ class CollisionManager:
     def remove_object(self, name: str) -> None:
         """Removes an object. KeyError if unknown."""
     def set_transform(self, name: str, transform: ArrayLike) -> None:
-        """Moves one object."""
+        """Moves one object. TypeError for a None transform (no default: not the identity)."""
     def set_transforms(self, names: Sequence[str], transforms: ArrayLike) -> None:
         """Moves many objects ((n, 4, 4) transforms) in one tree update; all checked first."""
     def get_transform(self, name: str) -> npt.NDArray[np.float64]: ...

@@ -460,11 +460,17 @@ an error: as add_object, plus ValueError for a name given twice or lengths that 
           "set_transform",
           [](Manager& self, py::handle name, py::handle tf) {
             const std::string n = nameOf(name);
+            // transform() reads None as the identity (add_object's default); a move needs one.
+            if (tf.is_none())
+              throw py::type_error(
+                  "set_transform: transform must be a 4x4 rigid transform, got "
+                  "None (np.eye(4) is the identity)");
             self.setTransforms({n}, {transform(tf)});
           },
           py::arg("name"), py::arg("transform"),
           "Moves one object (4x4 rigid transform). KeyError for an unknown name, TypeError / "
-          "ValueError for a bad transform; nothing changes then.")
+          "ValueError for a bad transform (TypeError for None, as trimesh and set_transforms); "
+          "nothing changes then.")
       .def(
           "set_transforms",
           [](Manager& self, py::handle names, py::handle tfs) {

@@ -108,3 +108,13 @@ def test_mutation_from_a_query_callback_is_refused():
     with pytest.raises(RuntimeError):
         m._collide_python(callback)
     assert len(m) == 20
+
+
+def test_set_transform_to_none_is_type_error_and_moves_nothing(backend):
+    # trimesh raises on a None transform (as set_transforms does here); no move to the origin.
+    m = build(mixed_scene(20, 3), backend)
+    before = state(m)
+    with pytest.raises(TypeError, match="None"):
+        m.set_transform("o1", None)
+    assert state(m) == before
+
