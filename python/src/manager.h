@@ -135,9 +135,20 @@ class Manager {
 void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
                       bool distance, const char* what);
 
-/// Set while a Python callback of a private benchmark hook runs on this thread: mutations then
-/// raise instead of waiting for a lock the thread itself holds.
+/// Set while this thread holds a manager's read lock and may run Python code (a callback of a
+/// private benchmark hook, or a __del__ set off by an allocation while a query or pickling builds
+/// its result): mutations then raise instead of waiting for a lock the thread itself holds.
 extern thread_local int in_python_callback;
+
+/// Marks this thread as in_python_callback for its lifetime, and restores the count on every
+/// exit, an exception included.
+class CallbackScope {
+ public:
+  CallbackScope() { ++in_python_callback; }
+  ~CallbackScope() { --in_python_callback; }
+  CallbackScope(const CallbackScope&) = delete;
+  CallbackScope& operator=(const CallbackScope&) = delete;
+};
 
 }  // namespace cubepy
 

@@ -11,6 +11,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -373,10 +374,7 @@ py::object collideQuery(const Manager& m, const Manager* other, const Want& w, K
     lock.emplace(m, other);
     o = run();
   }
-  struct Refuse {
-    Refuse() { ++in_python_callback; }
-    ~Refuse() { --in_python_callback; }
-  } refuse;
+  CallbackScope refuse;
   return collideReturn(o, w, kind);
 }
 
@@ -602,29 +600,48 @@ Handle handleOf(ObjPtr o) {
   return {nameOf(o), o, e ? py::cast(e->geometry) : py::none()};
 }
 
+// Every exception of the callback (a Python one, or a result of the wrong type) is kept and
+// stops the walk: none crosses the broadphase, whose walk is left as it would be after a stop.
 struct PyDrive {
   py::function fn;
-  std::optional<py::error_already_set> error;
-  static bool collideCb(ObjPtr a, ObjPtr b, void* data) {
+  const char* what;
+  std::exception_ptr error;
+
+  template <class Call>
+  static bool guarded(void* data, Call&& call) {
     auto& d = *static_cast<PyDrive*>(data);
     try {
-      py::object r = d.fn(handleOf(a), handleOf(b));
-      return r.cast<bool>();
-    } catch (py::error_already_set& e) {
-      d.error = std::move(e);
-      return true;
+      return call(d);
+    } catch (const py::cast_error& e) {
+      d.error = std::make_exception_ptr(py::type_error(
+          std::string(d.what) + ": the callback returned the wrong type (" + e.what() + ")"));
+    } catch (...) {
+      d.error = std::current_exception();
     }
+    return true;
+  }
+  static bool collideCb(ObjPtr a, ObjPtr b, void* data) {
+    return guarded(data, [&](PyDrive& d) { return d.fn(handleOf(a), handleOf(b)).cast<bool>(); });
   }
   static bool distanceCb(ObjPtr a, ObjPtr b, void* data, double& dist) {
-    auto& d = *static_cast<PyDrive*>(data);
-    try {
+    return guarded(data, [&](PyDrive& d) {
       py::tuple r = d.fn(handleOf(a), handleOf(b));
-      dist = r[1].cast<double>();
-      return r[0].cast<bool>();
-    } catch (py::error_already_set& e) {
-      d.error = std::move(e);
-      return true;
+      const double got = r[1].cast<double>();
+      const bool stop = r[0].cast<bool>();
+      dist = got;
+      return stop;
+    });
+  }
+  /// Runs a hook's walk on m with the thread marked as in a callback (restored on every exit),
+  /// then rethrows what a callback raised.
+  template <class Walk>
+  void run(const Manager& m, Walk&& walk) {
+    {
+      std::shared_lock lock(m.mutex);
+      CallbackScope scope;
+      walk();
     }
+    if (error) std::rethrow_exception(error);
   }
 };
 
@@ -844,30 +861,25 @@ point or a negative or NaN radius.)doc")
       .def(
           "_collide_python",
           [](const Manager& m, py::function fn) {
-            PyDrive d{fn, std::nullopt};
-            std::shared_lock lock(m.mutex);
-            ++in_python_callback;
-            m.broadphase().collide(&d, &PyDrive::collideCb);
-            --in_python_callback;
-            if (d.error) throw std::move(*d.error);
+            PyDrive d{fn, "_collide_python", nullptr};
+            d.run(m, [&] { m.broadphase().collide(&d, &PyDrive::collideCb); });
           },
           py::arg("callback"),
           "Benchmark hook (trimesh's way over python-fcl): the backend's self-collide calling "
           "callback(handle_a, handle_b) -> bool (True stops) for every candidate pair. Filters "
-          "are not applied. The manager must not change from the callback (RuntimeError).")
+          "are not applied. The manager must not change from the callback (RuntimeError). What "
+          "the callback raises stops the walk and is raised here; TypeError for a result that "
+          "is not a bool.")
       .def(
           "_distance_python",
           [](const Manager& m, py::function fn) {
-            PyDrive d{fn, std::nullopt};
-            std::shared_lock lock(m.mutex);
-            ++in_python_callback;
-            m.broadphase().distance(&d, &PyDrive::distanceCb);
-            --in_python_callback;
-            if (d.error) throw std::move(*d.error);
+            PyDrive d{fn, "_distance_python", nullptr};
+            d.run(m, [&] { m.broadphase().distance(&d, &PyDrive::distanceCb); });
           },
           py::arg("callback"),
           "Benchmark hook: the backend's self distance calling callback(handle_a, handle_b) -> "
-          "(stop, best distance so far) for every pair it visits.");
+          "(stop, best distance so far) for every pair it visits. Errors as _collide_python "
+          "(TypeError for a result that is not (bool, float)).");
 }
 
 void bindQueries(py::module_& m) {
