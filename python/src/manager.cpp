@@ -337,6 +337,9 @@ namespace {
 
 py::dict getState(const Manager& m) {
   std::shared_lock lock(m.mutex);
+  // The state is built under the read lock: a __del__ that an allocation here sets off and that
+  // mutates the manager would wait for this lock forever; it gets RuntimeError, as in a query.
+  CallbackScope refuse;
   py::list objects;
   for (const Entry* e : m.ordered()) {
     objects.append(py::make_tuple(e->name, e->geometry, toArray(e->obj->getTransform()),
@@ -389,8 +392,8 @@ hardware's, 1: the calling thread only); answers do not depend on it.
 Thread safety: any calls from several Python threads are safe. Queries run concurrently (each
 releases the GIL); a mutation (add, remove, set_transform(s), filters, margins) waits for the
 running queries and runs alone. A mutation from Python code that runs inside a query (a
-callback of the private _collide_python hooks, or a __del__ while a collide query builds its
-result) raises RuntimeError instead of waiting for that query. Pickles: the copy is rebuilt from
+callback of the private _collide_python hooks, or a __del__ while a collide query or pickling
+builds its result) raises RuntimeError instead of waiting for that query. Pickles: the copy is rebuilt from
 geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
   cls.def(py::init<const std::string&, int>(), py::arg("backend") = "cube", py::arg("threads") = 0,
           "An empty manager. ValueError for a backend other than 'cube' or 'fcl'.")
@@ -490,8 +493,13 @@ index), TypeError for non-str names or a non-numeric array.)doc")
       .def(
           "get_transform",
           [](const Manager& self, py::handle name) {
-            std::shared_lock lock(self.mutex);
-            return toArray(self.find(nameOf(name))->obj->getTransform());
+            const std::string n = nameOf(name);
+            fcl::Transform3d tf;
+            {
+              std::shared_lock lock(self.mutex);
+              tf = self.find(n)->obj->getTransform();
+            }
+            return toArray(tf);  // allocates: after the lock (a __del__ may mutate the manager)
           },
           py::arg("name"), "The object's 4x4 transform (a copy). KeyError for an unknown name.")
       .def(
