@@ -276,13 +276,27 @@ void swapSides(CollideOut& o) {
   }
 }
 
+// A cube manager and an FCL-backend one. The cube manager's walk knows the bits of its own
+// objects only (those of another kind of manager are query objects with the default bits there),
+// and FCL's tree static_casts another manager to its own type: each object of the cube manager
+// is asked of the FCL tree instead, the pair rules checked per pair with both objects' bits.
+// Pairs come as (FCL side, cube side).
+CollideOut mixedCollide(const Manager& fcl_side, const Manager& cube_side, const Want& want) {
+  const fcl::CollisionRequestd request =
+      want.anyOnly() ? fcl::CollisionRequestd() : want.pairRequest();
+  FclCollide c{&fcl_side, &cube_side, want, request, false, {}};
+  for (const Entry* e : cube_side.ordered()) {
+    fcl_side.broadphase().collide(e->obj.get(), &c, &FclCollide::callback);
+    if (c.out.any && want.anyOnly()) break;
+  }
+  return std::move(c.out);
+}
+
 CollideOut collide(const Manager& m, ObjPtr query, const Manager* other, const Want& want) {
   if (other) {
-    // FCL's tree static_casts the other manager to its own type: with a cube manager on the
-    // other side, ask from that side and swap.
-    if (!m.isCube() && other->isCube()) {
-      CollideOut o = collide(*other, nullptr, &m, want);
-      swapSides(o);
+    if (m.isCube() != other->isCube()) {
+      CollideOut o = m.isCube() ? mixedCollide(*other, m, want) : mixedCollide(m, *other, want);
+      if (m.isCube()) swapSides(o);
       return o;
     }
     return m.isCube() ? cubeCollide(m, nullptr, other, want)
@@ -451,10 +465,36 @@ DistOut nameResult(const fcl::DistanceResultd& r, const Manager& m,
   return out;
 }
 
+DistOut fromFcl(const FclDistance& c) {
+  DistOut out;
+  if (c.o1) {
+    out.found = true;
+    out.distance = c.best.min_distance;
+    out.a = nameOf(c.o1);
+    out.b = nameOf(c.o2);
+    out.pa = c.best.nearest_points[0];
+    out.pb = c.best.nearest_points[1];
+  }
+  return out;
+}
+
+// A cube manager and an FCL-backend one, as mixedCollide: each object of the cube manager asked
+// of the FCL tree with the best distance so far (which prunes), both objects' bits checked per
+// pair. Names and points come as (FCL side, cube side).
+DistOut mixedDistance(const Manager& fcl_side, const Manager& cube_side, bool points) {
+  FclDistance c{&fcl_side, &cube_side, fcl::DistanceRequestd(points), {}, nullptr, nullptr};
+  for (const Entry* e : cube_side.ordered()) {
+    fcl_side.broadphase().distance(e->obj.get(), &c, &FclDistance::callback);
+    if (c.o1 && c.best.min_distance <= 0) break;
+  }
+  return fromFcl(c);
+}
+
 DistOut distance(const Manager& m, ObjPtr query, const Manager* other, bool points) {
   fcl::DistanceRequestd request(points);
-  if (other && !m.isCube() && other->isCube()) {
-    DistOut o = distance(*other, nullptr, &m, points);
+  if (other && m.isCube() != other->isCube()) {
+    if (!m.isCube()) return mixedDistance(m, *other, points);
+    DistOut o = mixedDistance(*other, m, points);
     std::swap(o.a, o.b);
     std::swap(o.pa, o.pb);
     return o;
@@ -475,16 +515,7 @@ DistOut distance(const Manager& m, ObjPtr query, const Manager* other, bool poin
     m.broadphase().distance(&other->broadphase(), &c, &FclDistance::callback);
   else
     m.broadphase().distance(&c, &FclDistance::callback);
-  DistOut out;
-  if (c.o1) {
-    out.found = true;
-    out.distance = c.best.min_distance;
-    out.a = nameOf(c.o1);
-    out.b = nameOf(c.o2);
-    out.pa = c.best.nearest_points[0];
-    out.pb = c.best.nearest_points[1];
-  }
-  return out;
+  return fromFcl(c);
 }
 
 py::object distanceReturn(const DistOut& o, bool names, bool data, Kind kind) {
@@ -697,8 +728,9 @@ filter bits and the manager-wide margin. TypeError / ValueError for a bad geomet
           py::arg("max_contacts") = 100000, R"doc(
 Does any object of this manager collide with one of `other_manager` (either backend)? Returns
 is_collision, plus the set of (name here, name there) tuples, plus the contacts dict, as
-in_collision_internal. Filter bits apply across the two managers; ignored pairs and margins do
-not. The same manager as other is in_collision_internal.)doc")
+in_collision_internal. Filter bits apply across the two managers, whichever backend each has
+(a cube manager against an FCL-backend one asks FCL's tree for each of its objects); ignored
+pairs and margins do not. The same manager as other is in_collision_internal.)doc")
       .def(
           "min_distance_internal",
           [](const Manager& m, bool names, bool data) {
@@ -750,8 +782,9 @@ min_distance_internal.)doc")
           },
           py::arg("other_manager"), py::arg("return_names") = false, py::arg("return_data") = false,
           R"doc(
-The smallest distance between an object here and one of `other_manager`. Returns distance, plus
-the (name here, name there) tuple, plus the data dict, as min_distance_internal.)doc")
+The smallest distance between an object here and one of `other_manager` (either backend) whose
+filter bits let them pair. Returns distance, plus the (name here, name there) tuple, plus the
+data dict, as min_distance_internal.)doc")
       .def(
           "ray_first",
           [](const Manager& m, py::handle origins, py::handle ends, bool narrow, double tol) {
