@@ -2,7 +2,8 @@
 
     import cube_collision
     m = cube_collision.CollisionManager()            # was: trimesh.collision.CollisionManager()
-    m.add_object("a", mesh, transform)               # a Trimesh, or cube_collision.mesh(v, f)
+    m.add_object("a", mesh, transform)               # a Trimesh (convex if mesh.is_convex), or
+                                                     # cube_collision.mesh(v, f)
     hit, names = m.in_collision_internal(return_names=True)
 
 Geometry: mesh, convex, box, sphere, cylinder, capsule, cone, plane (each returns a Geometry).

@@ -11,6 +11,7 @@ Transform = Optional[npt.ArrayLike]  # 4x4 rigid; None: identity
 ALL_BITS: int
 
 class _HasMesh(Protocol):
+    """A trimesh.Trimesh or alike: a convex() if it has a true `is_convex`, else a mesh()."""
     vertices: Any
     faces: Any
 

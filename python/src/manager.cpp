@@ -417,8 +417,9 @@ geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
           py::arg("name"), py::arg("geometry"), py::arg("transform") = py::none(), py::kw_only(),
           py::arg("category") = 1, py::arg("mask") = ~std::uint64_t(0),
           py::arg("margin") = py::none(), R"doc(
-Adds an object: `geometry` (a Geometry, or a trimesh.Trimesh / anything with vertices and faces,
-made into a mesh) placed by `transform` (4x4 rigid, None: identity). category / mask: filter bits
+Adds an object: `geometry` (a Geometry, or a trimesh.Trimesh / anything with vertices and faces:
+as trimesh, a solid convex (FCL's Convex) if its is_convex is true, else a mesh, a surface)
+placed by `transform` (4x4 rigid, None: identity). category / mask: filter bits
 (set_filter). margin: the object's own margin (set_margin). A geometry added under several names
 is copied once per name (trimesh also builds one BVH per add_object).
 Raises TypeError (name not a str, not a geometry, non-numeric transform), ValueError (an object

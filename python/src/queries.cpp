@@ -710,8 +710,8 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
           },
           py::arg("geometry"), py::arg("transform") = py::none(), py::arg("return_names") = false,
           py::arg("return_data") = false, py::arg("max_contacts") = 100000, R"doc(
-Does `geometry` (a Geometry or a trimesh.Trimesh) placed by `transform` (4x4 rigid, None:
-identity) collide with any object? Returns is_collision, plus the set of names hit, plus the
+Does `geometry` (a Geometry or a trimesh.Trimesh, taken as add_object takes it: a convex one as a
+solid) placed by `transform` (4x4 rigid, None: identity) collide with any object? Returns is_collision, plus the set of names hit, plus the
 contacts dict (names (object, '__external')), as in_collision_internal. The query has the default
 filter bits and the manager-wide margin. TypeError / ValueError for a bad geometry or transform.)doc")
       .def(

@@ -40,6 +40,38 @@ def test_trimesh_like_objects_become_meshes():
     assert m.get_geometry("t").kind == "mesh"
 
 
+BOX_VERTICES = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+BOX_FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+
+
+class TrimeshLike:
+    """What the package reads of a trimesh.Trimesh: vertices, faces and is_convex."""
+
+    def __init__(self, vertices, faces, is_convex):
+        self.vertices, self.faces, self.is_convex = vertices, faces, is_convex
+
+
+@pytest.mark.parametrize("backend", ["cube", "fcl"])
+def test_convex_trimesh_is_a_solid_and_others_stay_surfaces(backend):
+    # As trimesh: a mesh whose is_convex is true becomes FCL's Convex (a solid), so a sphere
+    # inside the box collides with it; a mesh that is not convex stays a BVH surface.
+    ball = cc.sphere(0.25)
+    assert cc.pair_in_collision(cc.convex(BOX_VERTICES, BOX_FACES), I, ball, I)   # the oracle
+    assert not cc.pair_in_collision(cc.mesh(BOX_VERTICES, BOX_FACES), I, ball, I)
+    m = cc.CollisionManager(backend=backend)
+    m.add_object("solid", TrimeshLike(BOX_VERTICES, BOX_FACES, True))
+    m.add_object("shell", TrimeshLike(BOX_VERTICES, BOX_FACES, False), scenes.pose(I[:3, :3], [5, 0, 0]))
+    assert m.get_geometry("solid").kind == "convex" and m.get_geometry("shell").kind == "mesh"
+    assert m.in_collision_single(ball, return_names=True) == (True, {"solid"})
+    assert not m.in_collision_single(ball, scenes.pose(I[:3, :3], [5, 0, 0]))
+    # As a query geometry too: a convex trimesh around an object collides with it.
+    inner = cc.CollisionManager(backend=backend)
+    inner.add_object("ball", ball)
+    assert inner.in_collision_single(TrimeshLike(BOX_VERTICES, BOX_FACES, True))
+    assert not inner.in_collision_single(TrimeshLike(BOX_VERTICES, BOX_FACES, False))
+
+
 @pytest.mark.parametrize("make", [
     lambda: cc.box(0, 1, 1), lambda: cc.box(1, -1, 1), lambda: cc.sphere(float("nan")),
     lambda: cc.cylinder(1, float("inf")), lambda: cc.capsule(-1, 1), lambda: cc.cone(1, 0),
