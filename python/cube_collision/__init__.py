@@ -18,6 +18,7 @@ from ._core import (  # noqa: F401
     Body,
     CollisionManager,
     Geometry,
+    UnknownNameError,
     box,
     capsule,
     cone,
@@ -34,6 +35,6 @@ from ._core import _fcl_collide, _fcl_distance, _Handle  # noqa: F401  (benchmar
 __version__ = "0.1.0"
 
 __all__ = [
-    "ALL_BITS", "Body", "CollisionManager", "Geometry", "box", "capsule", "cone", "convex",
-    "cylinder", "mesh", "pair_distance", "pair_in_collision", "plane", "sphere",
+    "ALL_BITS", "Body", "CollisionManager", "Geometry", "UnknownNameError", "box", "capsule",
+    "cone", "convex", "cylinder", "mesh", "pair_distance", "pair_in_collision", "plane", "sphere",
 ]

@@ -48,12 +48,16 @@ void noCallback(const char* what) {
 }
 
 std::string nameOf(py::handle h) {
+  return nameOfArg(h);
+}
+
+}  // namespace
+
+std::string nameOfArg(py::handle h) {
   if (!py::isinstance<py::str>(h))
     throw py::type_error("names must be str, got " + py::str(py::type::of(h)).cast<std::string>());
   return h.cast<std::string>();
 }
-
-}  // namespace
 
 Manager::Manager(const std::string& backend, int threads) : backend_(backend), threads_(threads) {
   if (backend == "cube") {
@@ -73,7 +77,7 @@ Manager::~Manager() {
 
 Entry* Manager::find(const std::string& name) const {
   auto it = entries_.find(name);
-  if (it == entries_.end()) throw py::key_error("no object named '" + name + "'");
+  if (it == entries_.end()) throw UnknownName("no object named '" + name + "'");
   return it->second.get();
 }
 
@@ -380,6 +384,25 @@ std::shared_ptr<Manager> fromState(const py::dict& d) {
 }  // namespace
 
 void bindManager(py::module_& m) {
+  // Made once, kept for the process (as pybind11's own exception types).
+  static PyObject* unknown_name = [&] {
+    py::tuple bases = py::make_tuple(py::handle(PyExc_KeyError), py::handle(PyExc_ValueError));
+    PyObject* cls = PyErr_NewExceptionWithDoc(
+        "cube_collision.UnknownNameError",
+        "No object has this name: both a KeyError (this package's word) and a ValueError (what "
+        "trimesh raises), so that either except clause catches it.",
+        bases.ptr(), nullptr);
+    if (!cls) throw py::error_already_set();
+    return cls;
+  }();
+  m.attr("UnknownNameError") = py::handle(unknown_name);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const UnknownName& e) {
+      PyErr_SetString(unknown_name, e.what());
+    }
+  });
   ManagerClass cls(m, "CollisionManager", R"doc(
 Named collision objects with trimesh.collision.CollisionManager's vocabulary, every query run in
 C++ (broadphase, culling and FCL's narrow phase, the GIL released).
@@ -393,8 +416,11 @@ Thread safety: any calls from several Python threads are safe. Queries run concu
 releases the GIL); a mutation (add, remove, set_transform(s), filters, margins) waits for the
 running queries and runs alone. A mutation from Python code that runs inside a query (a
 callback of the private _collide_python hooks, or a __del__ while a collide query or pickling
-builds its result) raises RuntimeError instead of waiting for that query. Pickles: the copy is rebuilt from
-geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
+builds its result) raises RuntimeError instead of waiting for that query. Pickles: the copy is
+rebuilt from geometry, names, transforms, filter bits, ignored pairs and margins.
+
+An unknown name raises cube_collision.UnknownNameError, both the KeyError that the calls below
+name and the ValueError that trimesh raises.)doc");
   cls.def(py::init<const std::string&, int>(), py::arg("backend") = "cube", py::arg("threads") = 0,
           "An empty manager. ValueError for a backend other than 'cube' or 'fcl'.")
       .def_property_readonly("backend", &Manager::backend, "'cube' or 'fcl'.")
@@ -403,9 +429,9 @@ geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
       .def(
           "add_object",
           [](Manager& self, py::handle name, py::handle geometry, py::handle transform_,
-             std::uint64_t category, std::uint64_t mask, py::object margin) {
+             py::handle mesh, std::uint64_t category, std::uint64_t mask, py::object margin) {
             const std::string n = nameOf(name);
-            GeometryPtr g = geometryOf(geometry);
+            GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "add_object"));
             const fcl::Transform3d tf = transform(transform_);
             double own = -1;  // none: the manager-wide margin
             if (!margin.is_none()) {
@@ -413,18 +439,25 @@ geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
               checkMargin(own);
             }
             self.add({{n, g, tf, category, mask, own}}, "add_object");
+            return g;
           },
-          py::arg("name"), py::arg("geometry"), py::arg("transform") = py::none(), py::kw_only(),
-          py::arg("category") = 1, py::arg("mask") = ~std::uint64_t(0),
-          py::arg("margin") = py::none(), R"doc(
+          py::arg("name"), py::arg("geometry") = py::none(), py::arg("transform") = py::none(),
+          py::kw_only(), py::arg("mesh") = py::none(), py::arg("category") = 1,
+          py::arg("mask") = ~std::uint64_t(0), py::arg("margin") = py::none(), R"doc(
 Adds an object: `geometry` (a Geometry, or a trimesh.Trimesh / anything with vertices and faces:
 as trimesh, a solid convex (FCL's Convex) if its is_convex is true, else a mesh, a surface)
-placed by `transform` (4x4 rigid, None: identity). category / mask: filter bits
-(set_filter). margin: the object's own margin (set_margin). A geometry added under several names
-is copied once per name (trimesh also builds one BVH per add_object).
-Raises TypeError (name not a str, not a geometry, non-numeric transform), ValueError (an object
-with this name exists: unlike trimesh, which replaces it; a transform that is not 4x4, finite and
-rigid; a bad margin; a plane with backend='fcl'); nothing is added then.)doc")
+placed by `transform` (4x4 rigid, None: identity). mesh: trimesh's name for `geometry` (as
+trimesh's scene_to_collision calls add_object(name=..., mesh=..., transform=...)); give one of
+the two. category / mask: filter bits (set_filter). margin: the object's own margin
+(set_margin). A geometry added under several names is copied once per name (trimesh also builds
+one BVH per add_object).
+Returns the Geometry the object was added with (the one get_geometry returns; a trimesh is
+converted). trimesh returns python-fcl's CollisionObject, which this package has no binding
+for: move and read objects by name (set_transform, get_transform).
+Raises TypeError (name not a str, not a geometry, both or neither of geometry and mesh,
+non-numeric transform), ValueError (an object with this name exists: unlike trimesh, which
+replaces it; a transform that is not 4x4, finite and rigid; a bad margin; a plane with
+backend='fcl'); nothing is added then.)doc")
       .def(
           "add_objects",
           [](Manager& self, py::handle names, py::handle geometries, py::handle transforms) {
@@ -594,7 +627,7 @@ margins. ValueError for a negative or non-finite margin, KeyError for an unknown
              try {
                self.find(name.cast<std::string>());
                return true;
-             } catch (const py::key_error&) {
+             } catch (const UnknownName&) {
                return false;
              }
            })

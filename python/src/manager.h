@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <shared_mutex>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -35,6 +36,26 @@ class Object : public fcl::CollisionObjectd {
     }
   }
 };
+
+/// An unknown object name. Python gets cube_collision.UnknownNameError, both a KeyError (this
+/// package's word) and a ValueError (trimesh's).
+class UnknownName : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The geometry argument of a call that also takes trimesh's keyword `mesh`: whichever of the two
+/// is given. TypeError if both or neither are.
+inline py::handle geometryArg(py::handle geometry, py::handle mesh, const char* what) {
+  if (geometry.is_none() == mesh.is_none())
+    throw py::type_error(std::string(what) +
+                         (geometry.is_none() ? ": give the geometry (or trimesh's keyword mesh=)"
+                                             : ": give the geometry or mesh=, not both"));
+  return geometry.is_none() ? mesh : geometry;
+}
+
+/// A name argument as a std::string. TypeError if it is not a str.
+std::string nameOfArg(py::handle h);
 
 /// One named object.
 struct Entry {
@@ -81,7 +102,7 @@ class Manager {
   void setMargin(double margin, const std::string* name);
 
   // Reads (callers hold the shared lock, or the GIL with no query running).
-  Entry* find(const std::string& name) const;  ///< KeyError if unknown
+  Entry* find(const std::string& name) const;  ///< UnknownName if unknown
   std::vector<const Entry*> ordered() const;   ///< by registration
   static Entry* entryOf(const fcl::CollisionObjectd* o) {
     return static_cast<Entry*>(o->getUserData());

@@ -416,7 +416,7 @@ struct FclDistance {
     auto& c = *static_cast<FclDistance*>(data);
     const Entry* ea = Manager::entryOf(a);
     const Entry* eb = Manager::entryOf(b);
-    if (!pairAllowed(*c.self, c.other, ea, eb)) return false;
+    if (a == b || !pairAllowed(*c.self, c.other, ea, eb)) return false;
     fcl::DistanceResultd r;
     fcl::distance(a, b, c.request, r);
     if (r.min_distance < c.best.min_distance) {
@@ -487,6 +487,15 @@ DistOut mixedDistance(const Manager& fcl_side, const Manager& cube_side, bool po
     fcl_side.broadphase().distance(e->obj.get(), &c, &FclDistance::callback);
     if (c.o1 && c.best.min_distance <= 0) break;
   }
+  return fromFcl(c);
+}
+
+// The smallest distance from one object of m to the others: the broadphase's distance query
+// with the object itself (a registered object: FCL's tree pairs it with itself, the cube manager
+// does not) and the pair rules asked per pair.
+DistOut distanceFrom(const Manager& m, const Entry& e, bool points) {
+  FclDistance c{&m, nullptr, fcl::DistanceRequestd(points), {}, nullptr, nullptr};
+  m.broadphase().distance(e.obj.get(), &c, &FclDistance::callback);
   return fromFcl(c);
 }
 
@@ -698,9 +707,9 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
       .def(
           "in_collision_single",
           [](const Manager& m, py::handle geometry, py::handle tf, bool names, bool data,
-             int max_contacts) {
+             int max_contacts, py::handle mesh) {
             const Want w = want(names, data, max_contacts);
-            GeometryPtr g = geometryOf(geometry);
+            GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "in_collision_single"));
             Object q(g->fcl, transform(tf));
             return collideQuery(m, nullptr, w, Kind::single, [&] {
               refuseFclCrashes(&m, nullptr, {g->kind}, false, "in_collision_single");
@@ -708,12 +717,15 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
               return collide(m, &q, nullptr, w);
             });
           },
-          py::arg("geometry"), py::arg("transform") = py::none(), py::arg("return_names") = false,
-          py::arg("return_data") = false, py::arg("max_contacts") = 100000, R"doc(
+          py::arg("geometry") = py::none(), py::arg("transform") = py::none(),
+          py::arg("return_names") = false, py::arg("return_data") = false,
+          py::arg("max_contacts") = 100000, py::kw_only(), py::arg("mesh") = py::none(), R"doc(
 Does `geometry` (a Geometry or a trimesh.Trimesh, taken as add_object takes it: a convex one as a
-solid) placed by `transform` (4x4 rigid, None: identity) collide with any object? Returns is_collision, plus the set of names hit, plus the
-contacts dict (names (object, '__external')), as in_collision_internal. The query has the default
-filter bits and the manager-wide margin. TypeError / ValueError for a bad geometry or transform.)doc")
+solid; or by trimesh's keyword mesh=) placed by `transform` (4x4 rigid, None: identity) collide
+with any object? Returns is_collision, plus the set of names hit, plus the contacts dict (names
+(object, '__external')), as in_collision_internal. The query has the default filter bits and the
+manager-wide margin. TypeError / ValueError for a bad geometry or transform, TypeError for both
+or neither of geometry and mesh.)doc")
       .def(
           "in_collision_other",
           [](const Manager& m, const Manager& other, bool names, bool data, int max_contacts) {
@@ -733,26 +745,34 @@ in_collision_internal. Filter bits apply across the two managers, whichever back
 pairs and margins do not. The same manager as other is in_collision_internal.)doc")
       .def(
           "min_distance_internal",
-          [](const Manager& m, bool names, bool data) {
+          [](const Manager& m, bool names, bool data, py::object name) {
+            const std::optional<std::string> from =
+                name.is_none() ? std::nullopt : std::optional<std::string>(nameOfArg(name));
             DistOut o;
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
+              const Entry* e = from ? m.find(*from) : nullptr;
               refuseFclCrashes(&m, nullptr, {}, true, "min_distance_internal");
-              o = distance(m, nullptr, nullptr, data);
+              o = e ? distanceFrom(m, *e, data) : distance(m, nullptr, nullptr, data);
             }
             return distanceReturn(o, names, data, Kind::internal);
           },
-          py::arg("return_names") = false, py::arg("return_data") = false, R"doc(
+          py::arg("return_names") = false, py::arg("return_data") = false,
+          py::arg("name") = py::none(), R"doc(
 The smallest distance between two objects (FCL's fcl::distance; <= 0 when some pair touches: the
 search stops at the first such pair; inf with fewer than two objects that may pair). Filter bits
-and ignored pairs apply, margins do not. Returns distance, plus (return_names) the sorted
-(name, name) tuple (None if none), plus (return_data) a dict: 'distance', 'names' (as found),
-'points' (2, 3) the nearest points in the world frame, in the order of 'names'.)doc")
+and ignored pairs apply, margins do not. name: only the pairs of that object with the others
+(trimesh's name=: the distance from it to the rest; give it by keyword, trimesh's newest puts
+it first). Returns distance, plus (return_names) the sorted (name, name) tuple (None if none),
+plus (return_data) a dict: 'distance', 'names' (as found), 'points' (2, 3) the nearest points in
+the world frame, in the order of 'names'. UnknownNameError (a KeyError and a ValueError) for an
+unknown name, TypeError for a name that is not a str.)doc")
       .def(
           "min_distance_single",
-          [](const Manager& m, py::handle geometry, py::handle tf, bool name, bool data) {
-            GeometryPtr g = geometryOf(geometry);
+          [](const Manager& m, py::handle geometry, py::handle tf, bool name, bool data,
+             py::handle mesh) {
+            GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "min_distance_single"));
             Object q(g->fcl, transform(tf));
             DistOut o;
             {
@@ -763,11 +783,12 @@ and ignored pairs apply, margins do not. Returns distance, plus (return_names) t
             }
             return distanceReturn(o, name, data, Kind::single);
           },
-          py::arg("geometry"), py::arg("transform") = py::none(), py::arg("return_name") = false,
-          py::arg("return_data") = false, R"doc(
-The smallest distance from `geometry` placed by `transform` to any object. Returns distance,
-plus (return_name) the nearest object's name, plus the data dict (names (name, '__external')), as
-min_distance_internal.)doc")
+          py::arg("geometry") = py::none(), py::arg("transform") = py::none(),
+          py::arg("return_name") = false, py::arg("return_data") = false, py::kw_only(),
+          py::arg("mesh") = py::none(), R"doc(
+The smallest distance from `geometry` (or trimesh's keyword mesh=, as in_collision_single)
+placed by `transform` to any object. Returns distance, plus (return_name) the nearest object's
+name, plus the data dict (names (name, '__external')), as min_distance_internal.)doc")
       .def(
           "min_distance_other",
           [](const Manager& m, const Manager& other, bool names, bool data) {
