@@ -47,7 +47,7 @@ def test_mesh_keyword_as_trimesh_scene_to_collision_calls(backend):
 def test_geometry_and_mesh_together_or_neither_is_type_error(backend, call):
     m = build(mixed_scene(10, 3), backend)
     before = state(m)
-    with pytest.raises(TypeError, match="mesh"):
+    with pytest.raises(TypeError, match="give the geometry"):
         call(m)
     assert state(m) == before
 
