@@ -490,11 +490,21 @@ DistOut mixedDistance(const Manager& fcl_side, const Manager& cube_side, bool po
   return fromFcl(c);
 }
 
-// The smallest distance from one object of m to the others: the broadphase's distance query
-// with the object itself (a registered object: FCL's tree pairs it with itself, the cube manager
-// does not) and the pair rules asked per pair.
+// The smallest distance from one object of m to the others: a distance query with the object
+// itself. The cube manager never pairs a registered object with itself and applies its bits and
+// ignored pairs (the pipeline, as the other distance queries); FCL's tree pairs it with itself,
+// which the callback skips, asking the pair rules per pair.
 DistOut distanceFrom(const Manager& m, const Entry& e, bool points) {
-  FclDistance c{&m, nullptr, fcl::DistanceRequestd(points), {}, nullptr, nullptr};
+  fcl::DistanceRequestd request(points);
+  if (m.isCube()) {
+    cube::NarrowPhaseOptions<double> opt;
+    opt.threads = m.threads();
+    fcl::DistanceResultd r = cube::minimumDistance(*m.cube(), e.obj.get(), request, opt);
+    DistOut out = nameResult(r, m, e.obj->collisionGeometry().get(), nullptr);
+    if (out.found) out.b = e.name;  // nameResult names the query object as trimesh's external
+    return out;
+  }
+  FclDistance c{&m, nullptr, request, {}, nullptr, nullptr};
   m.broadphase().distance(e.obj.get(), &c, &FclDistance::callback);
   return fromFcl(c);
 }

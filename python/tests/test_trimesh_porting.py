@@ -90,6 +90,11 @@ def test_min_distance_internal_from_a_named_object_equals_brute_force(backend):
         if best > 0:
             assert names == tuple(sorted((name, nearest)))
         assert name in names
+        d2, data = m.min_distance_internal(return_data=True, name=name)
+        assert d2 == d and name in data["names"] and set(data["names"]) == set(names)
+        if best > 0:  # the nearest points, one on each object, are the distance apart
+            a, b = data["points"]
+            assert np.linalg.norm(a - b) == pytest.approx(d, rel=1e-6, abs=1e-9)
         # The whole manager's minimum is no larger than any one object's.
         assert m.min_distance_internal() <= d or same_distance(m.min_distance_internal(), d)
 
