@@ -5,6 +5,7 @@ import pytest
 
 import cube_collision as cc
 import scenes
+from conftest import BOX_FACES, BOX_VERTICES, TrimeshLike
 
 I = np.eye(4)
 
@@ -38,18 +39,6 @@ def test_trimesh_like_objects_become_meshes():
     m = cc.CollisionManager()
     m.add_object("t", Trimeshish())
     assert m.get_geometry("t").kind == "mesh"
-
-
-BOX_VERTICES = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-BOX_FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-
-
-class TrimeshLike:
-    """What the package reads of a trimesh.Trimesh: vertices, faces and is_convex."""
-
-    def __init__(self, vertices, faces, is_convex):
-        self.vertices, self.faces, self.is_convex = vertices, faces, is_convex
 
 
 @pytest.mark.parametrize("backend", ["cube", "fcl"])

@@ -6,9 +6,8 @@ import pytest
 
 import cube_collision as cc
 import scenes
-from conftest import build, mixed_scene, same_distance
+from conftest import BOX_FACES, BOX_VERTICES, TrimeshLike, build, mixed_scene, same_distance
 from test_bad_input import state
-from test_geometry import BOX_FACES, BOX_VERTICES, TrimeshLike
 
 
 def moved(x, y=0.0, z=0.0):
