@@ -229,9 +229,9 @@ A triangle mesh as FCL's BVH of oriented boxes (OBBRSS), the geometry trimesh ha
 vertices: (n, 3) real array, finite. faces: (m, 3) integer array indexing vertices. A surface:
 it collides where its triangles meet the other shape (a shape wholly inside a closed mesh does
 not touch it). A trimesh.Trimesh given to the manager is made a mesh unless its is_convex is
-true: then, as trimesh does, a convex() (a solid). Raises TypeError for a non-numeric array or float faces, ValueError for a wrong
-shape, a NaN or infinite vertex, a face index past the vertices or negative, an empty mesh
-(fewer than 3 vertices or no face).)doc");
+true: then, as trimesh does, a convex() (a solid). Raises TypeError for a non-numeric array or
+float faces, ValueError for a wrong shape, a NaN or infinite vertex, a face index past the
+vertices or negative, an empty mesh (fewer than 3 vertices or no face).)doc");
   m.def(
       "convex", [](py::handle v, py::handle f) { return fromArrays("convex", v, f); },
       py::arg("vertices"), py::arg("faces"), R"doc(

@@ -47,10 +47,6 @@ void noCallback(const char* what) {
                              ": the manager cannot change inside one of its own query callbacks");
 }
 
-std::string nameOf(py::handle h) {
-  return nameOfArg(h);
-}
-
 }  // namespace
 
 std::string nameOfArg(py::handle h) {
@@ -430,7 +426,7 @@ name and the ValueError that trimesh raises.)doc");
           "add_object",
           [](Manager& self, py::handle name, py::handle geometry, py::handle transform_,
              py::handle mesh, std::uint64_t category, std::uint64_t mask, py::object margin) {
-            const std::string n = nameOf(name);
+            const std::string n = nameOfArg(name);
             GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "add_object"));
             const fcl::Transform3d tf = transform(transform_);
             double own = -1;  // none: the manager-wide margin
@@ -464,7 +460,7 @@ backend='fcl'); nothing is added then.)doc")
             std::vector<Manager::NewObject> objs;
             for (py::handle h : names) {
               objs.emplace_back();
-              objs.back().name = nameOf(h);
+              objs.back().name = nameOfArg(h);
             }
             std::size_t i = 0;
             for (py::handle h : geometries) {
@@ -490,13 +486,13 @@ top-down build into an empty FCL backend): names (n str), geometries (n Geometry
 transforms (n, 4, 4) or None (identities). Everything is checked first and nothing is added on
 an error: as add_object, plus ValueError for a name given twice or lengths that differ.)doc")
       .def(
-          "remove_object", [](Manager& self, py::handle name) { self.remove(nameOf(name)); },
+          "remove_object", [](Manager& self, py::handle name) { self.remove(nameOfArg(name)); },
           py::arg("name"),
           "Removes the object (and its ignored pairs). KeyError if no object has this name.")
       .def(
           "set_transform",
           [](Manager& self, py::handle name, py::handle tf) {
-            const std::string n = nameOf(name);
+            const std::string n = nameOfArg(name);
             // transform() reads None as the identity (add_object's default); a move needs one.
             if (tf.is_none())
               throw py::type_error(
@@ -512,7 +508,7 @@ an error: as add_object, plus ValueError for a name given twice or lengths that 
           "set_transforms",
           [](Manager& self, py::handle names, py::handle tfs) {
             std::vector<std::string> ns;
-            for (py::handle h : names) ns.push_back(nameOf(h));
+            for (py::handle h : names) ns.push_back(nameOfArg(h));
             Array a = floats(tfs, "transforms", {static_cast<py::ssize_t>(ns.size()), 4, 4}, false);
             std::vector<fcl::Transform3d> out(ns.size());
             for (std::size_t i = 0; i < ns.size(); ++i)
@@ -527,7 +523,7 @@ index), TypeError for non-str names or a non-numeric array.)doc")
       .def(
           "get_transform",
           [](const Manager& self, py::handle name) {
-            const std::string n = nameOf(name);
+            const std::string n = nameOfArg(name);
             fcl::Transform3d tf;
             {
               std::shared_lock lock(self.mutex);
@@ -540,13 +536,13 @@ index), TypeError for non-str names or a non-numeric array.)doc")
           "get_geometry",
           [](const Manager& self, py::handle name) {
             std::shared_lock lock(self.mutex);
-            return self.find(nameOf(name))->geometry;
+            return self.find(nameOfArg(name))->geometry;
           },
           py::arg("name"), "The Geometry the object was added with. KeyError if unknown.")
       .def(
           "set_filter",
           [](Manager& self, py::handle name, std::uint64_t category, std::uint64_t mask) {
-            self.setFilter(nameOf(name), category, mask);
+            self.setFilter(nameOfArg(name), category, mask);
           },
           py::arg("name"), py::arg("category"), py::arg("mask"), R"doc(
 Filter bits (Box2D's rule, 64 bits each): a pair is tested only if (a.category & b.mask) and
@@ -557,14 +553,14 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
           "get_filter",
           [](const Manager& self, py::handle name) {
             std::shared_lock lock(self.mutex);
-            const Entry* e = self.find(nameOf(name));
+            const Entry* e = self.find(nameOfArg(name));
             return std::make_pair(e->category, e->mask);
           },
           py::arg("name"), "(category, mask) of the object. KeyError for an unknown name.")
       .def(
           "ignore_pair",
           [](Manager& self, py::handle a, py::handle b) {
-            self.ignorePair(nameOf(a), nameOf(b), true);
+            self.ignorePair(nameOfArg(a), nameOfArg(b), true);
           },
           py::arg("name_a"), py::arg("name_b"),
           "Never report or test this pair (an allowed-collision entry), in every collision and "
@@ -572,7 +568,7 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
       .def(
           "unignore_pair",
           [](Manager& self, py::handle a, py::handle b) {
-            self.ignorePair(nameOf(a), nameOf(b), false);
+            self.ignorePair(nameOfArg(a), nameOfArg(b), false);
           },
           py::arg("name_a"), py::arg("name_b"),
           "Undoes ignore_pair (no effect if the pair was not ignored). KeyError for an unknown "
@@ -591,7 +587,7 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
             if (name.is_none()) {
               self.setMargin(margin, nullptr);
             } else {
-              const std::string n = nameOf(name);
+              const std::string n = nameOfArg(name);
               self.setMargin(margin, &n);
             }
           },
@@ -606,7 +602,7 @@ margins. ValueError for a negative or non-finite margin, KeyError for an unknown
           [](const Manager& self, py::object name) {
             std::shared_lock lock(self.mutex);
             if (name.is_none()) return self.managerMargin();
-            return self.marginOf(self.find(nameOf(name)));
+            return self.marginOf(self.find(nameOfArg(name)));
           },
           py::arg("name") = py::none(),
           "The margin of the named object (its own, else the manager's), or the manager's.")
