@@ -134,16 +134,17 @@ class CollisionManager:
                                Tuple[bool, Set[Tuple[str, str]], Contacts]]:
         """is_collision[, set of (name here, name there)][, contacts]."""
     def min_distance_internal(self, return_names: bool = False, return_data: bool = False,
-                              name: Optional[str] = None) -> Union[float, Tuple[float, Optional[Tuple[str, str]]],
-                                         Tuple[float, DistanceData],
-                                         Tuple[float, Optional[Tuple[str, str]], DistanceData]]:
+                              name: Optional[str] = None) -> Union[
+                                  float, Tuple[float, Optional[Tuple[str, str]]],
+                                  Tuple[float, DistanceData],
+                                  Tuple[float, Optional[Tuple[str, str]], DistanceData]]:
         """distance[, sorted name pair][, data]; with name, from that object to the others."""
     def min_distance_single(self, geometry: Optional[GeometryLike] = None,
                             transform: Transform = None, return_name: bool = False,
                             return_data: bool = False, *,
-                            mesh: Optional[GeometryLike] = None) -> Union[float, Tuple[float, Optional[str]],
-                                       Tuple[float, DistanceData],
-                                       Tuple[float, Optional[str], DistanceData]]:
+                            mesh: Optional[GeometryLike] = None) -> Union[
+                                float, Tuple[float, Optional[str]], Tuple[float, DistanceData],
+                                Tuple[float, Optional[str], DistanceData]]:
         """distance[, name][, data]."""
     def min_distance_other(self, other_manager: "CollisionManager", return_names: bool = False,
                            return_data: bool = False

@@ -50,7 +50,8 @@ def test_convex_trimesh_is_a_solid_and_others_stay_surfaces(backend):
     assert not cc.pair_in_collision(cc.mesh(BOX_VERTICES, BOX_FACES), I, ball, I)
     m = cc.CollisionManager(backend=backend)
     m.add_object("solid", TrimeshLike(BOX_VERTICES, BOX_FACES, True))
-    m.add_object("shell", TrimeshLike(BOX_VERTICES, BOX_FACES, False), scenes.pose(I[:3, :3], [5, 0, 0]))
+    m.add_object("shell", TrimeshLike(BOX_VERTICES, BOX_FACES, False),
+                 scenes.pose(I[:3, :3], [5, 0, 0]))
     assert m.get_geometry("solid").kind == "convex" and m.get_geometry("shell").kind == "mesh"
     assert m.in_collision_single(ball, return_names=True) == (True, {"solid"})
     assert not m.in_collision_single(ball, scenes.pose(I[:3, :3], [5, 0, 0]))

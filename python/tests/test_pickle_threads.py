@@ -154,7 +154,8 @@ def test_pickling_refuses_a_mutating_finaliser_instead_of_deadlocking(backend):
         out = subprocess.run([sys.executable, "-c", FINALISER_SCRIPT, backend],
                              capture_output=True, text=True, timeout=30, env=os.environ.copy())
     except subprocess.TimeoutExpired:
-        raise AssertionError("pickle.dumps deadlocked on a finaliser that mutates the manager") from None
+        raise AssertionError("pickle.dumps deadlocked on a finaliser that mutates the manager") \
+            from None
     assert out.returncode == 0, out.stderr
     counts, message = out.stdout.split("\n", 1)
     refused, done = map(int, counts.split())
