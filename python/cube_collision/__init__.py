@@ -2,7 +2,8 @@
 
     import cube_collision
     m = cube_collision.CollisionManager()            # was: trimesh.collision.CollisionManager()
-    m.add_object("a", mesh, transform)               # a Trimesh, or cube_collision.mesh(v, f)
+    m.add_object("a", mesh, transform)               # a Trimesh (convex if mesh.is_convex), or
+                                                     # cube_collision.mesh(v, f)
     hit, names = m.in_collision_internal(return_names=True)
 
 Geometry: mesh, convex, box, sphere, cylinder, capsule, cone, plane (each returns a Geometry).
@@ -17,6 +18,7 @@ from ._core import (  # noqa: F401
     Body,
     CollisionManager,
     Geometry,
+    UnknownNameError,
     box,
     capsule,
     cone,
@@ -33,6 +35,6 @@ from ._core import _fcl_collide, _fcl_distance, _Handle  # noqa: F401  (benchmar
 __version__ = "0.1.0"
 
 __all__ = [
-    "ALL_BITS", "Body", "CollisionManager", "Geometry", "box", "capsule", "cone", "convex",
-    "cylinder", "mesh", "pair_distance", "pair_in_collision", "plane", "sphere",
+    "ALL_BITS", "Body", "CollisionManager", "Geometry", "UnknownNameError", "box", "capsule",
+    "cone", "convex", "cylinder", "mesh", "pair_distance", "pair_in_collision", "plane", "sphere",
 ]

@@ -3,6 +3,7 @@ from ._core import (
     Body as Body,
     CollisionManager as CollisionManager,
     Geometry as Geometry,
+    UnknownNameError as UnknownNameError,
     box as box,
     capsule as capsule,
     cone as cone,

@@ -11,10 +11,14 @@ Transform = Optional[npt.ArrayLike]  # 4x4 rigid; None: identity
 ALL_BITS: int
 
 class _HasMesh(Protocol):
+    """A trimesh.Trimesh or alike: a convex() if it has a true `is_convex`, else a mesh()."""
     vertices: Any
     faces: Any
 
 GeometryLike = Union["Geometry", _HasMesh]
+
+class UnknownNameError(KeyError, ValueError):
+    """No object has this name (a KeyError, and a ValueError as trimesh raises)."""
 
 class Geometry:
     """A collision shape in its own frame (mesh, convex, box, sphere, cylinder, capsule, cone, plane)."""
@@ -85,16 +89,18 @@ class CollisionManager:
     def __len__(self) -> int: ...
     def __contains__(self, name: object) -> bool: ...
 
-    def add_object(self, name: str, geometry: GeometryLike, transform: Transform = None, *,
-                   category: int = 1, mask: int = ..., margin: Optional[float] = None) -> None:
-        """Adds an object. ValueError for an existing name or a bad transform."""
+    def add_object(self, name: str, geometry: Optional[GeometryLike] = None,
+                   transform: Transform = None, *, mesh: Optional[GeometryLike] = None,
+                   category: int = 1, mask: int = ..., margin: Optional[float] = None) -> Geometry:
+        """Adds an object (geometry, or trimesh's keyword mesh); returns its Geometry.
+        ValueError for an existing name or a bad transform."""
     def add_objects(self, names: Sequence[str], geometries: Sequence[GeometryLike],
                     transforms: Optional[ArrayLike] = None) -> None:
         """Adds many objects in one build of the tree; all checked first."""
     def remove_object(self, name: str) -> None:
-        """Removes an object. KeyError if unknown."""
+        """Removes an object. UnknownNameError (KeyError and ValueError) if unknown."""
     def set_transform(self, name: str, transform: ArrayLike) -> None:
-        """Moves one object."""
+        """Moves one object. TypeError for a None transform (no default: not the identity)."""
     def set_transforms(self, names: Sequence[str], transforms: ArrayLike) -> None:
         """Moves many objects ((n, 4, 4) transforms) in one tree update; all checked first."""
     def get_transform(self, name: str) -> npt.NDArray[np.float64]: ...
@@ -115,9 +121,10 @@ class CollisionManager:
                                   bool, Tuple[bool, Set[Tuple[str, str]]], Tuple[bool, Contacts],
                                   Tuple[bool, Set[Tuple[str, str]], Contacts]]:
         """is_collision[, set of sorted name pairs][, contacts]."""
-    def in_collision_single(self, geometry: GeometryLike, transform: Transform = None,
-                            return_names: bool = False, return_data: bool = False,
-                            max_contacts: int = 100000) -> Union[
+    def in_collision_single(self, geometry: Optional[GeometryLike] = None,
+                            transform: Transform = None, return_names: bool = False,
+                            return_data: bool = False, max_contacts: int = 100000, *,
+                            mesh: Optional[GeometryLike] = None) -> Union[
                                 bool, Tuple[bool, Set[str]], Tuple[bool, Contacts],
                                 Tuple[bool, Set[str], Contacts]]:
         """is_collision[, set of names][, contacts]."""
@@ -126,16 +133,18 @@ class CollisionManager:
                                bool, Tuple[bool, Set[Tuple[str, str]]], Tuple[bool, Contacts],
                                Tuple[bool, Set[Tuple[str, str]], Contacts]]:
         """is_collision[, set of (name here, name there)][, contacts]."""
-    def min_distance_internal(self, return_names: bool = False, return_data: bool = False
-                              ) -> Union[float, Tuple[float, Optional[Tuple[str, str]]],
-                                         Tuple[float, DistanceData],
-                                         Tuple[float, Optional[Tuple[str, str]], DistanceData]]:
-        """distance[, sorted name pair][, data]."""
-    def min_distance_single(self, geometry: GeometryLike, transform: Transform = None,
-                            return_name: bool = False, return_data: bool = False
-                            ) -> Union[float, Tuple[float, Optional[str]],
-                                       Tuple[float, DistanceData],
-                                       Tuple[float, Optional[str], DistanceData]]:
+    def min_distance_internal(self, return_names: bool = False, return_data: bool = False,
+                              name: Optional[str] = None) -> Union[
+                                  float, Tuple[float, Optional[Tuple[str, str]]],
+                                  Tuple[float, DistanceData],
+                                  Tuple[float, Optional[Tuple[str, str]], DistanceData]]:
+        """distance[, sorted name pair][, data]; with name, from that object to the others."""
+    def min_distance_single(self, geometry: Optional[GeometryLike] = None,
+                            transform: Transform = None, return_name: bool = False,
+                            return_data: bool = False, *,
+                            mesh: Optional[GeometryLike] = None) -> Union[
+                                float, Tuple[float, Optional[str]], Tuple[float, DistanceData],
+                                Tuple[float, Optional[str], DistanceData]]:
         """distance[, name][, data]."""
     def min_distance_other(self, other_manager: "CollisionManager", return_names: bool = False,
                            return_data: bool = False

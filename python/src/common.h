@@ -54,7 +54,8 @@ GeometryPtr makeGeometry(const std::string& kind, std::vector<double> params,
 /// A copy of g's FCL geometry (a new object: one name per geometry pointer within a manager).
 std::shared_ptr<fcl::CollisionGeometryd> cloneFcl(const Geometry& g);
 /// A Geometry from a Python object: a Geometry, or anything with `vertices` and `faces`
-/// (trimesh.Trimesh), made into a mesh. TypeError otherwise.
+/// (trimesh.Trimesh), made into a convex if its `is_convex` is true (as trimesh does), else a
+/// mesh. TypeError otherwise.
 GeometryPtr geometryOf(py::handle obj);
 
 void bindGeometry(py::module_& m);

@@ -159,8 +159,12 @@ std::shared_ptr<fcl::CollisionGeometryd> cloneFcl(const Geometry& g) {
 
 GeometryPtr geometryOf(py::handle obj) {
   if (py::isinstance<Geometry>(obj)) return obj.cast<GeometryPtr>();
-  if (py::hasattr(obj, "vertices") && py::hasattr(obj, "faces"))
-    return fromArrays("mesh", obj.attr("vertices"), obj.attr("faces"));
+  if (py::hasattr(obj, "vertices") && py::hasattr(obj, "faces")) {
+    // As trimesh's collision module: a mesh whose is_convex is true becomes FCL's Convex (a
+    // solid), any other a BVH (a surface).
+    const bool convex = py::hasattr(obj, "is_convex") && py::bool_(obj.attr("is_convex"));
+    return fromArrays(convex ? "convex" : "mesh", obj.attr("vertices"), obj.attr("faces"));
+  }
   throw py::type_error(
       "expected a cube_collision Geometry or an object with vertices and faces "
       "(a trimesh.Trimesh), got " +
@@ -224,9 +228,10 @@ A triangle mesh as FCL's BVH of oriented boxes (OBBRSS), the geometry trimesh ha
 
 vertices: (n, 3) real array, finite. faces: (m, 3) integer array indexing vertices. A surface:
 it collides where its triangles meet the other shape (a shape wholly inside a closed mesh does
-not touch it). Raises TypeError for a non-numeric array or float faces, ValueError for a wrong
-shape, a NaN or infinite vertex, a face index past the vertices or negative, an empty mesh
-(fewer than 3 vertices or no face).)doc");
+not touch it). A trimesh.Trimesh given to the manager is made a mesh unless its is_convex is
+true: then, as trimesh does, a convex() (a solid). Raises TypeError for a non-numeric array or
+float faces, ValueError for a wrong shape, a NaN or infinite vertex, a face index past the
+vertices or negative, an empty mesh (fewer than 3 vertices or no face).)doc");
   m.def(
       "convex", [](py::handle v, py::handle f) { return fromArrays("convex", v, f); },
       py::arg("vertices"), py::arg("faces"), R"doc(

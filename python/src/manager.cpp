@@ -47,13 +47,13 @@ void noCallback(const char* what) {
                              ": the manager cannot change inside one of its own query callbacks");
 }
 
-std::string nameOf(py::handle h) {
+}  // namespace
+
+std::string nameOfArg(py::handle h) {
   if (!py::isinstance<py::str>(h))
     throw py::type_error("names must be str, got " + py::str(py::type::of(h)).cast<std::string>());
   return h.cast<std::string>();
 }
-
-}  // namespace
 
 Manager::Manager(const std::string& backend, int threads) : backend_(backend), threads_(threads) {
   if (backend == "cube") {
@@ -73,7 +73,7 @@ Manager::~Manager() {
 
 Entry* Manager::find(const std::string& name) const {
   auto it = entries_.find(name);
-  if (it == entries_.end()) throw py::key_error("no object named '" + name + "'");
+  if (it == entries_.end()) throw UnknownName("no object named '" + name + "'");
   return it->second.get();
 }
 
@@ -337,6 +337,9 @@ namespace {
 
 py::dict getState(const Manager& m) {
   std::shared_lock lock(m.mutex);
+  // The state is built under the read lock: a __del__ that an allocation here sets off and that
+  // mutates the manager would wait for this lock forever; it gets RuntimeError, as in a query.
+  CallbackScope refuse;
   py::list objects;
   for (const Entry* e : m.ordered()) {
     objects.append(py::make_tuple(e->name, e->geometry, toArray(e->obj->getTransform()),
@@ -377,6 +380,25 @@ std::shared_ptr<Manager> fromState(const py::dict& d) {
 }  // namespace
 
 void bindManager(py::module_& m) {
+  // Made once, kept for the process (as pybind11's own exception types).
+  static PyObject* unknown_name = [&] {
+    py::tuple bases = py::make_tuple(py::handle(PyExc_KeyError), py::handle(PyExc_ValueError));
+    PyObject* cls = PyErr_NewExceptionWithDoc(
+        "cube_collision.UnknownNameError",
+        "No object has this name: both a KeyError (this package's word) and a ValueError (what "
+        "trimesh raises), so that either except clause catches it.",
+        bases.ptr(), nullptr);
+    if (!cls) throw py::error_already_set();
+    return cls;
+  }();
+  m.attr("UnknownNameError") = py::handle(unknown_name);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const UnknownName& e) {
+      PyErr_SetString(unknown_name, e.what());
+    }
+  });
   ManagerClass cls(m, "CollisionManager", R"doc(
 Named collision objects with trimesh.collision.CollisionManager's vocabulary, every query run in
 C++ (broadphase, culling and FCL's narrow phase, the GIL released).
@@ -389,9 +411,12 @@ hardware's, 1: the calling thread only); answers do not depend on it.
 Thread safety: any calls from several Python threads are safe. Queries run concurrently (each
 releases the GIL); a mutation (add, remove, set_transform(s), filters, margins) waits for the
 running queries and runs alone. A mutation from Python code that runs inside a query (a
-callback of the private _collide_python hooks, or a __del__ while a collide query builds its
-result) raises RuntimeError instead of waiting for that query. Pickles: the copy is rebuilt from
-geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
+callback of the private _collide_python hooks, or a __del__ while a collide query or pickling
+builds its result) raises RuntimeError instead of waiting for that query. Pickles: the copy is
+rebuilt from geometry, names, transforms, filter bits, ignored pairs and margins.
+
+An unknown name raises cube_collision.UnknownNameError, both the KeyError that the calls below
+name and the ValueError that trimesh raises.)doc");
   cls.def(py::init<const std::string&, int>(), py::arg("backend") = "cube", py::arg("threads") = 0,
           "An empty manager. ValueError for a backend other than 'cube' or 'fcl'.")
       .def_property_readonly("backend", &Manager::backend, "'cube' or 'fcl'.")
@@ -400,9 +425,9 @@ geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
       .def(
           "add_object",
           [](Manager& self, py::handle name, py::handle geometry, py::handle transform_,
-             std::uint64_t category, std::uint64_t mask, py::object margin) {
-            const std::string n = nameOf(name);
-            GeometryPtr g = geometryOf(geometry);
+             py::handle mesh, std::uint64_t category, std::uint64_t mask, py::object margin) {
+            const std::string n = nameOfArg(name);
+            GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "add_object"));
             const fcl::Transform3d tf = transform(transform_);
             double own = -1;  // none: the manager-wide margin
             if (!margin.is_none()) {
@@ -410,24 +435,32 @@ geometry, names, transforms, filter bits, ignored pairs and margins.)doc");
               checkMargin(own);
             }
             self.add({{n, g, tf, category, mask, own}}, "add_object");
+            return g;
           },
-          py::arg("name"), py::arg("geometry"), py::arg("transform") = py::none(), py::kw_only(),
-          py::arg("category") = 1, py::arg("mask") = ~std::uint64_t(0),
-          py::arg("margin") = py::none(), R"doc(
-Adds an object: `geometry` (a Geometry, or a trimesh.Trimesh / anything with vertices and faces,
-made into a mesh) placed by `transform` (4x4 rigid, None: identity). category / mask: filter bits
-(set_filter). margin: the object's own margin (set_margin). A geometry added under several names
-is copied once per name (trimesh also builds one BVH per add_object).
-Raises TypeError (name not a str, not a geometry, non-numeric transform), ValueError (an object
-with this name exists: unlike trimesh, which replaces it; a transform that is not 4x4, finite and
-rigid; a bad margin; a plane with backend='fcl'); nothing is added then.)doc")
+          py::arg("name"), py::arg("geometry") = py::none(), py::arg("transform") = py::none(),
+          py::kw_only(), py::arg("mesh") = py::none(), py::arg("category") = 1,
+          py::arg("mask") = ~std::uint64_t(0), py::arg("margin") = py::none(), R"doc(
+Adds an object: `geometry` (a Geometry, or a trimesh.Trimesh / anything with vertices and faces:
+as trimesh, a solid convex (FCL's Convex) if its is_convex is true, else a mesh, a surface)
+placed by `transform` (4x4 rigid, None: identity). mesh: trimesh's name for `geometry` (as
+trimesh's scene_to_collision calls add_object(name=..., mesh=..., transform=...)); give one of
+the two. category / mask: filter bits (set_filter). margin: the object's own margin
+(set_margin). A geometry added under several names is copied once per name (trimesh also builds
+one BVH per add_object).
+Returns the Geometry the object was added with (the one get_geometry returns; a trimesh is
+converted). trimesh returns python-fcl's CollisionObject, which this package has no binding
+for: move and read objects by name (set_transform, get_transform).
+Raises TypeError (name not a str, not a geometry, both or neither of geometry and mesh,
+non-numeric transform), ValueError (an object with this name exists: unlike trimesh, which
+replaces it; a transform that is not 4x4, finite and rigid; a bad margin; a plane with
+backend='fcl'); nothing is added then.)doc")
       .def(
           "add_objects",
           [](Manager& self, py::handle names, py::handle geometries, py::handle transforms) {
             std::vector<Manager::NewObject> objs;
             for (py::handle h : names) {
               objs.emplace_back();
-              objs.back().name = nameOf(h);
+              objs.back().name = nameOfArg(h);
             }
             std::size_t i = 0;
             for (py::handle h : geometries) {
@@ -453,23 +486,29 @@ top-down build into an empty FCL backend): names (n str), geometries (n Geometry
 transforms (n, 4, 4) or None (identities). Everything is checked first and nothing is added on
 an error: as add_object, plus ValueError for a name given twice or lengths that differ.)doc")
       .def(
-          "remove_object", [](Manager& self, py::handle name) { self.remove(nameOf(name)); },
+          "remove_object", [](Manager& self, py::handle name) { self.remove(nameOfArg(name)); },
           py::arg("name"),
           "Removes the object (and its ignored pairs). KeyError if no object has this name.")
       .def(
           "set_transform",
           [](Manager& self, py::handle name, py::handle tf) {
-            const std::string n = nameOf(name);
+            const std::string n = nameOfArg(name);
+            // transform() reads None as the identity (add_object's default); a move needs one.
+            if (tf.is_none())
+              throw py::type_error(
+                  "set_transform: transform must be a 4x4 rigid transform, got "
+                  "None (np.eye(4) is the identity)");
             self.setTransforms({n}, {transform(tf)});
           },
           py::arg("name"), py::arg("transform"),
           "Moves one object (4x4 rigid transform). KeyError for an unknown name, TypeError / "
-          "ValueError for a bad transform; nothing changes then.")
+          "ValueError for a bad transform (TypeError for None, as trimesh and set_transforms); "
+          "nothing changes then.")
       .def(
           "set_transforms",
           [](Manager& self, py::handle names, py::handle tfs) {
             std::vector<std::string> ns;
-            for (py::handle h : names) ns.push_back(nameOf(h));
+            for (py::handle h : names) ns.push_back(nameOfArg(h));
             Array a = floats(tfs, "transforms", {static_cast<py::ssize_t>(ns.size()), 4, 4}, false);
             std::vector<fcl::Transform3d> out(ns.size());
             for (std::size_t i = 0; i < ns.size(); ++i)
@@ -484,21 +523,26 @@ index), TypeError for non-str names or a non-numeric array.)doc")
       .def(
           "get_transform",
           [](const Manager& self, py::handle name) {
-            std::shared_lock lock(self.mutex);
-            return toArray(self.find(nameOf(name))->obj->getTransform());
+            const std::string n = nameOfArg(name);
+            fcl::Transform3d tf;
+            {
+              std::shared_lock lock(self.mutex);
+              tf = self.find(n)->obj->getTransform();
+            }
+            return toArray(tf);  // allocates: after the lock (a __del__ may mutate the manager)
           },
           py::arg("name"), "The object's 4x4 transform (a copy). KeyError for an unknown name.")
       .def(
           "get_geometry",
           [](const Manager& self, py::handle name) {
             std::shared_lock lock(self.mutex);
-            return self.find(nameOf(name))->geometry;
+            return self.find(nameOfArg(name))->geometry;
           },
           py::arg("name"), "The Geometry the object was added with. KeyError if unknown.")
       .def(
           "set_filter",
           [](Manager& self, py::handle name, std::uint64_t category, std::uint64_t mask) {
-            self.setFilter(nameOf(name), category, mask);
+            self.setFilter(nameOfArg(name), category, mask);
           },
           py::arg("name"), py::arg("category"), py::arg("mask"), R"doc(
 Filter bits (Box2D's rule, 64 bits each): a pair is tested only if (a.category & b.mask) and
@@ -509,14 +553,14 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
           "get_filter",
           [](const Manager& self, py::handle name) {
             std::shared_lock lock(self.mutex);
-            const Entry* e = self.find(nameOf(name));
+            const Entry* e = self.find(nameOfArg(name));
             return std::make_pair(e->category, e->mask);
           },
           py::arg("name"), "(category, mask) of the object. KeyError for an unknown name.")
       .def(
           "ignore_pair",
           [](Manager& self, py::handle a, py::handle b) {
-            self.ignorePair(nameOf(a), nameOf(b), true);
+            self.ignorePair(nameOfArg(a), nameOfArg(b), true);
           },
           py::arg("name_a"), py::arg("name_b"),
           "Never report or test this pair (an allowed-collision entry), in every collision and "
@@ -524,7 +568,7 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
       .def(
           "unignore_pair",
           [](Manager& self, py::handle a, py::handle b) {
-            self.ignorePair(nameOf(a), nameOf(b), false);
+            self.ignorePair(nameOfArg(a), nameOfArg(b), false);
           },
           py::arg("name_a"), py::arg("name_b"),
           "Undoes ignore_pair (no effect if the pair was not ignored). KeyError for an unknown "
@@ -543,7 +587,7 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
             if (name.is_none()) {
               self.setMargin(margin, nullptr);
             } else {
-              const std::string n = nameOf(name);
+              const std::string n = nameOfArg(name);
               self.setMargin(margin, &n);
             }
           },
@@ -558,7 +602,7 @@ margins. ValueError for a negative or non-finite margin, KeyError for an unknown
           [](const Manager& self, py::object name) {
             std::shared_lock lock(self.mutex);
             if (name.is_none()) return self.managerMargin();
-            return self.marginOf(self.find(nameOf(name)));
+            return self.marginOf(self.find(nameOfArg(name)));
           },
           py::arg("name") = py::none(),
           "The margin of the named object (its own, else the manager's), or the manager's.")
@@ -579,7 +623,7 @@ margins. ValueError for a negative or non-finite margin, KeyError for an unknown
              try {
                self.find(name.cast<std::string>());
                return true;
-             } catch (const py::key_error&) {
+             } catch (const UnknownName&) {
                return false;
              }
            })

@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <shared_mutex>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -35,6 +36,26 @@ class Object : public fcl::CollisionObjectd {
     }
   }
 };
+
+/// An unknown object name. Python gets cube_collision.UnknownNameError, both a KeyError (this
+/// package's word) and a ValueError (trimesh's).
+class UnknownName : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The geometry argument of a call that also takes trimesh's keyword `mesh`: whichever of the two
+/// is given. TypeError if both or neither are.
+inline py::handle geometryArg(py::handle geometry, py::handle mesh, const char* what) {
+  if (geometry.is_none() == mesh.is_none())
+    throw py::type_error(std::string(what) +
+                         (geometry.is_none() ? ": give the geometry (or trimesh's keyword mesh=)"
+                                             : ": give the geometry or mesh=, not both"));
+  return geometry.is_none() ? mesh : geometry;
+}
+
+/// A name argument as a std::string. TypeError if it is not a str.
+std::string nameOfArg(py::handle h);
 
 /// One named object.
 struct Entry {
@@ -81,7 +102,7 @@ class Manager {
   void setMargin(double margin, const std::string* name);
 
   // Reads (callers hold the shared lock, or the GIL with no query running).
-  Entry* find(const std::string& name) const;  ///< KeyError if unknown
+  Entry* find(const std::string& name) const;  ///< UnknownName if unknown
   std::vector<const Entry*> ordered() const;   ///< by registration
   static Entry* entryOf(const fcl::CollisionObjectd* o) {
     return static_cast<Entry*>(o->getUserData());
@@ -135,9 +156,20 @@ class Manager {
 void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
                       bool distance, const char* what);
 
-/// Set while a Python callback of a private benchmark hook runs on this thread: mutations then
-/// raise instead of waiting for a lock the thread itself holds.
+/// Set while this thread holds a manager's read lock and may run Python code (a callback of a
+/// private benchmark hook, or a __del__ set off by an allocation while a query or pickling builds
+/// its result): mutations then raise instead of waiting for a lock the thread itself holds.
 extern thread_local int in_python_callback;
+
+/// Marks this thread as in_python_callback for its lifetime, and restores the count on every
+/// exit, an exception included.
+class CallbackScope {
+ public:
+  CallbackScope() { ++in_python_callback; }
+  ~CallbackScope() { --in_python_callback; }
+  CallbackScope(const CallbackScope&) = delete;
+  CallbackScope& operator=(const CallbackScope&) = delete;
+};
 
 }  // namespace cubepy
 

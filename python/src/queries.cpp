@@ -11,6 +11,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -275,13 +276,27 @@ void swapSides(CollideOut& o) {
   }
 }
 
+// A cube manager and an FCL-backend one. The cube manager's walk knows the bits of its own
+// objects only (those of another kind of manager are query objects with the default bits there),
+// and FCL's tree static_casts another manager to its own type: each object of the cube manager
+// is asked of the FCL tree instead, the pair rules checked per pair with both objects' bits.
+// Pairs come as (FCL side, cube side).
+CollideOut mixedCollide(const Manager& fcl_side, const Manager& cube_side, const Want& want) {
+  const fcl::CollisionRequestd request =
+      want.anyOnly() ? fcl::CollisionRequestd() : want.pairRequest();
+  FclCollide c{&fcl_side, &cube_side, want, request, false, {}};
+  for (const Entry* e : cube_side.ordered()) {
+    fcl_side.broadphase().collide(e->obj.get(), &c, &FclCollide::callback);
+    if (c.out.any && want.anyOnly()) break;
+  }
+  return std::move(c.out);
+}
+
 CollideOut collide(const Manager& m, ObjPtr query, const Manager* other, const Want& want) {
   if (other) {
-    // FCL's tree static_casts the other manager to its own type: with a cube manager on the
-    // other side, ask from that side and swap.
-    if (!m.isCube() && other->isCube()) {
-      CollideOut o = collide(*other, nullptr, &m, want);
-      swapSides(o);
+    if (m.isCube() != other->isCube()) {
+      CollideOut o = m.isCube() ? mixedCollide(*other, m, want) : mixedCollide(m, *other, want);
+      if (m.isCube()) swapSides(o);
       return o;
     }
     return m.isCube() ? cubeCollide(m, nullptr, other, want)
@@ -373,10 +388,7 @@ py::object collideQuery(const Manager& m, const Manager* other, const Want& w, K
     lock.emplace(m, other);
     o = run();
   }
-  struct Refuse {
-    Refuse() { ++in_python_callback; }
-    ~Refuse() { --in_python_callback; }
-  } refuse;
+  CallbackScope refuse;
   return collideReturn(o, w, kind);
 }
 
@@ -404,7 +416,7 @@ struct FclDistance {
     auto& c = *static_cast<FclDistance*>(data);
     const Entry* ea = Manager::entryOf(a);
     const Entry* eb = Manager::entryOf(b);
-    if (!pairAllowed(*c.self, c.other, ea, eb)) return false;
+    if (a == b || !pairAllowed(*c.self, c.other, ea, eb)) return false;
     fcl::DistanceResultd r;
     fcl::distance(a, b, c.request, r);
     if (r.min_distance < c.best.min_distance) {
@@ -453,10 +465,55 @@ DistOut nameResult(const fcl::DistanceResultd& r, const Manager& m,
   return out;
 }
 
+DistOut fromFcl(const FclDistance& c) {
+  DistOut out;
+  if (c.o1) {
+    out.found = true;
+    out.distance = c.best.min_distance;
+    out.a = nameOf(c.o1);
+    out.b = nameOf(c.o2);
+    out.pa = c.best.nearest_points[0];
+    out.pb = c.best.nearest_points[1];
+  }
+  return out;
+}
+
+// A cube manager and an FCL-backend one, as mixedCollide: each object of the cube manager asked
+// of the FCL tree with the best distance so far (which prunes), both objects' bits checked per
+// pair. Names and points come as (FCL side, cube side).
+DistOut mixedDistance(const Manager& fcl_side, const Manager& cube_side, bool points) {
+  FclDistance c{&fcl_side, &cube_side, fcl::DistanceRequestd(points), {}, nullptr, nullptr};
+  for (const Entry* e : cube_side.ordered()) {
+    fcl_side.broadphase().distance(e->obj.get(), &c, &FclDistance::callback);
+    if (c.o1 && c.best.min_distance <= 0) break;
+  }
+  return fromFcl(c);
+}
+
+// The smallest distance from one object of m to the others: a distance query with the object
+// itself. The cube manager never pairs a registered object with itself and applies its bits and
+// ignored pairs (the pipeline, as the other distance queries); FCL's tree pairs it with itself,
+// which the callback skips, asking the pair rules per pair.
+DistOut distanceFrom(const Manager& m, const Entry& e, bool points) {
+  fcl::DistanceRequestd request(points);
+  if (m.isCube()) {
+    cube::NarrowPhaseOptions<double> opt;
+    opt.threads = m.threads();
+    fcl::DistanceResultd r = cube::minimumDistance(*m.cube(), e.obj.get(), request, opt);
+    DistOut out = nameResult(r, m, e.obj->collisionGeometry().get(), nullptr);
+    if (out.found) out.b = e.name;  // nameResult names the query object as trimesh's external
+    return out;
+  }
+  FclDistance c{&m, nullptr, request, {}, nullptr, nullptr};
+  m.broadphase().distance(e.obj.get(), &c, &FclDistance::callback);
+  return fromFcl(c);
+}
+
 DistOut distance(const Manager& m, ObjPtr query, const Manager* other, bool points) {
   fcl::DistanceRequestd request(points);
-  if (other && !m.isCube() && other->isCube()) {
-    DistOut o = distance(*other, nullptr, &m, points);
+  if (other && m.isCube() != other->isCube()) {
+    if (!m.isCube()) return mixedDistance(m, *other, points);
+    DistOut o = mixedDistance(*other, m, points);
     std::swap(o.a, o.b);
     std::swap(o.pa, o.pb);
     return o;
@@ -477,16 +534,7 @@ DistOut distance(const Manager& m, ObjPtr query, const Manager* other, bool poin
     m.broadphase().distance(&other->broadphase(), &c, &FclDistance::callback);
   else
     m.broadphase().distance(&c, &FclDistance::callback);
-  DistOut out;
-  if (c.o1) {
-    out.found = true;
-    out.distance = c.best.min_distance;
-    out.a = nameOf(c.o1);
-    out.b = nameOf(c.o2);
-    out.pa = c.best.nearest_points[0];
-    out.pb = c.best.nearest_points[1];
-  }
-  return out;
+  return fromFcl(c);
 }
 
 py::object distanceReturn(const DistOut& o, bool names, bool data, Kind kind) {
@@ -602,29 +650,48 @@ Handle handleOf(ObjPtr o) {
   return {nameOf(o), o, e ? py::cast(e->geometry) : py::none()};
 }
 
+// Every exception of the callback (a Python one, or a result of the wrong type) is kept and
+// stops the walk: none crosses the broadphase, whose walk is left as it would be after a stop.
 struct PyDrive {
   py::function fn;
-  std::optional<py::error_already_set> error;
-  static bool collideCb(ObjPtr a, ObjPtr b, void* data) {
+  const char* what;
+  std::exception_ptr error;
+
+  template <class Call>
+  static bool guarded(void* data, Call&& call) {
     auto& d = *static_cast<PyDrive*>(data);
     try {
-      py::object r = d.fn(handleOf(a), handleOf(b));
-      return r.cast<bool>();
-    } catch (py::error_already_set& e) {
-      d.error = std::move(e);
-      return true;
+      return call(d);
+    } catch (const py::cast_error& e) {
+      d.error = std::make_exception_ptr(py::type_error(
+          std::string(d.what) + ": the callback returned the wrong type (" + e.what() + ")"));
+    } catch (...) {
+      d.error = std::current_exception();
     }
+    return true;
+  }
+  static bool collideCb(ObjPtr a, ObjPtr b, void* data) {
+    return guarded(data, [&](PyDrive& d) { return d.fn(handleOf(a), handleOf(b)).cast<bool>(); });
   }
   static bool distanceCb(ObjPtr a, ObjPtr b, void* data, double& dist) {
-    auto& d = *static_cast<PyDrive*>(data);
-    try {
+    return guarded(data, [&](PyDrive& d) {
       py::tuple r = d.fn(handleOf(a), handleOf(b));
-      dist = r[1].cast<double>();
-      return r[0].cast<bool>();
-    } catch (py::error_already_set& e) {
-      d.error = std::move(e);
-      return true;
+      const double got = r[1].cast<double>();
+      const bool stop = r[0].cast<bool>();
+      dist = got;
+      return stop;
+    });
+  }
+  /// Runs a hook's walk on m with the thread marked as in a callback (restored on every exit),
+  /// then rethrows what a callback raised.
+  template <class Walk>
+  void run(const Manager& m, Walk&& walk) {
+    {
+      std::shared_lock lock(m.mutex);
+      CallbackScope scope;
+      walk();
     }
+    if (error) std::rethrow_exception(error);
   }
 };
 
@@ -650,9 +717,9 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
       .def(
           "in_collision_single",
           [](const Manager& m, py::handle geometry, py::handle tf, bool names, bool data,
-             int max_contacts) {
+             int max_contacts, py::handle mesh) {
             const Want w = want(names, data, max_contacts);
-            GeometryPtr g = geometryOf(geometry);
+            GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "in_collision_single"));
             Object q(g->fcl, transform(tf));
             return collideQuery(m, nullptr, w, Kind::single, [&] {
               refuseFclCrashes(&m, nullptr, {g->kind}, false, "in_collision_single");
@@ -660,12 +727,15 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
               return collide(m, &q, nullptr, w);
             });
           },
-          py::arg("geometry"), py::arg("transform") = py::none(), py::arg("return_names") = false,
-          py::arg("return_data") = false, py::arg("max_contacts") = 100000, R"doc(
-Does `geometry` (a Geometry or a trimesh.Trimesh) placed by `transform` (4x4 rigid, None:
-identity) collide with any object? Returns is_collision, plus the set of names hit, plus the
-contacts dict (names (object, '__external')), as in_collision_internal. The query has the default
-filter bits and the manager-wide margin. TypeError / ValueError for a bad geometry or transform.)doc")
+          py::arg("geometry") = py::none(), py::arg("transform") = py::none(),
+          py::arg("return_names") = false, py::arg("return_data") = false,
+          py::arg("max_contacts") = 100000, py::kw_only(), py::arg("mesh") = py::none(), R"doc(
+Does `geometry` (a Geometry or a trimesh.Trimesh, taken as add_object takes it: a convex one as a
+solid; or by trimesh's keyword mesh=) placed by `transform` (4x4 rigid, None: identity) collide
+with any object? Returns is_collision, plus the set of names hit, plus the contacts dict (names
+(object, '__external')), as in_collision_internal. The query has the default filter bits and the
+manager-wide margin. TypeError / ValueError for a bad geometry or transform, TypeError for both
+or neither of geometry and mesh.)doc")
       .def(
           "in_collision_other",
           [](const Manager& m, const Manager& other, bool names, bool data, int max_contacts) {
@@ -680,30 +750,39 @@ filter bits and the manager-wide margin. TypeError / ValueError for a bad geomet
           py::arg("max_contacts") = 100000, R"doc(
 Does any object of this manager collide with one of `other_manager` (either backend)? Returns
 is_collision, plus the set of (name here, name there) tuples, plus the contacts dict, as
-in_collision_internal. Filter bits apply across the two managers; ignored pairs and margins do
-not. The same manager as other is in_collision_internal.)doc")
+in_collision_internal. Filter bits apply across the two managers, whichever backend each has
+(a cube manager against an FCL-backend one asks FCL's tree for each of its objects); ignored
+pairs and margins do not. The same manager as other is in_collision_internal.)doc")
       .def(
           "min_distance_internal",
-          [](const Manager& m, bool names, bool data) {
+          [](const Manager& m, bool names, bool data, py::object name) {
+            const std::optional<std::string> from =
+                name.is_none() ? std::nullopt : std::optional<std::string>(nameOfArg(name));
             DistOut o;
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
+              const Entry* e = from ? m.find(*from) : nullptr;
               refuseFclCrashes(&m, nullptr, {}, true, "min_distance_internal");
-              o = distance(m, nullptr, nullptr, data);
+              o = e ? distanceFrom(m, *e, data) : distance(m, nullptr, nullptr, data);
             }
             return distanceReturn(o, names, data, Kind::internal);
           },
-          py::arg("return_names") = false, py::arg("return_data") = false, R"doc(
+          py::arg("return_names") = false, py::arg("return_data") = false,
+          py::arg("name") = py::none(), R"doc(
 The smallest distance between two objects (FCL's fcl::distance; <= 0 when some pair touches: the
 search stops at the first such pair; inf with fewer than two objects that may pair). Filter bits
-and ignored pairs apply, margins do not. Returns distance, plus (return_names) the sorted
-(name, name) tuple (None if none), plus (return_data) a dict: 'distance', 'names' (as found),
-'points' (2, 3) the nearest points in the world frame, in the order of 'names'.)doc")
+and ignored pairs apply, margins do not. name: only the pairs of that object with the others
+(trimesh's name=: the distance from it to the rest; give it by keyword, trimesh's newest puts
+it first). Returns distance, plus (return_names) the sorted (name, name) tuple (None if none),
+plus (return_data) a dict: 'distance', 'names' (as found), 'points' (2, 3) the nearest points in
+the world frame, in the order of 'names'. UnknownNameError (a KeyError and a ValueError) for an
+unknown name, TypeError for a name that is not a str.)doc")
       .def(
           "min_distance_single",
-          [](const Manager& m, py::handle geometry, py::handle tf, bool name, bool data) {
-            GeometryPtr g = geometryOf(geometry);
+          [](const Manager& m, py::handle geometry, py::handle tf, bool name, bool data,
+             py::handle mesh) {
+            GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "min_distance_single"));
             Object q(g->fcl, transform(tf));
             DistOut o;
             {
@@ -714,11 +793,12 @@ and ignored pairs apply, margins do not. Returns distance, plus (return_names) t
             }
             return distanceReturn(o, name, data, Kind::single);
           },
-          py::arg("geometry"), py::arg("transform") = py::none(), py::arg("return_name") = false,
-          py::arg("return_data") = false, R"doc(
-The smallest distance from `geometry` placed by `transform` to any object. Returns distance,
-plus (return_name) the nearest object's name, plus the data dict (names (name, '__external')), as
-min_distance_internal.)doc")
+          py::arg("geometry") = py::none(), py::arg("transform") = py::none(),
+          py::arg("return_name") = false, py::arg("return_data") = false, py::kw_only(),
+          py::arg("mesh") = py::none(), R"doc(
+The smallest distance from `geometry` (or trimesh's keyword mesh=, as in_collision_single)
+placed by `transform` to any object. Returns distance, plus (return_name) the nearest object's
+name, plus the data dict (names (name, '__external')), as min_distance_internal.)doc")
       .def(
           "min_distance_other",
           [](const Manager& m, const Manager& other, bool names, bool data) {
@@ -733,8 +813,9 @@ min_distance_internal.)doc")
           },
           py::arg("other_manager"), py::arg("return_names") = false, py::arg("return_data") = false,
           R"doc(
-The smallest distance between an object here and one of `other_manager`. Returns distance, plus
-the (name here, name there) tuple, plus the data dict, as min_distance_internal.)doc")
+The smallest distance between an object here and one of `other_manager` (either backend) whose
+filter bits let them pair. Returns distance, plus the (name here, name there) tuple, plus the
+data dict, as min_distance_internal.)doc")
       .def(
           "ray_first",
           [](const Manager& m, py::handle origins, py::handle ends, bool narrow, double tol) {
@@ -844,30 +925,25 @@ point or a negative or NaN radius.)doc")
       .def(
           "_collide_python",
           [](const Manager& m, py::function fn) {
-            PyDrive d{fn, std::nullopt};
-            std::shared_lock lock(m.mutex);
-            ++in_python_callback;
-            m.broadphase().collide(&d, &PyDrive::collideCb);
-            --in_python_callback;
-            if (d.error) throw std::move(*d.error);
+            PyDrive d{fn, "_collide_python", nullptr};
+            d.run(m, [&] { m.broadphase().collide(&d, &PyDrive::collideCb); });
           },
           py::arg("callback"),
           "Benchmark hook (trimesh's way over python-fcl): the backend's self-collide calling "
           "callback(handle_a, handle_b) -> bool (True stops) for every candidate pair. Filters "
-          "are not applied. The manager must not change from the callback (RuntimeError).")
+          "are not applied. The manager must not change from the callback (RuntimeError). What "
+          "the callback raises stops the walk and is raised here; TypeError for a result that "
+          "is not a bool.")
       .def(
           "_distance_python",
           [](const Manager& m, py::function fn) {
-            PyDrive d{fn, std::nullopt};
-            std::shared_lock lock(m.mutex);
-            ++in_python_callback;
-            m.broadphase().distance(&d, &PyDrive::distanceCb);
-            --in_python_callback;
-            if (d.error) throw std::move(*d.error);
+            PyDrive d{fn, "_distance_python", nullptr};
+            d.run(m, [&] { m.broadphase().distance(&d, &PyDrive::distanceCb); });
           },
           py::arg("callback"),
           "Benchmark hook: the backend's self distance calling callback(handle_a, handle_b) -> "
-          "(stop, best distance so far) for every pair it visits.");
+          "(stop, best distance so far) for every pair it visits. Errors as _collide_python "
+          "(TypeError for a result that is not (bool, float)).");
 }
 
 void bindQueries(py::module_& m) {

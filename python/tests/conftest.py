@@ -75,6 +75,19 @@ def same_distance(found, expected):
     return abs(found - expected) <= 1e-9 + 1e-6 * abs(expected)
 
 
+# The surface of the box [-1, 1]^3 as 12 triangles (a closed convex mesh).
+BOX_VERTICES = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+BOX_FACES = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+
+
+class TrimeshLike:
+    """What the package reads of a trimesh.Trimesh: vertices, faces and is_convex."""
+
+    def __init__(self, vertices, faces, is_convex):
+        self.vertices, self.faces, self.is_convex = vertices, faces, is_convex
+
+
 @pytest.fixture(params=["cube", "fcl"])
 def backend(request):
     return request.param

@@ -108,3 +108,34 @@ def test_mutation_from_a_query_callback_is_refused():
     with pytest.raises(RuntimeError):
         m._collide_python(callback)
     assert len(m) == 20
+
+
+def test_set_transform_to_none_is_type_error_and_moves_nothing(backend):
+    # trimesh raises on a None transform (as set_transforms does here); no move to the origin.
+    m = build(mixed_scene(20, 3), backend)
+    before = state(m)
+    with pytest.raises(TypeError, match="None"):
+        m.set_transform("o1", None)
+    assert state(m) == before
+
+
+
+def bad_collide_callback(a, b):
+    return "yes"          # not a bool
+
+
+def bad_distance_callback(a, b):
+    return False, "far"   # the distance is not a number
+
+
+@pytest.mark.parametrize("hook, callback", [("_collide_python", bad_collide_callback),
+                                            ("_distance_python", bad_distance_callback)])
+def test_callback_of_the_wrong_type_leaves_managers_mutable(backend, hook, callback):
+    m = build(mixed_scene(20, 3), backend)
+    with pytest.raises(TypeError, match="callback"):
+        getattr(m, hook)(callback)
+    m.add_object("late", cc.sphere(0.5))       # the same manager, on the same thread
+    m.remove_object("late")
+    fresh = cc.CollisionManager(backend=backend)
+    fresh.add_object("x", cc.sphere(0.5))      # and a new one
+    assert "x" in fresh and len(m) == 20

@@ -5,6 +5,7 @@ import pytest
 
 import cube_collision as cc
 import scenes
+from conftest import BOX_FACES, BOX_VERTICES, TrimeshLike
 
 I = np.eye(4)
 
@@ -38,6 +39,27 @@ def test_trimesh_like_objects_become_meshes():
     m = cc.CollisionManager()
     m.add_object("t", Trimeshish())
     assert m.get_geometry("t").kind == "mesh"
+
+
+@pytest.mark.parametrize("backend", ["cube", "fcl"])
+def test_convex_trimesh_is_a_solid_and_others_stay_surfaces(backend):
+    # As trimesh: a mesh whose is_convex is true becomes FCL's Convex (a solid), so a sphere
+    # inside the box collides with it; a mesh that is not convex stays a BVH surface.
+    ball = cc.sphere(0.25)
+    assert cc.pair_in_collision(cc.convex(BOX_VERTICES, BOX_FACES), I, ball, I)   # the oracle
+    assert not cc.pair_in_collision(cc.mesh(BOX_VERTICES, BOX_FACES), I, ball, I)
+    m = cc.CollisionManager(backend=backend)
+    m.add_object("solid", TrimeshLike(BOX_VERTICES, BOX_FACES, True))
+    m.add_object("shell", TrimeshLike(BOX_VERTICES, BOX_FACES, False),
+                 scenes.pose(I[:3, :3], [5, 0, 0]))
+    assert m.get_geometry("solid").kind == "convex" and m.get_geometry("shell").kind == "mesh"
+    assert m.in_collision_single(ball, return_names=True) == (True, {"solid"})
+    assert not m.in_collision_single(ball, scenes.pose(I[:3, :3], [5, 0, 0]))
+    # As a query geometry too: a convex trimesh around an object collides with it.
+    inner = cc.CollisionManager(backend=backend)
+    inner.add_object("ball", ball)
+    assert inner.in_collision_single(TrimeshLike(BOX_VERTICES, BOX_FACES, True))
+    assert not inner.in_collision_single(TrimeshLike(BOX_VERTICES, BOX_FACES, False))
 
 
 @pytest.mark.parametrize("make", [

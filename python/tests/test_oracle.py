@@ -228,3 +228,49 @@ def test_what_crashes_fcl_is_refused():
     with pytest.raises(ValueError):
         m.check_states(body, np.eye(4)[None, None])
     assert m.names == ["floor", "ball"] and m.in_collision_internal()
+
+
+@pytest.mark.parametrize("other_backend", ["cube", "fcl"])
+def test_filter_bits_apply_between_managers_of_either_backend(backend, other_backend):
+    """Both managers' bits decide, whichever backend each side has and whichever side asks."""
+    a = mixed_scene(40, 61, side=5.0)
+    b = [("b" + n, g, t) for n, g, t in mixed_scene(40, 62, side=5.0)]
+    ma, mb = build(a, backend), build(b, other_backend)
+    rng = np.random.default_rng(63)
+    bits = {}
+    for m, scene in ((ma, a), (mb, b)):
+        for name, _, _ in scene:
+            bits[name] = (1 << int(rng.integers(3)), int(rng.integers(1, 8)))
+            m.set_filter(name, *bits[name])
+
+    def allowed(x, y):
+        (cx, mx), (cy, my) = bits[x], bits[y]
+        return bool(cx & my) and bool(cy & mx)
+
+    expected = {(na, nb) for na, ga, ta in a for nb, gb, tb in b
+                if allowed(na, nb) and cc.pair_in_collision(ga, ta, gb, tb)}
+    assert expected  # the scene has allowed colliding pairs, and forbidden ones below
+    assert expected != {(na, nb) for na, ga, ta in a for nb, gb, tb in b
+                        if cc.pair_in_collision(ga, ta, gb, tb)}
+    assert ma.in_collision_other(mb, return_names=True) == (True, expected)
+    assert mb.in_collision_other(ma, return_names=True) == \
+        (True, {(y, x) for x, y in expected})
+    hit, names, data = ma.in_collision_other(mb, return_names=True, return_data=True)
+    assert names == expected and {tuple(p) for p in data["names"]} == expected
+
+    # Distances: every touching pair made forbidden (the b side's mask loses the a side's
+    # category), so that the allowed minimum is positive and the forbidden pairs would undercut it.
+    touching = {(na, nb) for na, ga, ta in a for nb, gb, tb in b
+                if cc.pair_distance(ga, ta, gb, tb) <= 0}
+    assert touching
+    for na, nb in touching:
+        bits[nb] = (bits[nb][0], bits[nb][1] & ~bits[na][0])
+    for name, _, _ in b:
+        mb.set_filter(name, *bits[name])
+    best, pair = min((cc.pair_distance(ga, ta, gb, tb), (na, nb)) for na, ga, ta in a
+                     for nb, gb, tb in b if allowed(na, nb))
+    assert 0 < best < float("inf")
+    d, names = ma.min_distance_other(mb, return_names=True)
+    assert same_distance(d, best) and names == pair
+    d, names = mb.min_distance_other(ma, return_names=True)
+    assert same_distance(d, best) and names == pair[::-1]

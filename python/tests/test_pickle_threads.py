@@ -1,6 +1,9 @@
 """Pickling rebuilds the same world; concurrent Python threads get the serial answers."""
 
+import os
 import pickle
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -98,3 +101,64 @@ def test_mutations_while_other_threads_query():
     now = [(n, m.get_geometry(n), m.get_transform(n)) for n in m.names]
     from conftest import brute_colliding
     assert m.in_collision_internal(return_names=True)[1] == brute_colliding(now)
+
+
+# A finaliser that mutates the manager, run by collections set off inside the call under test:
+# a gc callback leaves a fresh reference cycle with a __del__ at the start of every collection,
+# and a threshold of 1 collects on (nearly) every allocation, those the call makes included.
+FINALISER_SCRIPT = """
+import gc, pickle, sys
+import numpy as np
+import cube_collision as cc
+
+m = cc.CollisionManager(backend=sys.argv[1])
+for i in range(20):
+    t = np.eye(4)
+    t[0, 3] = 2.0 * i
+    m.add_object(f"o{i}", cc.sphere(0.5), t)
+refused, done = [], []
+
+class Finaliser:
+    def __init__(self):
+        self.cycle = self
+
+    def __del__(self):
+        try:
+            m.set_transform("o0", np.eye(4))
+            done.append(1)
+        except RuntimeError as e:
+            refused.append(str(e))
+
+def leave_garbage(phase, info):
+    if phase == "start":
+        Finaliser()
+
+gc.collect()
+gc.callbacks.append(leave_garbage)
+gc.set_threshold(1)
+copy = pickle.loads(pickle.dumps(m))
+gc.set_threshold(700)
+gc.callbacks.remove(leave_garbage)
+gc.collect()
+assert copy.names == m.names, (copy.names, m.names)
+print(len(refused), len(done))
+print(refused[0] if refused else "")
+"""
+
+
+def test_pickling_refuses_a_mutating_finaliser_instead_of_deadlocking(backend):
+    """pickle.dumps holds the manager's read lock while it builds the state: a __del__ that
+    mutates the manager then gets RuntimeError, as during a query's result, and the call
+    returns. Run in a child process with a timeout: the deadlock would hang forever."""
+    try:
+        out = subprocess.run([sys.executable, "-c", FINALISER_SCRIPT, backend],
+                             capture_output=True, text=True, timeout=30, env=os.environ.copy())
+    except subprocess.TimeoutExpired:
+        raise AssertionError("pickle.dumps deadlocked on a finaliser that mutates the manager") \
+            from None
+    assert out.returncode == 0, out.stderr
+    counts, message = out.stdout.split("\n", 1)
+    refused, done = map(int, counts.split())
+    # Collections inside the state's construction were refused, those outside it were not.
+    assert refused >= 1 and done >= 1
+    assert "cannot change" in message
