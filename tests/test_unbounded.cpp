@@ -318,8 +318,8 @@ TEST(Unbounded, OnlyUnboundedObjects) {
   expectPairsWith(empty, m, {});
 }
 
-// The callback order after the first setup() depends on the live registrations alone (README,
-// "What the manager guarantees", 11): a manager that had a plane registered and removed before
+// The callback order after the first setup() depends on the live registrations alone
+// (docs/guarantees.md, point 11): a manager that had a plane registered and removed before
 // its first setup() calls back in the same order as one that never had it, for a self-collide,
 // an object query and a manager query (issue 38, item 5: a removal used to leave the unbounded
 // list in swap order).

@@ -2,7 +2,7 @@
 
 // Default callbacks: FCL's narrow phase (libccd GJK) on every candidate pair that tighter
 // volumes than the boxes cannot settle, stopping as FCL's own DefaultCollisionFunction /
-// DefaultDistanceFunction do, with the same results (README, "Callables and one-call helpers").
+// DefaultDistanceFunction do, with the same results (docs/pipeline.md).
 
 #include <fcl/narrowphase/collision_object.h>
 #include <fcl/narrowphase/collision_request.h>

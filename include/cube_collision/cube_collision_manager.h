@@ -25,7 +25,7 @@ struct ManagerAccess;  // the library's and tests' way to the core (src/adapter/
 /// split at the median object): the same callbacks for the same pairs. Touching AABBs count, an
 /// object never pairs with itself, a callback's true stops the query, const queries are
 /// thread-safe, bad input (null, NaN AABB) throws std::invalid_argument and changes nothing.
-/// Full contract, callbacks that mutate included: README.md, "What the manager guarantees".
+/// Full contract, callbacks that mutate included: docs/guarantees.md.
 template <typename S>
 class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
  public:

@@ -3,7 +3,7 @@
 // FCL's narrow phase over a list of candidate pairs: culled by tight volumes, answered from a
 // cache for pairs that did not move, and run on several threads (OpenMP). Results do not depend
 // on the thread count: per-pair answers are merged in the order of the pairs. The one-call
-// helpers of queries.h are built on this; README, "The narrow-phase pipeline".
+// helpers of queries.h are built on this; docs/pipeline.md.
 
 #include <fcl/narrowphase/collision_object.h>
 #include <fcl/narrowphase/collision_request.h>
@@ -132,8 +132,8 @@ struct NarrowPhaseOptions {
   /// cubes splits its broadphase walk too, into at least 64 subwalks taken by the threads; the
   /// candidate pairs are handed over on this thread in the serial walk's order, so the results
   /// are the same. Off by default: the walk is about 1% of a collideAll with the narrow phase,
-  /// and on 2 cores handing every pair over costs about what the serial walk saves (see the
-  /// README's figures). For machines with many idle cores and walks of 100,000 objects or more.
+  /// and on 2 cores handing every pair over costs about what the serial walk saves (see
+  /// benchmarks/README.md). For machines with many idle cores and walks of 100,000 objects or more.
   /// A self-collide that the threads answer task by task (see `threads`) splits its walk
   /// whatever this says.
   bool split_walk = false;

@@ -10,7 +10,7 @@ Geometry: mesh, convex, box, sphere, cylinder, capsule, cone, plane (each return
 The manager (CollisionManager) runs every query in C++ (broadphase, culling, FCL's narrow phase)
 with the GIL released; backend="fcl" builds it on FCL's DynamicAABBTreeCollisionManager instead.
 Batched planner checks: Body and CollisionManager.check_states / check_motions. Everything
-pickles. See README.md, section "Python".
+pickles. See docs/python.md.
 """
 
 from ._core import (  # noqa: F401

@@ -5,7 +5,7 @@
 #                                                only calls find_package(CubeCollision), run it;
 #                                                check that an incompatible version is refused
 #   run.sh pkg_config   <build dir> <work dir>   install, compile main.cpp with pkg-config's flags
-#                                                exactly as the README shows, run it
+#                                                exactly as docs/install.md shows, run it
 #   run.sh subdirectory <source dir> <work dir>  configure a project that add_subdirectory()s the
 #                                                source tree: the library target is there, the
 #                                                tests, examples and benchmarks are not (set
@@ -48,7 +48,7 @@ case "$mode" in
     cmake --install "$from" --prefix "$prefix"
     pc=$(find "$prefix" -name cube_collision.pc)
     export PKG_CONFIG_PATH="$(dirname "$pc")${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}"
-    # Exactly the README's command, `c++ -std=c++17 main.cpp $(pkg-config --cflags --libs
+    # Exactly the command of docs/install.md, `c++ -std=c++17 main.cpp $(pkg-config --cflags --libs
     # cube_collision)`, in that order (the .pc file carries no -std= of its own or of FCL's):
     # only the sanitizer flags come before it, and an rpath for a shared build after it.
     # shellcheck disable=SC2046,SC2086
