@@ -144,7 +144,7 @@ def full_table(medians, counters, errors):
 
 # SaP's self-collide walks the overlap list that its setup() and update() maintain: its cost is
 # in the update rows. The self-collide targets are therefore read against the other managers
-# (the issue's "best FCL manager" there is the tree manager); the full table shows SaP too.
+# (the "best FCL manager" there is the tree manager); the full table shows SaP too.
 NO_SAP = [m for m in FCL if m != "SaP"]
 TARGETS = [
     ("self-collide 10,000 (SaP excluded)", ("selfcollide", 10000), 5),
@@ -159,7 +159,7 @@ TARGETS = [
 ]
 
 
-# Issue 19: with FCL's narrow phase in the loop (cube: its pipeline; FCL: its default callback).
+# With FCL's narrow phase in the loop (cube: its pipeline; FCL: its default callback).
 NARROW_TARGETS = [
     ("self-collide + narrow phase, 1 thread", "selfcollide_narrow", 3),
     ("self-collide + narrow phase, hardware threads", "selfcollide_narrow_mt", 5),
@@ -273,13 +273,13 @@ def render(context, medians, counters, errors, reps, command, machine):
                      ", ".join("/".join(map(str, k)) for k in sorted(errors)))
     else:
         parts.append("Every correctness check of the cube manager passed in this run.")
-    parts.append("### With FCL's narrow phase in the loop (issue 19; ratio = best FCL manager / "
+    parts.append("### With FCL's narrow phase in the loop (ratio = best FCL manager / "
                  "cube, same run, best FCL manager in brackets)\n\n" + narrow_table(medians))
-    parts.append("### Targets of issue 4, broadphase alone (ratio = best FCL manager / cube, same "
+    parts.append("### Broadphase alone against its targets (ratio = best FCL manager / cube, same "
                  "run; ✗ = not met)\n\n" + target_table(medians))
     parts.append("### Memory per object after build (live heap growth, bytes per object)\n\n" +
                  memory_table(counters, sizes))
-    parts.append("### Issue 3: cost per object updated (time of one step / objects moved)\n\n" +
+    parts.append("### Cost per object updated (time of one step / objects moved)\n\n" +
                  motion_table(medians, counters))
     parts.append("### Scenes: overlaps and cube box tests\n\n" + scene_table(counters, sizes))
     parts.append("### Every case (median time per call; † = that FCL manager's answer differs "
