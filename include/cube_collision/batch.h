@@ -182,7 +182,9 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// checkMotion for one edge of `states` states whose poses `pose_of` writes on demand, for a
 /// planner that interpolates an edge and runs its kinematics per state: the states after the
 /// answer in `order` are never computed (with `threads` > 1, a few may be, and their answers
-/// dropped). The same answer as checkMotion over all the poses, whatever the thread count. Throws
+/// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
+/// pose array is made: the call's memory is the visiting order, 16 bytes a state (up to 32 while it
+/// is made), and one state's poses per thread. Throws
 /// std::invalid_argument for an empty body set or a null function (before any work), and as
 /// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on (with
 /// `threads` > 1, possibly one from a state after the answer).
