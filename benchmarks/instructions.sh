@@ -8,7 +8,7 @@
 # cube_instructions). CUBE_INSTRUCTION_CASES overrides the list ("case:objects ...").
 set -euo pipefail
 command -v valgrind >/dev/null || { echo "needs valgrind (Debian: apt-get install valgrind)" >&2; exit 2; }
-cases=${CUBE_INSTRUCTION_CASES:-"self:32 self:1000 self:10000 queries:1000 queries:10000 robot:1000 robot:10000 update:1000 update:10000 distance:1000 contacts:1000 states:1000 states:10000"}
+cases=${CUBE_INSTRUCTION_CASES:-"self:32 self:1000 self:10000 queries:1000 queries:10000 robot:1000 robot:10000 update:1000 update:10000 distance:1000 contacts:1000 states:1000 states:10000 first:10000"}
 count() {  # build dir, case, objects -> "instructions calls checksum"
   local out
   out=$(valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=/dev/null \
@@ -17,6 +17,7 @@ count() {  # build dir, case, objects -> "instructions calls checksum"
   ir=$(echo "$out" | sed -n 's/.*Collected : \([0-9]*\).*/\1/p')
   calls=$(echo "$out" | sed -n 's/^calls \([0-9]*\) checksum.*/\1/p')
   sum=$(echo "$out" | sed -n 's/^calls [0-9]* checksum \([0-9]*\)/\1/p')
+  [ -n "$calls" ] || { echo "0 0 -"; return; }  # a case this build does not have
   echo "$ir $calls $sum"
 }
 before=${1:-build}
@@ -31,9 +32,14 @@ for c in $cases; do
   n=${c##*:}
   read -r ir calls sum <<<"$(count "$before" "$name" "$n")"
   if [ -z "$after" ]; then
-    printf '%-10s %8s %14d %10s\n' "$name" "$n" $((ir / calls)) "$sum"
+    printf '%-10s %8s %14d %10s\n' "$name" "$n" $((calls ? ir / calls : 0)) "$sum"
   else
     read -r ir2 calls2 sum2 <<<"$(count "$after" "$name" "$n")"
+    if [ "$calls" = 0 ] || [ "$calls2" = 0 ]; then
+      printf '%-10s %8s %14s %14s\n' "$name" "$n" "$((calls ? ir / calls : 0))" \
+        "$((calls2 ? ir2 / calls2 : 0))  (a case one build lacks)"
+      continue
+    fi
     note=""
     [ "$sum" != "$sum2" ] && note="  (answers differ: $sum vs $sum2)"
     printf '%-10s %8s %14d %14d %8s%s\n' "$name" "$n" $((ir / calls)) $((ir2 / calls2)) \

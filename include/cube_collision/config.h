@@ -103,14 +103,14 @@ struct Config {
   /// candidate pair by reading two records instead of two FCL objects and their geometries. They
   /// are built only when needed: by the first such query of a manager that holds 256 objects or
   /// more (or by the registration that brings a manager those queries have asked to 256), from
-  /// the objects as they are then (its cost: one pass over the objects, about the time of a
-  /// registration); a manager used only through FCL's interface with its own callbacks never
-  /// builds them. Once built, registration and update(obj) / update(objects) build an object's
-  /// records from the geometry and the transform; update() places them anew for each object whose
-  /// box changed (reading its geometry again only if its local AABB changed) or whose transform
-  /// no longer rounds to the same floats (a rotation may leave FCL's box as it was). So move
-  /// objects, update, then query, as for the boxes; and after changing a geometry in place in a
-  /// way that leaves its local AABB as it was (another radius of a capsule of the same box, the
+  /// the objects as they are then (one pass over the objects, counted by the "first" case of
+  /// benchmarks/instructions.sh); a manager used only through FCL's interface with its own
+  /// callbacks never builds them. Once built, registration and update(obj) / update(objects) build
+  /// an object's records from the geometry and the transform; update() places them anew for each
+  /// object whose box changed (reading its geometry again only if its local AABB changed) or whose
+  /// transform no longer rounds to the same floats (a rotation may leave FCL's box as it was). So
+  /// move objects, update, then query, as for the boxes; and after changing a geometry in place in
+  /// a way that leaves its local AABB as it was (another radius of a capsule of the same box, the
   /// cost density), name its object to update(obj). CubeCollisionManager::dropVolumes() frees
   /// them. Trade-off, once built: memory per object, and update() reads every object's transform
   /// and registration builds the records, against a cull several times cheaper per candidate pair
