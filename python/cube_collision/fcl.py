@@ -638,8 +638,10 @@ def defaultDistanceCallback(o1, o2, cdata):
 class DynamicAABBTreeCollisionManager:
     """python-fcl's manager, backed by cube_collision's cube manager (CollisionManager)."""
 
-    def __init__(self):
-        self._m = _core.CollisionManager()
+    def __init__(self, threads=1):
+        # threads: the narrow phase's (python-fcl's manager has one); 0 = every core.
+        self._threads = threads
+        self._m = _core.CollisionManager(threads=threads)
         self._objs = {}   # name -> CollisionObject, in registration order
         self._geoms = {}  # name -> the object's geometry (what results name)
         self._dirty = {}  # name -> object moved since it was last passed to the cube manager
@@ -717,7 +719,7 @@ class DynamicAABBTreeCollisionManager:
     def clear(self):
         for o in self._objs.values():
             o._managers.discard(self)
-        self._m = _core.CollisionManager()
+        self._m = _core.CollisionManager(threads=self._threads)
         self._objs.clear()
         self._geoms.clear()
         self._dirty.clear()

@@ -1063,10 +1063,11 @@ point or a negative or NaN radius.)doc")
               opt.threads = m.threads();
               // python-fcl's defaultCollisionCallback: fcl::collide per candidate pair (a fresh
               // result each, its contacts appended), done once the result holds more than
-              // num_max_contacts contacts (costs aside). Pairs go to the pipeline in chunks
-              // that double, so that an early stop wastes little and a full answer runs on the
-              // threads.
-              std::size_t count = prior_count, chunk = 64;
+              // num_max_contacts contacts (costs aside). Pairs go to the pipeline at once when
+              // the budget is at least their number, else in chunks that double from 64, so
+              // that an early stop wastes little.
+              std::size_t count = prior_count;
+              std::size_t chunk = req.num_max_contacts < pairs.size() ? 64 : pairs.size();
               for (std::size_t start = 0; start < pairs.size() && !done;
                    start += chunk, chunk = std::min<std::size_t>(2 * chunk, 8192)) {
                 const std::vector<cube::ObjectPair<double>> sub(
