@@ -657,10 +657,10 @@ class DynamicAABBTreeCollisionManager:
     # -- registration
 
     def registerObjects(self, other_objs):
-        objs = [o for o in dict.fromkeys(other_objs) if o._name not in self._objs]
-        for o in objs:
-            if not isinstance(o, CollisionObject):
-                raise TypeError("registerObjects: CollisionObjects only")
+        objs = list(dict.fromkeys(other_objs))
+        if not all(isinstance(o, CollisionObject) for o in objs):
+            raise TypeError("registerObjects: CollisionObjects only")
+        objs = [o for o in objs if o._name not in self._objs]
         if not objs:
             return
         self._m.add_objects([o._name for o in objs], [o._g for o in objs],

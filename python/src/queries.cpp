@@ -1072,7 +1072,8 @@ point or a negative or NaN radius.)doc")
                    start += chunk, chunk = std::min<std::size_t>(2 * chunk, 8192)) {
                 const std::vector<cube::ObjectPair<double>> sub(
                     pairs.begin() + static_cast<std::ptrdiff_t>(start),
-                    pairs.begin() + static_cast<std::ptrdiff_t>(std::min(pairs.size(), start + chunk)));
+                    pairs.begin() +
+                        static_cast<std::ptrdiff_t>(std::min(pairs.size(), start + chunk)));
                 const auto results = cube::collidePairs(sub, req, opt);
                 for (std::size_t i = 0; i < sub.size(); ++i) {
                   if (results[i].isCollision()) {
@@ -1108,8 +1109,8 @@ point or a negative or NaN radius.)doc")
                 pa = geomOf(r.a);
                 pb = geomOf(r.b);
               }
-              contacts.append(makeContact(contact_type, r.c, r.a->collisionGeometry().get(), pa,
-                                          pb, req.enable_contact));
+              contacts.append(makeContact(contact_type, r.c, r.a->collisionGeometry().get(), pa, pb,
+                                          req.enable_contact));
             }
             result.attr("is_collision") = prior || any;
             return done;
@@ -1134,18 +1135,19 @@ point or a negative or NaN radius.)doc")
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m, t.other);
-              refuseFclCrashes(&m, t.other, t.query ? std::vector<std::string>{t.geometry->kind}
-                                                    : std::vector<std::string>{},
-                               true, "distance");
+              refuseFclCrashes(
+                  &m, t.other,
+                  t.query ? std::vector<std::string>{t.geometry->kind} : std::vector<std::string>{},
+                  true, "distance");
               o = distance(m, t.query.get(), t.other, req.enable_nearest_points);
             }
-            if (!o.found || !(o.distance < result.attr("min_distance").cast<double>()))
-              return;
+            if (!o.found || !(o.distance < result.attr("min_distance").cast<double>())) return;
             const auto geomOf = [&](const std::string& name) -> py::object {
               if (name == kExternal) return query_geom;
               py::str key(name);
               PyObject* g = PyDict_GetItem(geoms.ptr(), key.ptr());
-              if (!g && PyDict_Check(other_geoms.ptr())) g = PyDict_GetItem(other_geoms.ptr(), key.ptr());
+              if (!g && PyDict_Check(other_geoms.ptr()))
+                g = PyDict_GetItem(other_geoms.ptr(), key.ptr());
               return g ? py::reinterpret_borrow<py::object>(g) : py::object(py::none());
             };
             result.attr("min_distance") = o.distance;
@@ -1252,8 +1254,7 @@ void bindQueries(py::module_& m) {
         return res.numContacts();
       },
       py::arg("geometry_a"), py::arg("transform_a"), py::arg("geometry_b"), py::arg("transform_b"),
-      py::arg("request"), py::arg("result"), py::arg("contact_type"), py::arg("o1"),
-      py::arg("o2"),
+      py::arg("request"), py::arg("result"), py::arg("contact_type"), py::arg("o1"), py::arg("o2"),
       "cube_collision.fcl.collide: fcl::collide with a python-fcl request on two placed "
       "geometries; contacts appended to result.contacts as contact_type(o1, o2, b1, b2, normal, "
       "pos, depth) naming the Python geometries o1 / o2; returns the number of contacts.");
