@@ -10,7 +10,8 @@ Geometry: mesh, convex, box, sphere, cylinder, capsule, cone, plane (each return
 The manager (CollisionManager) runs every query in C++ (broadphase, culling, FCL's narrow phase)
 with the GIL released; backend="fcl" builds it on FCL's DynamicAABBTreeCollisionManager instead.
 Batched planner checks: Body and CollisionManager.check_states / check_motions. Everything
-pickles. See docs/python.md.
+pickles. python-fcl's API (for code written for it, and trimesh's CollisionManager):
+`import cube_collision.fcl as fcl`. See docs/python.md.
 """
 
 from ._core import (  # noqa: F401

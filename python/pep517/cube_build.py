@@ -92,7 +92,7 @@ def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
     meta = _project()
     staged = _build()
     suffix = sysconfig.get_config_var("EXT_SUFFIX")
-    files = ["__init__.py", "__init__.pyi", "_core.pyi", "py.typed", "_core" + suffix]
+    files = ["__init__.py", "__init__.pyi", "_core.pyi", "fcl.py", "py.typed", "_core" + suffix]
     dist = _dist_name(meta)
     info = f"{dist}-{meta['version']}.dist-info"
     wheel_name = f"{dist}-{meta['version']}-{_tag()}.whl"
