@@ -105,9 +105,9 @@ struct StateResult {
   /// With BatchOptions::clearance: for a free state, the smallest fcl::distance(link, other)
   /// between a link and a world object it may meet (filter bits, the world's pair predicate) or
   /// between two checked links (with
-  /// self_collision); a pair with a plane, halfspace or octree, whose distance FCL 0.7 does not
-  /// answer, counts the distance between the two AABBs (the link's exact box of its local AABB
-  /// posed, the object's getAABB()). Margins do not lower it. 0 for a colliding state; the
+  /// self_collision); a pair with a plane or halfspace, on which FCL 0.7's fcl::distance
+  /// crashes, counts its exact distance in closed form (as minimumDistance, queries.h). Margins
+  /// do not lower it. 0 for a colliding state; the
   /// largest value of S when nothing can be met. Without the option: the largest value of S.
   S clearance = std::numeric_limits<S>::max();
 };
@@ -117,7 +117,8 @@ struct StateResult {
 /// link order). A state collides when FCL reports a contact between one of its links and a world
 /// object whose filter bits and the world's pair predicate (setPairFilter, asked as
 /// (world object, link object)) let them meet, or (self_collision) between two checked links,
-/// margins included: fcl::collide(link, other) with FCL's default request, then, within a
+/// margins included: fcl::collide(link, other) with FCL's default request (a cylinder or cone
+/// link against a plane or halfspace as collideAll, queries.h, says), then, within a
 /// margin, fcl::distance(link, other) <= the margin. Returns one StateResult per state, in state
 /// order. `world` is only read: other threads may query it meanwhile (not mutate it); a pair
 /// predicate that mutates it gets std::logic_error, as from its other queries. The objects a
