@@ -104,7 +104,8 @@ void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void
 /// along the normal; a mesh's triangles; an octree's occupied cells), for a halfspace the
 /// height of the object's lowest point above it, with the nearest points in the world frame; -1,
 /// as FCL answers objects that meet, when they meet; two planes or halfspaces are apart only
-/// when parallel.
+/// when parallel (a geometry of a kind FCL does not ship, or an empty mesh or octree, gets the
+/// AABBs' distance).
 /// FCL's own managers crash on such a pair.
 template <typename S>
 fcl::DistanceResult<S> minimumDistance(
