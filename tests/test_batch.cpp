@@ -3,6 +3,7 @@
 
 #include <fcl/broadphase/default_broadphase_callbacks.h>
 #include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/octree/octree.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/cone.h>
@@ -23,12 +24,14 @@
 #include <limits>
 #include <memory>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <thread>
 #include <vector>
 
 #include "core/kernels/pose_boxes.h"
 #include "cube_collision/batch.h"
+#include "cube_collision/margins.h"
 #include "support/plane_brute.h"
 
 namespace {
@@ -466,6 +469,53 @@ TEST(Batch, TiltedCylindersAndConesOverPlanesGetTheTrueAnswer) {
       EXPECT_LT(hits, 3700u);
       expectSame(got, w, body, poses, o);
     }
+}
+
+// FCL 0.7's fcl::distance answers an octree against a shape (each occupied cell as a box): the
+// batch's clearance and margins, and contactsWithinMargin, take its answer, not the distance of
+// the AABBs (a diagonal row of cells, whose box is far larger than the cells).
+TEST(Batch, ClearanceAndMarginsToAnOctreeAreFclsDistance) {
+  auto tree = std::make_shared<octomap::OcTree>(0.5);
+  for (double x = -5; x <= 5; x += 0.5) tree->updateNode(octomap::point3d(x, 0.6 * x, 0), true);
+  World w;
+  w.objects.push_back(std::make_unique<Object>(std::make_shared<fcl::OcTreed>(tree)));
+  w.objects.back()->computeAABB();
+  w.manager.registerObjects(w.pointers());
+  cube::BodySet<S> body;
+  body.addLink(std::make_shared<fcl::Sphered>(0.3), 0.2);
+  std::mt19937 rng(71);
+  std::uniform_real_distribution<double> u(-6, 6), z(-1.5, 1.5);
+  std::vector<fcl::Transform3d> poses;
+  for (int k = 0; k < 300; ++k)
+    poses.push_back(fcl::Transform3d(fcl::Translation3d(u(rng), u(rng), z(rng))));
+  cube::BatchOptions o;
+  o.clearance = true;
+  std::size_t hits = 0;
+  expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, &hits);
+  EXPECT_GT(hits, 10u);
+  EXPECT_LT(hits, 290u);
+
+  // The same spheres as objects of one manager with the octree, margin 0.2 each.
+  std::vector<std::unique_ptr<Object>> balls;
+  cube::CubeCollisionManagerd m;
+  m.registerObject(w.objects[0].get());
+  for (const auto& tf : poses) {
+    balls.push_back(std::make_unique<Object>(std::make_shared<fcl::Sphered>(0.3), tf));
+    balls.back()->computeAABB();
+    m.registerObject(balls.back().get());
+    m.setMargin(balls.back().get(), 0.2);
+  }
+  m.setup();
+  std::set<const Object*> want;
+  for (const auto& b : balls)
+    if (bruteTouch(*b, *w.objects[0], 0.2)) want.insert(b.get());
+  std::set<const Object*> got;
+  for (const auto& c : cube::contactsWithinMargin<S>(m, fcl::DistanceRequestd(), 1)) {
+    const bool octree_first = c.a == w.objects[0].get();
+    if (octree_first || c.b == w.objects[0].get()) got.insert(octree_first ? c.b : c.a);
+  }
+  EXPECT_EQ(got, want);
+  EXPECT_GT(want.size(), 10u);
 }
 
 // The serial scan of an edge in an order, from per-state answers.
