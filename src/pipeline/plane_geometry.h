@@ -236,8 +236,7 @@ bool forEachPart(const fcl::CollisionGeometry<S>& g, const fcl::Transform3<S>& t
   }
 }
 
-template <typename S>
-bool isPlanar(fcl::NODE_TYPE t) {
+inline bool isPlanar(fcl::NODE_TYPE t) {
   return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE;
 }
 
@@ -253,13 +252,13 @@ bool isPlanar(fcl::NODE_TYPE t) {
 template <typename S>
 bool planeDistance(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
                    fcl::DistanceResult<S>& result, S& distance) {
-  const bool a_planar = isPlanar<S>(a.getNodeType());
+  const bool a_planar = isPlanar(a.getNodeType());
   const fcl::CollisionObject<S>& pl = a_planar ? a : b;
   const fcl::CollisionObject<S>& other = a_planar ? b : a;
   const WorldPlane<S> w = worldPlane(pl.collisionGeometry().get(), pl.getTransform());
   const bool solid = pl.getNodeType() == fcl::GEOM_HALFSPACE;
   V3<S> on_other, on_plane;
-  if (isPlanar<S>(other.getNodeType())) {
+  if (isPlanar(other.getNodeType())) {
     // Two planes or halfspaces are apart only when parallel: then along the first's normal the
     // other is a single value (a plane) or a half line (a halfspace).
     const WorldPlane<S> o = worldPlane(other.collisionGeometry().get(), other.getTransform());
@@ -369,7 +368,7 @@ std::size_t defectiveCollide(const fcl::CollisionGeometry<S>* ga, const fcl::Tra
                              fcl::CollisionResult<S>& result) {
   if (request.isSatisfied(result)) return result.numContacts();
   if (request.enable_cached_gjk_guess) result.cached_gjk_guess = request.cached_gjk_guess;
-  const bool a_planar = isPlanar<S>(ga->getNodeType());
+  const bool a_planar = isPlanar(ga->getNodeType());
   const WorldPlane<S> w = a_planar ? worldPlane(ga, tfa) : worldPlane(gb, tfb);
   // A cylinder or a cone: one convex part.
   Extent<S> e;
