@@ -6,7 +6,10 @@
 #include <fcl/geometry/octree/octree.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
 #include <fcl/geometry/shape/halfspace.h>
 #include <fcl/geometry/shape/plane.h>
 #include <fcl/geometry/shape/sphere.h>
@@ -14,18 +17,22 @@
 #include <fcl/narrowphase/distance.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <thread>
 #include <vector>
 
 #include "core/kernels/pose_boxes.h"
 #include "cube_collision/batch.h"
+#include "cube_collision/margins.h"
+#include "support/plane_brute.h"
 
 namespace {
 
@@ -130,28 +137,12 @@ std::vector<fcl::Transform3d> randomStates(std::size_t states, std::size_t links
   return poses;
 }
 
-// The link's box as batch.h says: the exact box of its local AABB posed.
-fcl::AABBd linkBox(const fcl::CollisionGeometryd& g, const fcl::Transform3d& tf) {
-  const fcl::Vector3d c = tf * g.aabb_local.center();
-  const fcl::Vector3d h = tf.linear().cwiseAbs() * ((g.aabb_local.max_ - g.aabb_local.min_) / 2);
-  return fcl::AABBd(c - h, c + h);
-}
-
-bool unanswered(const Object& o) {
-  const auto t = o.getNodeType();
-  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
-}
-
 S bruteDistance(const Object& a, const Object& b);
 
 // Brute force for one pair (link first): touching within margin m.
-bool bruteTouch(const Object& a, const fcl::AABBd& a_box, const Object& b, S m) {
-  fcl::CollisionRequestd req;
-  fcl::CollisionResultd res;
-  if (fcl::collide(&a, &b, req, res) > 0) return true;
-  if (m == 0) return false;
-  if (unanswered(b)) return a_box.distance(b.getAABB()) <= m;
-  return bruteDistance(a, b) <= m;
+bool bruteTouch(const Object& a, const Object& b, S m) {
+  if (cube::brute::touch(a, b)) return true;
+  return m > 0 && bruteDistance(a, b) <= m;
 }
 
 struct Brute {
@@ -181,24 +172,20 @@ Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d
   for (std::size_t l = 0; l < body.size() && !out.colliding; ++l) {
     for (const auto& o : w.objects) {  // registration order
       if (!meets(l, o.get())) continue;
-      if (bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]), *o,
-                     body.margin(l) + w.manager.margin(o.get()))) {
+      if (bruteTouch(*links[l], *o, body.margin(l) + w.manager.margin(o.get()))) {
         out = {true, l, cube::kNoIndex, o.get()};
         break;
       }
     }
     for (std::size_t j = l + 1; self && !out.colliding && j < body.size(); ++j)
-      if (body.checked(l, j) && bruteTouch(*links[l], linkBox(*body.geometry(l), poses[l]),
-                                           *links[j], body.margin(l) + body.margin(j)))
+      if (body.checked(l, j) && bruteTouch(*links[l], *links[j], body.margin(l) + body.margin(j)))
         out = {true, l, j, nullptr};
   }
   if (out.colliding) return out;
   for (std::size_t l = 0; l < body.size(); ++l) {
     for (const auto& o : w.objects)
       if (meets(l, o.get())) {
-        const S d = unanswered(*o) ? linkBox(*body.geometry(l), poses[l]).distance(o->getAABB())
-                                   : bruteDistance(*links[l], *o);
-        out.clearance = std::min(out.clearance, d);
+        out.clearance = std::min(out.clearance, bruteDistance(*links[l], *o));
       }
     for (std::size_t j = l + 1; self && j < body.size(); ++j)
       if (body.checked(l, j))
@@ -207,11 +194,10 @@ Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d
   return out;
 }
 
+// fcl::distance, or for a plane or halfspace the gap of the brute force (plane_brute.h).
 S bruteDistance(const Object& a, const Object& b) {
-  if (unanswered(a) || unanswered(b)) {
-    ADD_FAILURE() << "no distance for planes here";
-    return 0;
-  }
+  if (cube::brute::planar(a.getNodeType()) || cube::brute::planar(b.getNodeType()))
+    return cube::brute::distance(a, b);
   fcl::DistanceRequestd req;
   fcl::DistanceResultd res;
   return fcl::distance(&a, &b, req, res);
@@ -236,16 +222,19 @@ void expectSame(const std::vector<cube::StateResult<S>>& got, const World& w,
       EXPECT_EQ(got[k].link, cube::kNoIndex);
       EXPECT_EQ(got[k].object, nullptr);
     }
-    if (o.clearance)
-      EXPECT_EQ(got[k].clearance, b.colliding ? S(0) : b.clearance) << "state " << k;
-    else
+    if (o.clearance) {
+      // Bit for bit where FCL answers; a closed form's rounding for a plane or halfspace.
+      const S want = b.colliding ? S(0) : b.clearance;
+      EXPECT_NEAR(got[k].clearance, want, 1e-9 * (1 + std::abs(want))) << "state " << k;
+    } else {
       EXPECT_EQ(got[k].clearance, std::numeric_limits<S>::max());
+    }
   }
   if (colliding != nullptr) *colliding = hits;
 }
 
 // Worlds of 60 objects (no per-object records: below kVolumeMinObjects) and 400 (records), with
-// and without meshes, planes in the small one (clearance then reads AABB gaps).
+// and without meshes, planes in the small one (one tilted: clearance then reads exact gaps).
 class BatchWorlds : public ::testing::TestWithParam<std::tuple<std::size_t, bool>> {};
 
 TEST_P(BatchWorlds, StatesEqualBruteForce) {
@@ -396,6 +385,199 @@ TEST(Batch, FirstPairIsTheDocumentedOneInRandomScenes) {
   // Enough colliding and free states that a wrong pick would show.
   EXPECT_GT(colliding, checked / 4);
   EXPECT_LT(colliding, checked);
+}
+
+// A sphere of radius 0.5 whose surface is 50 units above the tilted plane x + y + z = 0 (the
+// plane's box is the whole space), with a margin of 0.01: free, clearance 50. Also as a
+// halfspace, moved 1000 units along the plane; 0.005 above, it is within its margin.
+TEST(Batch, SphereAboveATiltedPlaneIsFreeBeyondItsMargin) {
+  const fcl::Vector3d n = fcl::Vector3d(1, 1, 1).normalized();
+  const fcl::Vector3d along = fcl::Vector3d(1, -1, 0).normalized() * 1000;
+  for (const bool halfspace : {false, true}) {
+    World w;
+    if (halfspace)
+      w.objects.push_back(std::make_unique<Object>(std::make_shared<fcl::Halfspaced>(n, 0.0)));
+    else
+      w.objects.push_back(std::make_unique<Object>(std::make_shared<fcl::Planed>(n, 0.0)));
+    w.objects.back()->computeAABB();
+    w.manager.registerObjects(w.pointers());
+    cube::BodySet<S> body;
+    body.addLink(std::make_shared<fcl::Sphered>(0.5), 0.01);
+    cube::BatchOptions o;
+    o.clearance = true;
+    for (const double gap : {50.0, 0.02, 0.005}) {
+      const std::vector<fcl::Transform3d> poses = {fcl::Transform3d(
+          fcl::Translation3d((halfspace ? along : fcl::Vector3d::Zero()) + n * (0.5 + gap)))};
+      const auto got = cube::checkStates(w.manager, body, poses, o);
+      ASSERT_EQ(got.size(), 1u);
+      EXPECT_EQ(got[0].colliding, gap <= 0.01) << gap;
+      if (gap > 0.01) {
+        EXPECT_NEAR(got[0].clearance, gap, 1e-9) << gap;
+      }
+      expectSame(got, w, body, poses, o);
+    }
+  }
+}
+
+// Links of every kind (box, sphere, capsule, cylinder, cone, ellipsoid, convex, mesh) against a
+// tilted plane and a tilted halfspace about 1000 units from the origin: collisions, margins and
+// clearance equal the brute force (the exact gap to the plane, plane_brute.h).
+TEST(Batch, EveryLinkKindAgainstTiltedPlanesFarFromTheOrigin) {
+  auto verts = std::make_shared<std::vector<fcl::Vector3d>>(std::vector<fcl::Vector3d>{
+      {0.5, 0, -0.2}, {-0.3, 0.4, -0.2}, {-0.3, -0.4, -0.2}, {0, 0, 0.6}});
+  auto faces = std::make_shared<std::vector<int>>(
+      std::vector<int>{3, 0, 1, 2, 3, 0, 3, 1, 3, 1, 3, 2, 3, 2, 3, 0});
+  const std::vector<Geometry> kinds = {std::make_shared<fcl::Boxd>(1.0, 0.4, 0.7),
+                                       std::make_shared<fcl::Sphered>(0.45),
+                                       std::make_shared<fcl::Capsuled>(0.25, 0.9),
+                                       std::make_shared<fcl::Cylinderd>(0.3, 1.1),
+                                       std::make_shared<fcl::Coned>(0.4, 0.9),
+                                       std::make_shared<fcl::Ellipsoidd>(0.6, 0.3, 0.4),
+                                       std::make_shared<fcl::Convexd>(verts, 4, faces, true),
+                                       meshBox(0.8, 0.5, 0.3)};
+  const fcl::Vector3d n = fcl::Vector3d(2, -1, 3).normalized();
+  const fcl::Vector3d origin(700, 500, -400);  // on the plane: d = n . origin
+  for (const bool halfspace : {false, true}) {
+    World w;
+    if (halfspace)
+      w.objects.push_back(
+          std::make_unique<Object>(std::make_shared<fcl::Halfspaced>(n, n.dot(origin))));
+    else
+      w.objects.push_back(
+          std::make_unique<Object>(std::make_shared<fcl::Planed>(n, n.dot(origin))));
+    w.objects.back()->computeAABB();
+    w.manager.registerObjects(w.pointers());
+    cube::BodySet<S> body;
+    for (std::size_t l = 0; l < kinds.size(); ++l) body.addLink(kinds[l], l % 2 ? 0.1 : 0.0);
+    // Each link near the plane (-0.6 .. 8 off it, either side of a plane), the links far apart.
+    std::mt19937 rng(halfspace ? 31 : 32);
+    std::uniform_real_distribution<double> off(-0.6, 8.0), u(-1.0, 1.0);
+    const fcl::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+    std::vector<fcl::Transform3d> poses;
+    for (int k = 0; k < 150; ++k)
+      for (std::size_t l = 0; l < kinds.size(); ++l) {
+        fcl::Transform3d tf = randomPose(rng, 0);
+        const double side = !halfspace && u(rng) < 0 ? -1 : 1;
+        tf.translation() =
+            origin + e1 * (10.0 * double(l)) + e2 * (5 * u(rng)) + n * (side * off(rng));
+        poses.push_back(tf);
+      }
+    for (const bool first : {false, true}) {
+      cube::BatchOptions o;
+      o.first_pair = first;
+      o.clearance = !first;
+      std::size_t hits = 0;
+      expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, &hits);
+      EXPECT_GT(hits, 20u);
+      EXPECT_LT(hits, 130u);  // free states: their clearance checked
+    }
+  }
+}
+
+// FCL 0.7's yes/no cylinder-plane test projects lz where lz/2 belongs, and its cone-halfspace
+// test takes a cone whose apex points into the halfspace for one lying on its side; the batch
+// answers from the geometry whether or not the link's box reaches the plane's. 4,000 tilted
+// cylinder (and cone) links over the plane z = 0 and the halfspace z <= 0, the lowest point
+// -0.3 .. 2.5 off it, against brute force: centre . n - |axis . n| h/2 - r sqrt(1 - (axis . n)^2)
+// for a cylinder, the lower of the apex and the base rim's lowest point for a cone.
+TEST(Batch, TiltedCylindersAndConesOverPlanesGetTheTrueAnswer) {
+  const fcl::Vector3d n(0, 0, 1);
+  for (const bool halfspace : {false, true})
+    for (const bool cone : {false, true}) {
+      World w;
+      if (halfspace)
+        w.objects.push_back(std::make_unique<Object>(std::make_shared<fcl::Halfspaced>(n, 0.0)));
+      else
+        w.objects.push_back(std::make_unique<Object>(std::make_shared<fcl::Planed>(n, 0.0)));
+      w.objects.back()->computeAABB();
+      w.manager.registerObjects(w.pointers());
+      const double r = 0.35, h = 2.0;
+      cube::BodySet<S> body;
+      if (cone)
+        body.addLink(std::make_shared<fcl::Coned>(r, h));
+      else
+        body.addLink(std::make_shared<fcl::Cylinderd>(r, h));
+      std::mt19937 rng(cone ? 51 : 52);
+      std::uniform_real_distribution<double> off(-0.3, 2.5), u(-20, 20);
+      std::vector<fcl::Transform3d> poses;
+      std::vector<bool> truth;
+      for (int k = 0; k < 4000; ++k) {
+        fcl::Transform3d tf = randomPose(rng, 0);
+        const fcl::Vector3d axis = tf.linear().col(2);
+        const double an = axis.dot(n), rim = r * std::sqrt(std::max(0.0, 1 - an * an));
+        // The centre placed so that the lowest point is `off` above the plane.
+        const double lowest_rel =
+            cone ? std::min(an * h / 2, -an * h / 2 - rim) : -std::abs(an) * h / 2 - rim;
+        const double highest_rel =
+            cone ? std::max(an * h / 2, -an * h / 2 + rim) : std::abs(an) * h / 2 + rim;
+        const double lowest = off(rng);
+        tf.translation() = fcl::Vector3d(u(rng), u(rng), lowest - lowest_rel);
+        poses.push_back(tf);
+        const double highest = lowest - lowest_rel + highest_rel;
+        truth.push_back(halfspace ? lowest <= 0 : (lowest <= 0 && highest >= 0));
+      }
+      cube::BatchOptions o;
+      o.clearance = true;
+      const auto got = cube::checkStates(w.manager, body, poses, o);
+      ASSERT_EQ(got.size(), truth.size());
+      std::size_t wrong = 0, hits = 0;
+      for (std::size_t k = 0; k < truth.size(); ++k) {
+        wrong += got[k].colliding != truth[k];
+        hits += truth[k];
+      }
+      EXPECT_EQ(wrong, 0u) << (cone ? "cones" : "cylinders")
+                           << (halfspace ? " / halfspace" : " / plane");
+      EXPECT_GT(hits, 300u);
+      EXPECT_LT(hits, 3700u);
+      expectSame(got, w, body, poses, o);
+    }
+}
+
+// FCL 0.7's fcl::distance answers an octree against a shape (each occupied cell as a box): the
+// batch's clearance and margins, and contactsWithinMargin, take its answer, not the distance of
+// the AABBs (a diagonal row of cells, whose box is far larger than the cells).
+TEST(Batch, ClearanceAndMarginsToAnOctreeAreFclsDistance) {
+  auto tree = std::make_shared<octomap::OcTree>(0.5);
+  for (double x = -5; x <= 5; x += 0.5) tree->updateNode(octomap::point3d(x, 0.6 * x, 0), true);
+  World w;
+  w.objects.push_back(std::make_unique<Object>(std::make_shared<fcl::OcTreed>(tree)));
+  w.objects.back()->computeAABB();
+  w.manager.registerObjects(w.pointers());
+  cube::BodySet<S> body;
+  body.addLink(std::make_shared<fcl::Sphered>(0.3), 0.2);
+  std::mt19937 rng(71);
+  std::uniform_real_distribution<double> u(-6, 6), z(-1.5, 1.5);
+  std::vector<fcl::Transform3d> poses;
+  for (int k = 0; k < 300; ++k)
+    poses.push_back(fcl::Transform3d(fcl::Translation3d(u(rng), u(rng), z(rng))));
+  cube::BatchOptions o;
+  o.clearance = true;
+  std::size_t hits = 0;
+  expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, &hits);
+  EXPECT_GT(hits, 10u);
+  EXPECT_LT(hits, 290u);
+
+  // The same spheres as objects of one manager with the octree, margin 0.2 each.
+  std::vector<std::unique_ptr<Object>> balls;
+  cube::CubeCollisionManagerd m;
+  m.registerObject(w.objects[0].get());
+  for (const auto& tf : poses) {
+    balls.push_back(std::make_unique<Object>(std::make_shared<fcl::Sphered>(0.3), tf));
+    balls.back()->computeAABB();
+    m.registerObject(balls.back().get());
+    m.setMargin(balls.back().get(), 0.2);
+  }
+  m.setup();
+  std::set<const Object*> want;
+  for (const auto& b : balls)
+    if (bruteTouch(*b, *w.objects[0], 0.2)) want.insert(b.get());
+  std::set<const Object*> got;
+  for (const auto& c : cube::contactsWithinMargin<S>(m, fcl::DistanceRequestd(), 1)) {
+    const bool octree_first = c.a == w.objects[0].get();
+    if (octree_first || c.b == w.objects[0].get()) got.insert(octree_first ? c.b : c.a);
+  }
+  EXPECT_EQ(got, want);
+  EXPECT_GT(want.size(), 10u);
 }
 
 // The serial scan of an edge in an order, from per-state answers.

@@ -8,6 +8,7 @@
 // Float: sweptPairs and sweptBox only; FCL 0.7's float continuousCollide does not compile.
 
 #include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cone.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/halfspace.h>
 #include <fcl/geometry/shape/plane.h>
@@ -20,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <random>
 #include <set>
@@ -400,49 +402,94 @@ TYPED_TEST(ContinuousBadInput, ThrowsAndChangesNothing) {
   EXPECT_EQ(now, w.registered);
 }
 
-// continuous.h's exception to "equals fcl::continuousCollide over every pair": FCL 0.7's yes/no
-// cylinder-plane test takes the cylinder's full length where half belongs. A cylinder of radius
-// 0.25 and length 2 whose end is 0.5 above the plane z = 0, moving 0.4 down, never reaches the
-// plane: FCL says it collides at t = 0 (and its own static test with contacts says it does not);
-// the swept boxes leave the pair out, so continuousCollideAll reports nothing. Moving 0.6 down it
-// reaches the plane at t = 5/6; the boxes overlap and FCL's answer (t = 0) is passed on.
-TEST(ContinuousCollideAll, CylinderPlaneDefectOfFclIsDocumentedSide) {
-  auto cylinder = std::make_shared<fcl::Cylinderd>(0.25, 2);
-  auto plane = std::make_shared<fcl::Planed>(fcl::Vector3d(0, 0, 1), 0);
-  fcl::Transform3d start = fcl::Transform3d::Identity();
-  start.translation() = fcl::Vector3d(0, 0, 1.5);  // the lower end 0.5 above the plane
-  Obj<double> c(cylinder, start), p(plane, fcl::Transform3d::Identity());
-  c.computeAABB();
-  p.computeAABB();
-  fcl::CollisionRequestd with_contacts;
-  with_contacts.enable_contact = true;
-  fcl::CollisionResultd truth, yes_no;
-  fcl::collide(&c, &p, with_contacts, truth);
-  fcl::collide(&c, &p, fcl::CollisionRequestd(), yes_no);
-  ASSERT_FALSE(truth.isCollision()) << "0.5 apart";
-  ASSERT_TRUE(yes_no.isCollision()) << "FCL 0.7's defect, which this test documents";
-  cube::CubeCollisionManagerd m;
-  m.registerObject(&c);
-  m.registerObject(&p);
-  for (const double drop : {0.4, 0.6}) {
-    std::vector<cube::Motion<double>> motions(1);
-    motions[0].object = &c;
-    motions[0].end = start;
-    motions[0].end.translation().z() -= drop;
-    fcl::ContinuousCollisionRequestd req;
-    fcl::ContinuousCollisionResultd fcl_says;
-    fcl::continuousCollide(&c, motions[0].end, &p, p.getTransform(), req, fcl_says);
-    EXPECT_TRUE(fcl_says.is_collide) << "drop " << drop;
-    EXPECT_EQ(fcl_says.time_of_contact, 0.0) << "drop " << drop;
-    const auto got = cube::continuousCollideAll(m, motions, req);
-    if (drop < 0.5) {
-      EXPECT_TRUE(got.empty()) << "never reaches the plane: left out";
-      EXPECT_TRUE(cube::sweptPairs(m, motions).empty());
-    } else {
-      ASSERT_EQ(got.size(), 1u) << "reaches the plane: FCL's answer passed on";
-      EXPECT_EQ(got[0].time_of_contact, fcl_says.time_of_contact);
-    }
-  }
+// FCL 0.7's yes/no cylinder-plane test projects lz where lz/2 belongs, and its cone-halfspace
+// test takes a cone whose apex points into the halfspace for one lying on its side: the library
+// samples such pairs at FCL's times with the true test (continuous.h). 4,000 tilted cylinders
+// (and cones) on a grid over the plane z = 0 or the halfspace z <= 0, and over a tilted plane
+// 1000 units from the origin, each translated along the normal from 0.5 .. 2.5 off it to
+// -0.3 .. 1.0 off it: the first sampled time t = i / (n - 1) at which the lowest point along the
+// normal (a cylinder's centre . n - |axis . n| h/2 - r sqrt(1 - (axis . n)^2); a cone's lower of
+// its apex and its base rim's lowest point) is at or below the plane (and, for a plane, the
+// highest at or above it), against continuousCollideAll.
+TEST(ContinuousCollideAll, CylindersAndConesAgainstPlanesSampledWithTheTrueTest) {
+  using S = double;
+  std::size_t contacts = 0, free = 0;
+  for (const bool halfspace : {false, true})
+    for (const bool cones : {false, true})
+      for (const bool far : {false, true}) {
+        const fcl::Vector3d n = far ? fcl::Vector3d(1, -2, 2).normalized() : fcl::Vector3d(0, 0, 1);
+        const double d = far ? 1000 : 0;
+        std::shared_ptr<fcl::CollisionGeometryd> flat_geo;
+        if (halfspace)
+          flat_geo = std::make_shared<fcl::Halfspaced>(n, d);
+        else
+          flat_geo = std::make_shared<fcl::Planed>(n, d);
+        Obj<S> flat(flat_geo);
+        flat.computeAABB();
+        cube::CubeCollisionManagerd m;
+        m.registerObject(&flat);
+        std::mt19937 rng(61 + 2 * halfspace + cones);
+        std::uniform_real_distribution<double> radius(0.2, 1.0), length(0.5, 3.0), start(0.5, 2.5),
+            stop(-0.3, 1.0);
+        std::normal_distribution<double> g;
+        const fcl::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+        std::vector<std::unique_ptr<Obj<S>>> shapes;
+        std::vector<cube::Motion<double>> motions;
+        // Each shape's lowest and highest point along n relative to its centre.
+        std::vector<double> low, high, c0, c1;
+        for (int i = 0; i < 4000; ++i) {
+          const double r = radius(rng), h = length(rng);
+          std::shared_ptr<fcl::CollisionGeometryd> geo;
+          if (cones)
+            geo = std::make_shared<fcl::Coned>(r, h);
+          else
+            geo = std::make_shared<fcl::Cylinderd>(r, h);
+          const fcl::Matrix3d R =
+              fcl::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+          const double an = R.col(2).dot(n), rim = r * std::sqrt(std::max(0.0, 1 - an * an));
+          low.push_back(cones ? std::min(an * h / 2, -an * h / 2 - rim)
+                              : -std::abs(an) * h / 2 - rim);
+          high.push_back(cones ? std::max(an * h / 2, -an * h / 2 + rim)
+                               : std::abs(an) * h / 2 + rim);
+          // Centre heights over the plane at the start and the end.
+          c0.push_back(start(rng) - low.back());
+          c1.push_back(stop(rng) - low.back());
+          const fcl::Vector3d foot = n * d + e1 * (12.0 * (i % 64)) + e2 * (12.0 * (i / 64));
+          shapes.push_back(std::make_unique<Obj<S>>(geo, R, foot + n * c0.back()));
+          shapes.back()->computeAABB();
+          m.registerObject(shapes.back().get());
+          fcl::Transform3d end = shapes.back()->getTransform();
+          end.translation() = foot + n * c1.back();
+          motions.push_back({shapes.back().get(), end});
+        }
+        m.setup();
+        fcl::ContinuousCollisionRequestd req;
+        const std::size_t samples =
+            std::min(req.num_max_iterations, std::size_t(std::ceil(1 / req.toc_err)));
+        std::map<const Obj<S>*, double> got;
+        for (const auto& c : cube::continuousCollideAll(m, motions, req))
+          got[c.a == &flat ? c.b : c.a] = c.time_of_contact;
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < shapes.size(); ++i) {
+          double want = -1;  // no contact
+          bool near_zero = false;
+          for (std::size_t k = 0; k < samples && want < 0; ++k) {
+            const double t = double(k) / double(samples - 1);
+            const double c = c0[i] + t * (c1[i] - c0[i]);
+            near_zero |= std::abs(c + low[i]) < 1e-9 || std::abs(c + high[i]) < 1e-9;
+            if (halfspace ? c + low[i] <= 0 : (c + low[i] <= 0 && c + high[i] >= 0)) want = t;
+          }
+          if (near_zero) continue;
+          const auto it = got.find(shapes[i].get());
+          const double have = it == got.end() ? -1 : it->second;
+          wrong += have != want;
+          (want >= 0 ? contacts : free) += 1;
+        }
+        EXPECT_EQ(wrong, 0u) << (cones ? "cones" : "cylinders")
+                             << (halfspace ? " / halfspace" : " / plane") << (far ? " far" : "");
+      }
+  EXPECT_GT(contacts, 4000u);
+  EXPECT_GT(free, 4000u);
 }
 
 TEST(ContinuousBadInput, RefusedRequests) {

@@ -28,6 +28,7 @@
 #include "core/traversal.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
+#include "pipeline/fcl_narrow.h"
 #include "scenes.h"
 #include "support/oracle.h"
 
@@ -236,13 +237,14 @@ TEST(SplitWalk, EarlyStopSeesTheSerialPrefix) {
   return ::testing::AssertionSuccess();
 }
 
-// FCL's own accumulation over the manager's serial walk: the reference of collideAll.
+// FCL's own accumulation over the manager's serial walk (its narrow phase as the library applies
+// it, detail::fclCollide): the reference of collideAll.
 struct Accumulate {
   fcl::CollisionRequest<S> request;
   fcl::CollisionResult<S> result;
   static bool fn(Object* a, Object* b, void* d) {
     auto& x = *static_cast<Accumulate*>(d);
-    fcl::collide(a, b, x.request, x.result);
+    cube::detail::fclCollide(a, b, x.request, x.result);
     return x.result.isCollision() && x.result.numContacts() >= x.request.num_max_contacts;
   }
 };
@@ -372,7 +374,8 @@ TEST(SplitWalk, TasksHandedToASinkAreTheSerialWalk) {
   }
 }
 
-// FCL's accumulation over the serial walk, with the pairs that added contacts.
+// FCL's accumulation over the serial walk (detail::fclCollide), with the pairs that added
+// contacts.
 struct AccumulatePairs {
   fcl::CollisionRequest<S> request;
   fcl::CollisionResult<S> result;
@@ -382,7 +385,7 @@ struct AccumulatePairs {
     auto& x = *static_cast<AccumulatePairs*>(d);
     ++x.calls;
     const std::size_t before = x.result.numContacts();
-    fcl::collide(a, b, x.request, x.result);
+    cube::detail::fclCollide(a, b, x.request, x.result);
     if (x.result.numContacts() > before) x.colliding.emplace_back(a, b);
     return x.result.isCollision() && x.result.numContacts() >= x.request.num_max_contacts;
   }

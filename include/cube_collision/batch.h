@@ -105,9 +105,9 @@ struct StateResult {
   /// With BatchOptions::clearance: for a free state, the smallest fcl::distance(link, other)
   /// between a link and a world object it may meet (filter bits, the world's pair predicate) or
   /// between two checked links (with
-  /// self_collision); a pair with a plane, halfspace or octree, whose distance FCL 0.7 does not
-  /// answer, counts the distance between the two AABBs (the link's exact box of its local AABB
-  /// posed, the object's getAABB()). Margins do not lower it. 0 for a colliding state; the
+  /// self_collision); a pair with a plane or halfspace, on which FCL 0.7's fcl::distance
+  /// crashes, counts its exact distance in closed form (as minimumDistance, queries.h). Margins
+  /// do not lower it. 0 for a colliding state; the
   /// largest value of S when nothing can be met. Without the option: the largest value of S.
   S clearance = std::numeric_limits<S>::max();
 };
@@ -118,13 +118,17 @@ struct StateResult {
 /// object whose filter bits and the world's pair predicate (setPairFilter, asked as
 /// (world object, link object)) let them meet, or (self_collision) between two checked links,
 /// margins included: fcl::collide(link, other) with FCL's default request, then, within a
-/// margin, fcl::distance(link, other) <= the margin. Returns one StateResult per state, in state
-/// order. `world` is only read: other threads may query it meanwhile (not mutate it); a pair
-/// predicate that mutates it gets std::logic_error, as from its other queries. The objects a
-/// predicate is given for a link share its geometry and hold the state's pose, and their
-/// getAABB() is the link's box (the exact box of its local AABB posed). Throws
-/// std::invalid_argument for an empty body set or a pose array whose size is not a multiple of
-/// body.size() (before any work), or for a pose (rotation or translation) with a NaN or infinite
+/// margin, fcl::distance(link, other) <= the margin (to a plane or halfspace: its exact distance,
+/// as minimumDistance in queries.h says). Where FCL 0.7's fcl::collide answers a pair wrongly, a
+/// cylinder against a plane (its yes/no test projects the length lz where lz/2 belongs) or a
+/// cone against a halfspace (one whose apex points into it is tested as if lying on its side),
+/// the library answers from the geometry instead, whatever the link's box. Returns one
+/// StateResult per state, in state order. `world` is only read: other threads may query it
+/// meanwhile (not mutate it); a pair predicate that mutates it gets std::logic_error, as from its
+/// other queries. The objects a predicate is given for a link share its geometry and hold the
+/// state's pose, and their getAABB() is the link's box (the exact box of its local AABB posed).
+/// Throws std::invalid_argument for an empty body set or a pose array whose size is not a multiple
+/// of body.size() (before any work), or for a pose (rotation or translation) with a NaN or infinite
 /// entry, naming the first one (each state's poses are read once, as its links are placed; the
 /// call returns nothing then, and changes nothing).
 template <typename S>

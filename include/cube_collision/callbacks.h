@@ -33,6 +33,10 @@ struct CollisionData {
 /// Returns true (stop) once the result holds request.num_max_contacts contacts and costs are
 /// not requested. A convex polytope against a plane (fcl::collide crashes on it in FCL 0.7) is
 /// answered from the polytope's vertices, as collideAll (queries.h) says.
+/// Where FCL 0.7's fcl::collide answers a pair wrongly, a cylinder against a plane (its yes/no
+/// test projects the length lz where lz/2 belongs) or a cone against a halfspace (one whose apex
+/// points into it is tested as if lying on its side), the library answers from the geometry
+/// instead, with the contact FCL's correct tests would give.
 template <typename S>
 bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data);
 
@@ -48,8 +52,9 @@ struct DistanceData {
 
 /// Runs fcl::distance on the pair, accumulates the minimum into DistanceData::result and writes
 /// it to `dist`. Returns true (stop) once the objects touch or penetrate (dist <= 0) or `done`.
-/// A pair with a plane or a halfspace (fcl::distance crashes on it in FCL 0.7) gets its AABBs'
-/// distance and nearest points instead, as minimumDistance (queries.h) says.
+/// A pair with a plane or a halfspace (fcl::distance crashes on it in FCL 0.7) gets its exact
+/// distance and nearest points in closed form instead (-1 when they meet), as minimumDistance
+/// (queries.h) says.
 template <typename S>
 bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
                              S& dist);

@@ -79,23 +79,20 @@ std::vector<std::pair<fcl::CollisionObject<S>*, fcl::CollisionObject<S>*>> swept
 /// contact, ties in the order of sweptPairs. The answer equals fcl::continuousCollide over every
 /// pair with a mover that passes the manager's filter bits and pair predicate (with margins,
 /// boxes grown by them as in sweptPairs: a margin lists more pairs, never changes FCL's answer
-/// for one): a pair left out cannot collide at any pose FCL visits. One exception, FCL 0.7's:
-/// its yes/no cylinder-plane test (fcl::detail::cylinderPlaneIntersect without contacts, in
-/// narrowphase/detail/primitive_shape_algorithm/plane-inl.h) projects the cylinder's full length
-/// lz where half of it belongs, so for a cylinder and a Plane (not a Halfspace) FCL's sampling
-/// reports contact while the cylinder's end is up to lz/2 further from the plane than touching.
-/// Such a pair whose swept boxes do not overlap is left out, so the true answer (no contact) is
-/// given where fcl::continuousCollide over every pair reports one; where the boxes overlap,
-/// FCL's answer is passed on as it is (its time of contact may be early). With
-/// `earliest_only`, only the first contact (or none). Double only: FCL 0.7's float
-/// continuousCollide does not compile (its float motion classes are abstract).
-/// Accepts what FCL's continuous collision answers by intersections: request.ccd_solver_type
-/// CCDC_NAIVE (FCL's default; fcl::collide at evenly spaced times), with motion types TRANS and
-/// SCREW. Throws std::invalid_argument, before any work, for another solver type (conservative
-/// advancement reports contact within a tolerance, not an intersection; ray shooting and the
-/// polynomial solver answer nothing for most geometry), for a request that samples fewer than
-/// two times (FCL would divide by zero: min(num_max_iterations, ceil(1 / toc_err)) < 2, or a
-/// toc_err that is not a positive number), and for what sweptPairs refuses.
+/// for one): a pair left out cannot collide at any pose FCL visits. Where FCL 0.7's fcl::collide
+/// answers a pair wrongly, a cylinder against a plane (its yes/no test projects the length lz
+/// where lz/2 belongs) or a cone against a halfspace (one whose apex points into it is tested as
+/// if lying on its side), the library answers from the geometry instead: such a pair is sampled
+/// at FCL's times (t = i / (n - 1)) with the true contact test. With `earliest_only`, only the
+/// first contact (or none). Double only: FCL 0.7's float continuousCollide does not compile (its
+/// float motion classes are abstract). Accepts what FCL's continuous collision answers by
+/// intersections: request.ccd_solver_type CCDC_NAIVE (FCL's default; fcl::collide at evenly spaced
+/// times), with motion types TRANS and SCREW. Throws std::invalid_argument, before any work, for
+/// another solver type (conservative advancement reports contact within a tolerance, not an
+/// intersection; ray shooting and the polynomial solver answer nothing for most geometry), for a
+/// request that samples fewer than two times (FCL would divide by zero: min(num_max_iterations,
+/// ceil(1 / toc_err)) < 2, or a toc_err that is not a positive number), and for what sweptPairs
+/// refuses.
 std::vector<ContinuousContact> continuousCollideAll(
     const CubeCollisionManager<double>& manager, const std::vector<Motion<double>>& motions,
     const fcl::ContinuousCollisionRequest<double>& request =

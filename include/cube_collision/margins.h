@@ -19,12 +19,11 @@ struct MarginContact {
   fcl::CollisionObject<S>* a = nullptr;  ///< in the callback's argument order
   fcl::CollisionObject<S>* b = nullptr;
   /// fcl::distance between them; 0 when fcl::collide reports contact (FCL 0.7's distance gives
-  /// no depth). For a pair with a plane, halfspace or octree (whose fcl::distance FCL 0.7 cannot
-  /// answer) the distance of the two objects' own AABBs (getAABB(), not grown by the margins)
-  /// stands in, and nearest points are left at zero.
+  /// no depth). For a pair with a plane or halfspace, on which FCL 0.7's fcl::distance crashes,
+  /// the exact distance in closed form, with its nearest points (as minimumDistance, queries.h).
   S distance = 0;
   bool colliding = false;  ///< fcl::collide reported contact
-  /// Nearest points in world coordinates from fcl::distance (pairs apart and answered by FCL).
+  /// Nearest points in world coordinates from fcl::distance (pairs apart).
   fcl::Vector3<S> nearest_points[2] = {fcl::Vector3<S>::Zero(), fcl::Vector3<S>::Zero()};
 };
 

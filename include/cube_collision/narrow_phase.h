@@ -154,7 +154,11 @@ struct NarrowPhaseOptions {
 /// result.
 /// With request.enable_cost or enable_cached_gjk_guess nothing is culled or cached. A null object
 /// in `pairs` throws std::invalid_argument before any pair runs (here and in collideMerged and
-/// forEachPair).
+/// forEachPair). A convex polytope against a plane is answered as collideAll (queries.h) says.
+/// Where FCL 0.7's fcl::collide answers a pair wrongly, a cylinder against a plane (its yes/no
+/// test projects the length lz where lz/2 belongs) or a cone against a halfspace (one whose apex
+/// points into it is tested as if lying on its side), the library answers from the geometry
+/// instead, with the contact FCL's correct tests would give.
 template <typename S>
 std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S>>& pairs,
                                                   const fcl::CollisionRequest<S>& request,
@@ -162,7 +166,8 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
 
 /// The contacts of the pairs, merged in pair order into one result exactly as fcl::collide
 /// called on each pair in turn with one accumulating result would give them (stopping once it
-/// holds request.num_max_contacts contacts, costs aside). What collideAll runs.
+/// holds request.num_max_contacts contacts, costs aside), with collidePairs' exceptions to
+/// fcl::collide. What collideAll runs.
 template <typename S>
 fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
                                       const fcl::CollisionRequest<S>& request,

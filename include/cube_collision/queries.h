@@ -50,6 +50,10 @@ std::vector<ObjectPair<S>> overlappingPairs(const fcl::BroadPhaseCollisionManage
 /// is answered from the polytope's vertices instead: they meet where vertices lie on both sides of
 /// the plane or on it; one contact, normal the plane's, depth the lesser push to either side,
 /// position the deepest vertex on that side moved half the depth towards the plane.
+/// Where FCL 0.7's fcl::collide answers a pair wrongly, a cylinder against a plane (its yes/no
+/// test projects the length lz where lz/2 belongs) or a cone against a halfspace (one whose apex
+/// points into it is tested as if lying on its side), the library answers from the geometry
+/// instead, with the contact FCL's correct tests would give.
 template <typename S>
 fcl::CollisionResult<S> collideAll(
     const fcl::BroadPhaseCollisionManager<S>& manager,
@@ -94,9 +98,15 @@ void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void
 /// octrees. The minimum is the same for every thread count, and its nearest points are those of
 /// the first pair in walk order that reaches it. A pair with a plane or a halfspace, on which FCL
 /// 0.7's fcl::distance crashes (its GJK calls a support function libccd lacks for them), gets
-/// the distance of the two objects' AABBs instead, with the AABBs' nearest points: a lower bound
-/// of the true distance, exact for an axis-aligned plane or halfspace beside the other object,
-/// 0 for a tilted one (its AABB is unbounded); FCL's own managers crash on such a pair.
+/// its exact distance in closed form instead (fcl::Plane the two-sided plane n . x = d,
+/// fcl::Halfspace the solid n . x <= d): the least gap along the normal between the plane and
+/// the other object's convex parts (a primitive or convex polytope itself, by its exact extent
+/// along the normal; a mesh's triangles; an octree's occupied cells), for a halfspace the
+/// height of the object's lowest point above it, with the nearest points in the world frame; -1,
+/// as FCL answers objects that meet, when they meet; two planes or halfspaces are apart only
+/// when parallel (a geometry of a kind FCL does not ship, or an empty mesh or octree, gets the
+/// AABBs' distance).
+/// FCL's own managers crash on such a pair.
 template <typename S>
 fcl::DistanceResult<S> minimumDistance(
     const fcl::BroadPhaseCollisionManager<S>& manager,

@@ -57,7 +57,8 @@ def pair_in_collision(geometry_a: GeometryLike, transform_a: Transform,
     """fcl::collide on two placed geometries."""
 def pair_distance(geometry_a: GeometryLike, transform_a: Transform,
                   geometry_b: GeometryLike, transform_b: Transform) -> float:
-    """fcl::distance on two placed geometries (<= 0 when they touch)."""
+    """fcl::distance on two placed geometries (<= 0 when they touch); ValueError for a plane
+    (FCL 0.7's fcl::distance crashes on it)."""
 
 Contacts = Dict[str, npt.NDArray[Any]]  # 'names' (n, 2) object, 'points' (n, 3), 'normals' (n, 3), 'depths' (n,)
 DistanceData = Dict[str, Any]           # 'distance', 'names' (a, b) or None, 'points' (2, 3) or None
@@ -138,20 +139,23 @@ class CollisionManager:
                                   float, Tuple[float, Optional[Tuple[str, str]]],
                                   Tuple[float, DistanceData],
                                   Tuple[float, Optional[Tuple[str, str]], DistanceData]]:
-        """distance[, sorted name pair][, data]; with name, from that object to the others."""
+        """distance[, sorted name pair][, data]; with name, from that object to the others. A pair
+        with a plane (cube backend): its exact distance, -1 when they meet."""
     def min_distance_single(self, geometry: Optional[GeometryLike] = None,
                             transform: Transform = None, return_name: bool = False,
                             return_data: bool = False, *,
                             mesh: Optional[GeometryLike] = None) -> Union[
                                 float, Tuple[float, Optional[str]], Tuple[float, DistanceData],
                                 Tuple[float, Optional[str], DistanceData]]:
-        """distance[, name][, data]."""
+        """distance[, name][, data]. A plane (cube backend): its exact distance, -1 when they
+        meet."""
     def min_distance_other(self, other_manager: "CollisionManager", return_names: bool = False,
                            return_data: bool = False
                            ) -> Union[float, Tuple[float, Optional[Tuple[str, str]]],
                                       Tuple[float, DistanceData],
                                       Tuple[float, Optional[Tuple[str, str]], DistanceData]]:
-        """distance[, (name here, name there)][, data]."""
+        """distance[, (name here, name there)][, data]. A plane with a cube manager taking part:
+        its exact distance, -1 when they meet."""
 
     def ray_first(self, origins: ArrayLike, ends: ArrayLike, narrow_phase: bool = True,
                   tolerance: float = 1e-6) -> Tuple[npt.NDArray[np.object_],

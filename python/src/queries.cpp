@@ -842,13 +842,16 @@ pairs and margins do not. The same manager as other is in_collision_internal.)do
           py::arg("return_names") = false, py::arg("return_data") = false,
           py::arg("name") = py::none(), R"doc(
 The smallest distance between two objects (FCL's fcl::distance; <= 0 when some pair touches: the
-search stops at the first such pair; inf with fewer than two objects that may pair). Filter bits
-and ignored pairs apply, margins do not. name: only the pairs of that object with the others
-(trimesh's name=: the distance from it to the rest; give it by keyword, trimesh's newest puts
-it first). Returns distance, plus (return_names) the sorted (name, name) tuple (None if none),
-plus (return_data) a dict: 'distance', 'names' (as found), 'points' (2, 3) the nearest points in
-the world frame, in the order of 'names'. UnknownNameError (a KeyError and a ValueError) for an
-unknown name, TypeError for a name that is not a str.)doc")
+search stops at the first such pair; inf with fewer than two objects that may pair). A pair with
+a plane (the two-sided plane n . x = offset; cube backend only), on which FCL 0.7's fcl::distance
+crashes, gets its exact distance in closed form instead, -1 when they meet; the 'fcl' backend
+refuses a distance query with a plane (ValueError). Filter bits and ignored pairs apply, margins
+do not. name: only the pairs of that object with the others (trimesh's name=: the distance from
+it to the rest; give it by keyword, trimesh's newest puts it first). Returns distance, plus
+(return_names) the sorted (name, name) tuple (None if none), plus (return_data) a dict:
+'distance', 'names' (as found), 'points' (2, 3) the nearest points in the world frame, in the
+order of 'names'. UnknownNameError (a KeyError and a ValueError) for an unknown name, TypeError
+for a name that is not a str.)doc")
       .def(
           "min_distance_single",
           [](const Manager& m, py::handle geometry, py::handle tf, bool name, bool data,
@@ -1323,7 +1326,8 @@ void bindQueries(py::module_& m) {
         return res.min_distance;
       },
       py::arg("geometry_a"), py::arg("transform_a"), py::arg("geometry_b"), py::arg("transform_b"),
-      "fcl::distance on two placed geometries (<= 0 when they touch). As pair_in_collision.");
+      "fcl::distance on two placed geometries (<= 0 when they touch). As pair_in_collision; "
+      "ValueError for a plane (FCL 0.7's fcl::distance crashes on it).");
 }
 
 }  // namespace cubepy

@@ -205,15 +205,17 @@ def test_planes_on_the_cube_backend():
 
 def test_what_crashes_fcl_is_refused():
     """FCL 0.7 segfaults in fcl::distance with a plane and in fcl::collide of a plane and a
-    convex: these get ValueError, and nothing changes."""
+    convex: these get ValueError where FCL's own calls would run (the 'fcl' backend,
+    pair_distance), and nothing changes."""
     rng = np.random.default_rng(0)
     hull = scenes.random_convex(rng, 1.0)
     floor = cc.plane([0, 0, 1], 0.0)
     m = cc.CollisionManager()
     m.add_object("floor", floor)
     m.add_object("ball", cc.sphere(0.5))
-    for call in (lambda: m.add_object("hull", hull), lambda: m.min_distance_internal(),
-                 lambda: m.min_distance_single(cc.sphere(1)),
+    fcl_manager = cc.CollisionManager(backend="fcl")
+    fcl_manager.add_object("ball", cc.sphere(0.5))
+    for call in (lambda: m.add_object("hull", hull), lambda: fcl_manager.min_distance_single(floor),
                  lambda: m.in_collision_single(hull),
                  lambda: cc.pair_in_collision(floor, np.eye(4), hull, np.eye(4)),
                  lambda: cc.pair_distance(floor, np.eye(4), cc.sphere(1), np.eye(4))):
@@ -274,3 +276,92 @@ def test_filter_bits_apply_between_managers_of_either_backend(backend, other_bac
     assert same_distance(d, best) and names == pair
     d, names = mb.min_distance_other(ma, return_names=True)
     assert same_distance(d, best) and names == pair[::-1]
+
+
+def lowest_along(kind, size, g, transform, n):
+    """min of n . x over a placed shape, from its own description: a sphere's centre less its
+    radius, a box's corners, a cylinder's centre . n - |axis . n| h/2 - r sqrt(1 - (axis . n)^2),
+    a capsule's end balls, a cone's apex or lowest base rim point, a mesh's vertices."""
+    R, t = transform[:3, :3], transform[:3, 3]
+    c, a = t @ n, R[:, 2] @ n
+    rim = np.sqrt(max(0.0, 1 - a * a))
+    if kind == "sphere":
+        return c - size[0]
+    if kind == "box":
+        corners = np.array(list(itertools.product(*[(-s / 2, s / 2) for s in size])))
+        return min((corners @ R.T + t) @ n)
+    if kind == "cylinder":
+        return c - abs(a) * size[1] / 2 - size[0] * rim
+    if kind == "capsule":
+        return c - abs(a) * size[1] / 2 - size[0]
+    if kind == "cone":
+        return min(c + a * size[1] / 2, c - a * size[1] / 2 - size[0] * rim)
+    return min((np.asarray(size) @ R.T + t) @ n)  # a mesh: its vertices
+
+
+def test_distances_to_tilted_planes_far_away_are_exact():
+    """A plane n . x = d whose normal is tilted and which passes about 1000 units from the
+    origin: min_distance_single / _internal / _other give every kind its exact distance (the gap
+    between the plane and the shape's nearer extreme along n; -1 when they meet), with the
+    plane's nearest point on the plane."""
+    rng = np.random.default_rng(11)
+    verts, faces = scenes.uv_sphere(6, 0.6)
+    kinds = [("sphere", (0.5,), cc.sphere(0.5)), ("box", (1.0, 0.4, 0.7), cc.box(1.0, 0.4, 0.7)),
+             ("cylinder", (0.3, 1.6), cc.cylinder(0.3, 1.6)),
+             ("capsule", (0.25, 0.9), cc.capsule(0.25, 0.9)),
+             ("cone", (0.4, 1.2), cc.cone(0.4, 1.2)),
+             ("mesh", np.asarray(verts, dtype=float), cc.mesh(verts, faces))]
+    apart = meeting = 0
+    for rep in range(15):
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        anchor = np.array([600.0, -700.0, 500.0]) + rng.uniform(-5, 5, 3)
+        d = float(n @ anchor)
+        floor = cc.plane(n, d)
+        m = cc.CollisionManager()
+        m.add_object("floor", floor)
+        for kind, size, g in kinds:
+            tf = scenes.pose(scenes.random_rotation(rng),
+                             anchor + np.cross(n, rng.normal(size=3)) + n * rng.uniform(-3, 6))
+            lo = lowest_along(kind, size, g, tf, n) - d
+            hi = d + lowest_along(kind, size, g, tf, -n)  # d - max n . x
+            gap = max(lo, hi)
+            if abs(gap) < 1e-6:
+                continue
+            want = gap if gap > 0 else -1.0
+            apart += gap > 0
+            meeting += gap <= 0
+            dist, name, data = m.min_distance_single(g, tf, return_name=True, return_data=True)
+            assert abs(dist - want) < 1e-6, (kind, rep)
+            assert name == "floor"
+            if want > 0:
+                on_plane = data["points"][list(data["names"]).index("floor")]
+                assert abs(on_plane @ n - d) < 1e-6
+                assert abs(np.linalg.norm(data["points"][0] - data["points"][1]) - want) < 1e-6
+            pair = cc.CollisionManager()
+            pair.add_object("floor", floor)
+            pair.add_object("thing", g, tf)
+            assert abs(pair.min_distance_internal() - want) < 1e-6, (kind, rep)
+            other = cc.CollisionManager(backend="fcl")
+            other.add_object("thing", g, tf)
+            assert abs(m.min_distance_other(other) - want) < 1e-6, (kind, rep)
+            assert abs(other.min_distance_other(m) - want) < 1e-6, (kind, rep)
+    assert apart > 20 and meeting > 10
+
+
+def test_sphere_above_a_tilted_plane_is_free_beyond_its_margin():
+    """A sphere 50 units above x + y + z = 0 with a margin of 0.01 is free, its clearance 50;
+    0.005 above, within its margin it collides."""
+    n = np.ones(3) / np.sqrt(3)
+    m = cc.CollisionManager()
+    m.add_object("floor", cc.plane(n, 0.0))
+    body = cc.Body()
+    body.add_link(cc.sphere(0.5), margin=0.01)
+    for gap in (50.0, 0.02, 0.005):
+        r = m.check_states(body, scenes.pose(np.eye(3), n * (0.5 + gap))[None, None],
+                           clearance=True)
+        assert bool(r["colliding"][0]) == (gap <= 0.01)
+        if gap > 0.01:
+            assert abs(r["clearance"][0] - gap) < 1e-9
+        assert abs(m.min_distance_single(cc.sphere(0.5), scenes.pose(np.eye(3), n * (0.5 + gap)))
+                   - gap) < 1e-9

@@ -11,6 +11,7 @@
 
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
+#include "pipeline/plane_geometry.h"
 
 namespace cube {
 
@@ -119,6 +120,10 @@ std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObj
   if ((ta == fcl::GEOM_CONVEX && tb == fcl::GEOM_PLANE) ||
       (ta == fcl::GEOM_PLANE && tb == fcl::GEOM_CONVEX))
     return convexPlane(a, b, request, result);
+  if (contactDefective(ta, tb))
+    return planes::defectiveCollide(a->collisionGeometry().get(), a->getTransform(),
+                                    b->collisionGeometry().get(), b->getTransform(), request,
+                                    result);
   return fcl::collide(a, b, request, result);
 }
 
@@ -141,7 +146,10 @@ S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b
               const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result) {
   if (!distanceCrashes(*a) && !distanceCrashes(*b)) return fcl::distance(a, b, request, result);
   // FCL 0.7's fcl::distance runs its GJK on a plane or a halfspace, which give libccd no support
-  // function: a call through a null pointer. The AABBs' distance stands in, with their nearest
+  // function: a call through a null pointer. The distance in closed form instead.
+  S d;
+  if (planes::planeDistance(*a, *b, result, d)) return d;
+  // A geometry of no kind FCL ships, or an empty one: the AABBs' distance, with their nearest
   // points (each coordinate inside the overlap where the boxes overlap on that axis).
   const fcl::AABB<S>& x = a->getAABB();
   const fcl::AABB<S>& y = b->getAABB();
@@ -158,12 +166,32 @@ S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b
       q[k] = y.max_[k];
     }
   }
-  const S d = (p - q).norm();
+  d = (p - q).norm();
   result.update(d, a->collisionGeometry().get(), b->collisionGeometry().get(),
                 fcl::DistanceResult<S>::NONE, fcl::DistanceResult<S>::NONE, p, q);
   return d;
 }
 
+template <typename S>
+std::size_t collideDefective(const fcl::CollisionGeometry<S>* ga, const fcl::Transform3<S>& tfa,
+                             const fcl::CollisionGeometry<S>* gb, const fcl::Transform3<S>& tfb,
+                             const fcl::CollisionRequest<S>& request,
+                             fcl::CollisionResult<S>& result) {
+  return planes::defectiveCollide(ga, tfa, gb, tfb, request, result);
+}
+
+template std::size_t collideDefective<double>(const fcl::CollisionGeometry<double>*,
+                                              const fcl::Transform3<double>&,
+                                              const fcl::CollisionGeometry<double>*,
+                                              const fcl::Transform3<double>&,
+                                              const fcl::CollisionRequest<double>&,
+                                              fcl::CollisionResult<double>&);
+template std::size_t collideDefective<float>(const fcl::CollisionGeometry<float>*,
+                                             const fcl::Transform3<float>&,
+                                             const fcl::CollisionGeometry<float>*,
+                                             const fcl::Transform3<float>&,
+                                             const fcl::CollisionRequest<float>&,
+                                             fcl::CollisionResult<float>&);
 template std::size_t fclCollide<double>(const fcl::CollisionObject<double>*,
                                         const fcl::CollisionObject<double>*,
                                         const fcl::CollisionRequest<double>&,

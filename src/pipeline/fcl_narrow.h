@@ -16,18 +16,32 @@
 namespace cube {
 namespace detail {
 
-/// Whether FCL 0.7's fcl::distance leaves the object's pairs unanswered (planes, halfspaces:
-/// no support function in its GJK; octrees): callers stand in the AABBs' distance.
-template <typename S>
-bool distanceUnanswered(const fcl::CollisionObject<S>& o) {
-  const fcl::NODE_TYPE t = o.getNodeType();
-  return t == fcl::GEOM_PLANE || t == fcl::GEOM_HALFSPACE || t == fcl::GEOM_OCTREE;
+/// Whether FCL 0.7's fcl::collide answers pairs of these kinds wrongly: a cylinder and a plane
+/// (its yes/no test, used without enable_contact, projects the cylinder's length lz where lz/2
+/// belongs, so it reports contacts that are not there) and a cone and a halfspace (a cone whose
+/// apex points into the halfspace is tested as if it lay on its side).
+inline bool contactDefective(fcl::NODE_TYPE ta, fcl::NODE_TYPE tb) {
+  const auto either = [&](fcl::NODE_TYPE x, fcl::NODE_TYPE y) {
+    return (ta == x && tb == y) || (ta == y && tb == x);
+  };
+  return either(fcl::GEOM_CYLINDER, fcl::GEOM_PLANE) || either(fcl::GEOM_CONE, fcl::GEOM_HALFSPACE);
 }
 
-/// fcl::collide(a, b, request, result), except for a convex polytope against a plane, on which
-/// FCL 0.7 crashes (its GJK on a plane): answered here from the polytope's vertices (they meet
-/// where vertices lie on both sides of the plane or on it), with one contact as FCL gives a box
-/// and a plane (the lesser push to either side as depth, the plane's normal).
+/// For a pair contactDefective lists, geometries ga and gb at poses tfa and tfb: what fclCollide
+/// gives two objects so placed, the true answer from the geometry with contacts, costs and the
+/// result's limits as FCL's shape collision treats them.
+template <typename S>
+std::size_t collideDefective(const fcl::CollisionGeometry<S>* ga, const fcl::Transform3<S>& tfa,
+                             const fcl::CollisionGeometry<S>* gb, const fcl::Transform3<S>& tfb,
+                             const fcl::CollisionRequest<S>& request,
+                             fcl::CollisionResult<S>& result);
+
+/// fcl::collide(a, b, request, result), except for pairs FCL 0.7 crashes on or answers wrongly:
+/// a convex polytope against a plane, on which FCL crashes (its GJK on a plane), is answered
+/// from the polytope's vertices (they meet where vertices lie on both sides of the plane or on
+/// it), with one contact as FCL gives a box and a plane (the lesser push to either side as
+/// depth, the plane's normal); a pair contactDefective lists is answered from the geometry
+/// (collideDefective).
 template <typename S>
 std::size_t fclCollide(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
                        const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result);
@@ -41,9 +55,8 @@ bool distanceCrashes(const fcl::CollisionObject<S>& o) {
 }
 
 /// fcl::distance(a, b, request, result), except for a pair FCL 0.7 crashes on
-/// (distanceCrashes): there the distance of the objects' AABBs, with the AABBs' nearest points,
-/// into `result` as fcl::distance would put its answer (a lower bound of the true distance,
-/// exact for an axis-aligned plane or halfspace against an object beside it).
+/// (distanceCrashes): there the exact distance in closed form (planes::planeDistance), into
+/// `result` as fcl::distance would put its answer, -1 when the pair meets.
 template <typename S>
 S fclDistance(const fcl::CollisionObject<S>* a, const fcl::CollisionObject<S>* b,
               const fcl::DistanceRequest<S>& request, fcl::DistanceResult<S>& result);
@@ -56,6 +69,18 @@ extern template std::size_t fclCollide<float>(const fcl::CollisionObject<float>*
                                               const fcl::CollisionObject<float>*,
                                               const fcl::CollisionRequest<float>&,
                                               fcl::CollisionResult<float>&);
+extern template std::size_t collideDefective<double>(const fcl::CollisionGeometry<double>*,
+                                                     const fcl::Transform3<double>&,
+                                                     const fcl::CollisionGeometry<double>*,
+                                                     const fcl::Transform3<double>&,
+                                                     const fcl::CollisionRequest<double>&,
+                                                     fcl::CollisionResult<double>&);
+extern template std::size_t collideDefective<float>(const fcl::CollisionGeometry<float>*,
+                                                    const fcl::Transform3<float>&,
+                                                    const fcl::CollisionGeometry<float>*,
+                                                    const fcl::Transform3<float>&,
+                                                    const fcl::CollisionRequest<float>&,
+                                                    fcl::CollisionResult<float>&);
 extern template double fclDistance<double>(const fcl::CollisionObject<double>*,
                                            const fcl::CollisionObject<double>*,
                                            const fcl::DistanceRequest<double>&,

@@ -1,18 +1,21 @@
 #include "cube_collision/continuous.h"
 
 #include <fcl/math/motion/screw_motion.h>
+#include <fcl/math/motion/translation_motion.h>
 #include <fcl/narrowphase/continuous_collision.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "adapter/manager_access.h"
 #include "adapter/query_guard.h"
 #include "core/broadphase.h"
+#include "pipeline/fcl_narrow.h"
 
 namespace cube {
 
@@ -194,6 +197,44 @@ struct Found {
   }
 };
 
+// fcl::continuousCollide's naive sampling (fcl::collide at t = i / (n - 1), i < n, with FCL's
+// default request; the first t in contact) for a pair whose contact test FCL 0.7 gets wrong,
+// with the library's test (fclCollide) in place of FCL's.
+void sampledCollide(const fcl::CollisionObjectd& a, const fcl::Transform3d& end_a,
+                    const fcl::CollisionObjectd& b, const fcl::Transform3d& end_b,
+                    const fcl::ContinuousCollisionRequestd& request,
+                    fcl::ContinuousCollisionResultd& result) {
+  const auto motion = [&](const fcl::Transform3d& from,
+                          const fcl::Transform3d& to) -> std::unique_ptr<fcl::MotionBase<double>> {
+    if (request.ccd_motion_type == fcl::CCDM_SCREW)
+      return std::make_unique<fcl::ScrewMotion<double>>(from, to);
+    return std::make_unique<fcl::TranslationMotion<double>>(from, to);
+  };
+  const std::unique_ptr<fcl::MotionBase<double>> ma = motion(a.getTransform(), end_a);
+  const std::unique_ptr<fcl::MotionBase<double>> mb = motion(b.getTransform(), end_b);
+  const std::size_t n =
+      std::min(request.num_max_iterations, std::size_t(std::ceil(1 / request.toc_err)));
+  fcl::Transform3d tf_a, tf_b;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = double(i) / double(n - 1);
+    ma->integrate(t);
+    mb->integrate(t);
+    ma->getCurrentTransform(tf_a);
+    mb->getCurrentTransform(tf_b);
+    fcl::CollisionResultd c;
+    if (detail::collideDefective(a.collisionGeometry().get(), tf_a, b.collisionGeometry().get(),
+                                 tf_b, fcl::CollisionRequestd(), c) > 0) {
+      result.is_collide = true;
+      result.time_of_contact = t;
+      result.contact_tf1 = tf_a;
+      result.contact_tf2 = tf_b;
+      return;
+    }
+  }
+  result.is_collide = false;
+  result.time_of_contact = 1;
+}
+
 }  // namespace
 
 template <typename S>
@@ -291,7 +332,10 @@ std::vector<ContinuousContact> continuousCollideAll(
   std::vector<ContinuousContact> out;
   for (const auto& [a, b] : pairs) {
     fcl::ContinuousCollisionResult<double> result;
-    fcl::continuousCollide(a, endOf(a), b, endOf(b), request, result);
+    if (detail::contactDefective(a->getNodeType(), b->getNodeType()))
+      sampledCollide(*a, endOf(a), *b, endOf(b), request, result);
+    else
+      fcl::continuousCollide(a, endOf(a), b, endOf(b), request, result);
     if (!result.is_collide) continue;
     ContinuousContact c;
     c.a = a;

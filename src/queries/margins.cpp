@@ -15,8 +15,6 @@ namespace cube {
 
 namespace {
 
-using detail::distanceUnanswered;
-
 template <typename S>
 std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manager,
                                             const std::vector<ObjectPair<S>>& pairs,
@@ -48,15 +46,11 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
           verdict[i] = kNear;
           return;
         }
-        if (distanceUnanswered(*a) || distanceUnanswered(*b)) {
-          c.distance = a->getAABB().distance(b->getAABB());
-        } else {
-          fcl::DistanceResult<S> dres;
-          calls.fetch_add(1, std::memory_order_relaxed);
-          c.distance = detail::fclDistance(a, b, request, dres);
-          c.nearest_points[0] = dres.nearest_points[0];
-          c.nearest_points[1] = dres.nearest_points[1];
-        }
+        fcl::DistanceResult<S> dres;
+        calls.fetch_add(1, std::memory_order_relaxed);
+        c.distance = detail::fclDistance(a, b, request, dres);
+        c.nearest_points[0] = dres.nearest_points[0];
+        c.nearest_points[1] = dres.nearest_points[1];
         if (c.distance <= within) verdict[i] = kNear;
       },
       threads);

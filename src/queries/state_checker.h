@@ -354,7 +354,6 @@ class StateChecker {
   }
 
   S pairDistance(const Object& a, const Object& b) {
-    if (distanceUnanswered(a) || distanceUnanswered(b)) return a.getAABB().distance(b.getAABB());
     fcl::DistanceResult<S> result;
     return fclDistance(&a, &b, distance_request_, result);
   }
