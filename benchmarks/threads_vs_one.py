@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Each cube_bench case with the default threads against one thread, idle and loaded.
 
-Runs cube_bench (or any Google Benchmark executable that takes --load=N) four ways, interleaved,
---reps times: idle and with --load busy processes beside it, each with the default threads (the
+Runs cube_bench (or any Google Benchmark executable that takes --load=N) case by case, four ways
+in turn, --reps times: idle and with --load busy processes beside it, each with the default threads (the
 hardware's) and with OMP_NUM_THREADS=1 (every default becomes one thread). Prints a markdown
 table of each case's minimum time and the ratio one-thread time / default time ("speed": >= 0.95
 is the target; above 1 the threads pay).
@@ -15,6 +15,7 @@ is the target; above 1 the threads pay).
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -47,11 +48,17 @@ def main():
     args = ap.parse_args()
     ways = [(0, False), (0, True), (args.load, False), (args.load, True)]
     best = {w: {} for w in ways}
-    for _ in range(args.reps):
-        for w in ways:
-            for name, t in run(args.bench, args.filter, args.min_time, *w).items():
-                best[w][name] = min(t, best[w].get(name, float("inf")))
-    names = list(best[ways[0]])
+    # Case by case, the four ways in turn: a busy machine's background changes over minutes.
+    listed = subprocess.run([args.bench, f"--benchmark_filter={args.filter}",
+                             "--benchmark_list_tests=true"], stdout=subprocess.PIPE, text=True,
+                            check=True).stdout.split()
+    for case in listed:
+        one = "^" + re.escape(case) + "$"
+        for _ in range(args.reps):
+            for w in ways:
+                for name, t in run(args.bench, one, args.min_time, *w).items():
+                    best[w][name] = min(t, best[w].get(name, float("inf")))
+    names = [n for n in listed if n in best[ways[0]]]
     print(f"| case | idle: default | idle: 1 thread | speed | {args.load} busy: default | "
           f"{args.load} busy: 1 thread | speed |")
     print("|---|---:|---:|---:|---:|---:|---:|")
