@@ -28,11 +28,11 @@ long long nowNs() {
 // Runnable threads on the machine now, the caller included (the "R" of /proc/loadavg's "R/T");
 // -1 if unknown.
 int runnableThreads() {
-  const int fd = ::open("/proc/loadavg", O_RDONLY | O_CLOEXEC);
+  // Opened once and read from its start each time (pread: safe on several threads at once).
+  static const int fd = ::open("/proc/loadavg", O_RDONLY | O_CLOEXEC);
   if (fd < 0) return -1;
   char buf[128];
-  const ssize_t got = ::read(fd, buf, sizeof(buf) - 1);
-  ::close(fd);
+  const ssize_t got = ::pread(fd, buf, sizeof(buf) - 1, 0);
   if (got <= 0) return -1;
   buf[got] = '\0';
   // "0.52 0.61 0.70 3/412 12345": the fourth field.
