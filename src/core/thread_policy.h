@@ -57,15 +57,20 @@ constexpr std::size_t kSinkWalkTasks = 256;
 constexpr std::size_t kParallelMinStates = 64;
 // checkMotion(s) checks this many states on the calling thread first (edges stop at their first
 // colliding state: most of a planner's edges collide within their first states, and what other
-// threads started past that point is wasted) and hands the rest to the threads only if none of
-// those collided and at least kMotionParallelMinStates states are left undecided. The OMPL
-// example with edges of 40-150 states planned in less time on one thread than on two per call:
-// 2.5-3.1x less than FCL's checker on one, 0.17-0.23x on two with the machine loaded.
+// threads started past that point is wasted) and hands the rest to the threads only if at least
+// kMotionParallelMinStates states of edges still undecided are left. With two threads per call
+// from the first state, the OMPL example planned in 2.5-3.1x less time than FCL's checker idle
+// but 0.17-0.23x loaded (edges of 150 states). Under this rule its edges (20-150 states) open no
+// region, and it plans in 3.2-5.5x less time than FCL's checker idle and loaded.
 constexpr std::size_t kMotionSerialStates = 64;
 constexpr std::size_t kMotionParallelMinStates = 128;
 
 // ---- The team.
 
+// The team by load: with the machine busy, a worker shares a core with other work and the
+// region's end waits for its scheduler slice (milliseconds). The OMPL example's edges of 644
+// states, two threads each when forced, planned in 1,728 ms on the machine busy (load average
+// about 6), in 209 ms with the team sized here (one thread). A probe costs 1.3 us.
 // A region's threads may still be spinning (libgomp's active wait) this long after it closed: the
 // runnable threads counted then include them.
 constexpr long long kRecentRegionNs = 20'000'000;
