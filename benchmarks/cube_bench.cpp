@@ -34,6 +34,7 @@
 #include <utility>
 #include <vector>
 
+#include "busy_load.h"
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/queries.h"
@@ -1355,6 +1356,12 @@ void registerAll() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --load=N: N processes spin beside the run (a loaded machine), for at most --load_seconds
+  // (default 1800), stopped at exit.
+  const int load = cube::scenes::BusyLoad::takeArgument(argc, argv, "--load");
+  const int load_seconds = cube::scenes::BusyLoad::takeArgument(argc, argv, "--load_seconds");
+  const cube::scenes::BusyLoad busy(load, load_seconds > 0 ? load_seconds : 1800);
+  if (load > 0) benchmark::AddCustomContext("busy_processes", std::to_string(load));
   registerAll();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;

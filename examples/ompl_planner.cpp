@@ -6,8 +6,12 @@
 // problems, same seeds: identical answers give identical exploration, so the example checks that
 // both found the very same paths, and prints the planning times.
 //
-// Usage: ompl_planner [world objects] [problems] [threads] [object size scale]
-// (default 2000 5 1 1.0)
+// Usage: ompl_planner [world objects] [problems] [threads] [object size scale] [--load N]
+//                     [--resolution R]
+// (default 2000 5 0 1.0: BatchOptions' default threads, the hardware's). The planner keeps OMPL's
+// defaults: RRTConnect's range (a fifth of the space's extent) and the motion checks' resolution
+// (1% of it), unless --resolution sets that fraction. --load N runs N spinning processes beside
+// the planning (a loaded machine).
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/default_broadphase_callbacks.h>
@@ -29,8 +33,10 @@
 #include <cstdlib>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "busy_load.h"
 #include "cube_collision/batch.h"
 #include "cube_collision/cube_collision_manager.h"
 #include "scenes.h"
@@ -154,12 +160,16 @@ class CubeMotion final : public ob::MotionValidator {
       for (int i = 0; i < kJoints; ++i) q[i] = from[i] + (to[i] - from[i]) * t;
       forwardKinematics(q, poses);
     };
+    states_ += std::size_t(nd);
     return {cube::checkMotion(world_, body_, std::size_t(nd), pose_of, order, options_), nd};
   }
 
   const cube::CubeCollisionManagerd& world_;
   const cube::BodySet<S>& body_;
   cube::BatchOptions options_;
+
+ public:
+  mutable std::size_t states_ = 0;  // states of the edges checked (one planner thread)
 };
 
 // ---- The checker FCL users write today ----------------------------------------------------------
@@ -224,6 +234,7 @@ class SeededSampler final : public ob::RealVectorStateSampler {
 struct Outcome {
   bool solved = false;
   double seconds = 0;
+  std::size_t edges = 0, edge_states = 0;  // cube's checkMotion calls and their states
   std::vector<std::vector<double>> path;
 };
 
@@ -232,16 +243,19 @@ enum class Checker { cube, fcl };
 Outcome plan(Checker which, const std::vector<double>& start, const std::vector<double>& goal,
              std::uint_fast32_t seed, const cube::CubeCollisionManagerd& cube_world,
              const cube::BodySet<S>& body, const fcl::BroadPhaseCollisionManagerd& fcl_world,
-             const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry, int threads) {
+             const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry, int threads,
+             double resolution) {
   auto space = std::make_shared<ob::RealVectorStateSpace>(kJoints);
   space->setBounds(-M_PI, M_PI);
   space->setStateSamplerAllocator(
       [seed](const ob::StateSpace* s) { return std::make_shared<SeededSampler>(s, seed); });
   auto si = std::make_shared<ob::SpaceInformation>(space);
-  si->setStateValidityCheckingResolution(0.005);
+  if (resolution > 0) si->setStateValidityCheckingResolution(resolution);
+  std::shared_ptr<CubeMotion> motion;
   if (which == Checker::cube) {
     si->setStateValidityChecker(std::make_shared<CubeValidity>(si, cube_world, body, threads));
-    si->setMotionValidator(std::make_shared<CubeMotion>(si, cube_world, body, threads));
+    motion = std::make_shared<CubeMotion>(si, cube_world, body, threads);
+    si->setMotionValidator(motion);
   } else {
     si->setStateValidityChecker(std::make_shared<FclValidity>(si, fcl_world, geometry));
     si->setMotionValidator(std::make_shared<ob::DiscreteMotionValidator>(si));
@@ -262,6 +276,10 @@ Outcome plan(Checker which, const std::vector<double>& start, const std::vector<
   out.solved = planner->solve(ob::timedPlannerTerminationCondition(120.0)) ==
                ob::PlannerStatus::EXACT_SOLUTION;
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (motion) {
+    out.edges = motion->getValidMotionCount() + motion->getInvalidMotionCount();
+    out.edge_states = motion->states_;
+  }
   if (out.solved) {
     const auto& path = *pdef->getSolutionPath()->as<og::PathGeometric>();
     for (std::size_t k = 0; k < path.getStateCount(); ++k) {
@@ -290,9 +308,18 @@ bool touches(const std::vector<double>& q,
 }  // namespace
 
 int main(int argc, char** argv) {
+  const int load = cube::scenes::BusyLoad::takeArgument(argc, argv, "--load");
+  double resolution = 0;  // OMPL's default
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::string(argv[i]) == "--resolution") {
+      resolution = std::atof(argv[i + 1]);
+      for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
+      argc -= 2;
+      break;
+    }
   const std::size_t n = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 2000;
   const int problems = argc > 2 ? std::atoi(argv[2]) : 5;
-  const int threads = argc > 3 ? std::atoi(argv[3]) : 1;
+  const int threads = argc > 3 ? std::atoi(argv[3]) : 0;
   ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
 
   // The world: objects around the arm (reach 7), none within 1.2 of its base. Each problem's
@@ -333,16 +360,22 @@ int main(int argc, char** argv) {
   for (const auto& g : geometry) body.addLink(g);
   for (int i = 0; i + 1 < kJoints; ++i) body.allowPair(i, i + 1);
 
-  std::printf("RRTConnect, %d-joint arm, %zu obstacles, %d problems, cube on %d thread(s)\n",
-              kJoints, objs.size(), problems, threads);
+  std::printf(
+      "RRTConnect, %d-joint arm, %zu obstacles, %d problems, cube on %d thread(s) (0: the "
+      "hardware's), %d busy processes beside\n",
+      kJoints, objs.size(), problems, threads, load);
+  const cube::scenes::BusyLoad busy(load, 1800);
+  std::size_t edges = 0, edge_states = 0;
   double cube_s = 0, fcl_s = 0;
   int same = 0, solved = 0;
   for (int p = 0; p < problems; ++p) {
     const std::uint_fast32_t seed = 1000 + p;
     const Outcome c = plan(Checker::cube, tasks[p].first, tasks[p].second, seed, cube_world, body,
-                           fcl_world, geometry, threads);
+                           fcl_world, geometry, threads, resolution);
     const Outcome f = plan(Checker::fcl, tasks[p].first, tasks[p].second, seed, cube_world, body,
-                           fcl_world, geometry, threads);
+                           fcl_world, geometry, threads, resolution);
+    edges += c.edges;
+    edge_states += c.edge_states;
     const bool equal = c.solved == f.solved && c.path == f.path;
     same += equal;
     solved += c.solved;
@@ -354,6 +387,7 @@ int main(int argc, char** argv) {
   }
   std::printf("planning time: cube %.1f ms, FCL DynamicAABBTree %.1f ms: %.2fx less\n",
               1e3 * cube_s, 1e3 * fcl_s, fcl_s / cube_s);
-  std::printf("same paths: %d of %d problems (%d solved)\n", same, problems, solved);
+  std::printf("same paths: %d of %d problems (%d solved); %zu motion checks, %.1f states an edge\n",
+              same, problems, solved, edges, edges ? double(edge_states) / double(edges) : 0.0);
   return same == problems && solved > 0 ? 0 : 1;
 }

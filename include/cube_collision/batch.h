@@ -86,9 +86,10 @@ struct BatchOptions {
   /// Report each free state's clearance (StateResult::clearance).
   bool clearance = false;
   /// Threads (OpenMP) across states; 0 or less: hardwareThreads() (narrow_phase.h). Answers do
-  /// not depend on it. A call with fewer than 64 states runs on the calling thread (a parallel
-  /// region cost more than it saved: the OMPL example's edges of about 40 states planned in 2.48x
-  /// less time than FCL's checker on two threads per call, in 3.0-3.1x on one).
+  /// not depend on it. A ceiling: checkStates with fewer than 64 states runs on the calling
+  /// thread, and checkMotion(s) checks its first 64 states there, handing the rest to the threads
+  /// only if at least 128 states of edges still undecided are left; a region then takes the count
+  /// less the other threads runnable on the machine at that moment, at least one.
   int threads = 0;
 };
 

@@ -85,35 +85,24 @@ class NarrowPhaseCache {
 template <typename S>
 struct NarrowPhaseOptions {
   /// Threads for the narrow phase: 0 (or less) = hardwareThreads(), 1 = this thread only.
-  /// Results are the same for every count. Threads are used only where they pay for a parallel
-  /// region (about 1 us to open on an idle 2-core machine, tens of us on a busy one): a collide
-  /// answers its pairs on the calling thread until it has seen 1,024 candidate pairs (an FCL
-  /// call on a mesh or an octree counts 64 more), then hands the cull and FCL's calls to the
-  /// threads in chunks of at least 128 pairs (a pair with a mesh or an octree counts 64); the
-  /// cache is always looked up on the calling thread. On a CubeCollisionManager that keeps
-  /// per-object volumes (Config::tight_volumes, 256 objects or more) the cull runs on the
-  /// calling thread and only FCL's calls count towards the 1,024: 63 for a mesh or an octree, 5
-  /// for a pair of shapes that FCL 0.7 answers with GJK (any but a sphere with a sphere, box,
-  /// capsule or cylinder and a box with a box), none for those; in a chunk such a pair counts 6,
-  /// the others 1. So a collide among spheres and boxes there runs on the calling thread
-  /// whatever the count, and one among cylinders, cones or convex polytopes goes to the threads
-  /// once it has made about 200 GJK calls. So a small query
-  /// (most object queries, a robot against its surroundings) runs on the calling thread as with 1.
-  /// A collide that stops at its first contact (num_max_contacts == 1, FCL's default) calls FCL one
-  /// pair at a time on any count, never more often than on one thread; minimumDistance without a
-  /// cache runs on the calling thread (queries.h says why).
-  /// A large self-collide runs on the threads from its first pair instead: collideAll(manager)
-  /// of a CubeCollisionManager with at least 4,096 objects in its cubes and per-object volumes,
-  /// on more than one thread, for a request that may take more than one contact, without a
-  /// cache, a pair predicate or Config::canonical_pairs. Its walk is cut into tasks (as
-  /// split_walk's), and each task's pairs are culled and answered by FCL on the thread that walked
-  /// it, 16 pairs at a time (their records, objects and geometries fetched together); the calling
-  /// thread merges the tasks in the serial walk's order, so the contacts and colliding pairs are
-  /// the same. The tasks (256 where the cubes have leaves enough) run in one parallel region,
-  /// handed out in walk order; a task is skipped when its predecessors that have run hold
-  /// num_max_contacts contacts (the result is full before it). So a request that fills its
-  /// budget early may call FCL for pairs after its stop (those of tasks started before the
-  /// budget was seen full), and `stats` counts the pairs of every task that ran.
+  /// Results are the same for every count. A count is a ceiling: a parallel region is opened
+  /// only for large work (a collide that has seen more than a thousand candidate pairs' work, a
+  /// mesh or an octree counting more; the self-collide of a CubeCollisionManager with 4,096
+  /// objects or more in its cubes; a pair list with meshes or octrees), and then with the count
+  /// less the other threads runnable on the machine at that moment, at least one. The cache is
+  /// always looked up on the calling thread. A collide that stops at its first contact
+  /// (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any count, never more
+  /// often than on one thread; minimumDistance without a cache runs on the calling thread
+  /// (queries.h says why).
+  /// A large self-collide runs on the threads from its first pair: collideAll(manager) of a
+  /// CubeCollisionManager with at least 4,096 objects in its cubes and per-object volumes, on
+  /// more than one thread, for a request that may take more than one contact, without a cache,
+  /// a pair predicate or Config::canonical_pairs. Its walk is cut into tasks (as split_walk's),
+  /// each task's pairs answered on the thread that walked it; the calling thread merges the
+  /// tasks in the serial walk's order, so the contacts and colliding pairs are the same. A task
+  /// is skipped when its predecessors that have run hold num_max_contacts contacts. So a request
+  /// that fills its budget early may call FCL for pairs after its stop (those of tasks started
+  /// before the budget was seen full), and `stats` counts the pairs of every task that ran.
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;

@@ -19,12 +19,19 @@ checked equal across the managers before any time is printed. Median of --repeat
 after one untimed run.
 
   PYTHONPATH=build/python python3 python/benchmarks/bench_trimesh.py [--primitives 10000]
-      [--meshes 5000] [--repeat 3] [--threads 0]
+      [--meshes 5000] [--repeat 3] [--threads 0] [--load 0]
+
+--load N runs N spinning processes beside the benchmark (a loaded machine; each stops by itself
+after --load-seconds, and all are stopped at exit). Each scene also reports cube's time with the
+given threads against threads=1, called in turn (the target: at least 0.95x the one-thread
+speed, loaded or not).
 """
 
 import argparse
+import atexit
 import os
 import statistics
+import subprocess
 import sys
 import time
 
@@ -43,6 +50,37 @@ def timed(fn, repeat):
         result = fn()
         times.append(time.perf_counter() - t)
     return statistics.median(times), result
+
+
+SPIN = "import time\nend = time.monotonic() + {seconds}\nwhile time.monotonic() < end:\n    for _ in range(100000):\n        pass\n"
+
+
+def start_load(processes, seconds):
+    """`processes` spinning Python processes, each bounded to `seconds`, killed at exit."""
+    procs = [subprocess.Popen([sys.executable, "-c", SPIN.format(seconds=seconds)])
+             for _ in range(processes)]
+
+    def stop():
+        for p in procs:
+            p.kill()
+        for p in procs:
+            p.wait()
+    atexit.register(stop)
+    return stop
+
+
+def timed_pair(fa, fb, repeat):
+    """Minimums of `repeat` timed calls of fa and fb in turn (after one untimed call of each): on a
+    busy machine the background changes between calls far apart."""
+    ta, tb, ra, rb = [], [], fa(), fb()
+    for _ in range(repeat):
+        t = time.perf_counter()
+        ra = fa()
+        ta.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        rb = fb()
+        tb.append(time.perf_counter() - t)
+    return min(ta), ra, min(tb), rb
 
 
 def without_collisions(scene):
@@ -67,6 +105,9 @@ def run_scene(label, scene, repeat, threads, out):
     trimesh = TrimeshManager(fcl)
     t_cube, (_, names) = timed(lambda: cube.in_collision_internal(return_names=True), repeat)
     t_cube1, r1 = timed(lambda: cube1.in_collision_internal(return_names=True), repeat)
+    m_cube, _, m_cube1, _ = timed_pair(lambda: cube.in_collision_internal(return_names=True),
+                                       lambda: cube1.in_collision_internal(return_names=True),
+                                       3 * repeat)
     t_fcl, r_fcl = timed(lambda: fcl.in_collision_internal(return_names=True), repeat)
     t_tm, r_tm = timed(lambda: trimesh.in_collision_internal(return_names=True), repeat)
     for other in (r1, r_fcl):
@@ -95,7 +136,13 @@ def run_scene(label, scene, repeat, threads, out):
     dcube = scenes.build(free, "cube", threads)
     dfcl = scenes.build(free, "fcl")
     dtrimesh = TrimeshManager(dfcl)
+    dcube1 = scenes.build(free, "cube", 1)
     t_dc, (d_c, n_c) = timed(lambda: dcube.min_distance_internal(return_names=True), repeat)
+    m_dc, _, m_dc1, (d_c1, _) = timed_pair(
+        lambda: dcube.min_distance_internal(return_names=True),
+        lambda: dcube1.min_distance_internal(return_names=True), 3 * repeat)
+    if d_c1 != d_c:
+        raise SystemExit(f"{label}: the distance depends on the thread count: {d_c} {d_c1}")
     t_df, (d_f, n_f) = timed(lambda: dfcl.min_distance_internal(return_names=True), repeat)
     t_dp, (d_p, n_p) = timed(lambda: dtrimesh.min_distance_internal(return_names=True), repeat)
     if not (close(d_c, d_f) and close(d_c, d_p)):
@@ -105,6 +152,10 @@ def run_scene(label, scene, repeat, threads, out):
     for what, t in (("cube", t_dc), ("fcl backend, narrow phase in C++", t_df),
                     ("fcl backend + Python per pair (trimesh)", t_dp)):
         out.append(f"    {what:45s} {t * 1e3:10.2f} ms {t_dp / t:8.2f}x {t_df / t:7.2f}x")
+    out.append(f"  cube threads={threads} against threads=1, minimums of {3 * repeat} calls in "
+               f"turn (speed, >= 0.95x wanted): in_collision_internal {m_cube * 1e3:.2f} / "
+               f"{m_cube1 * 1e3:.2f} ms = {m_cube1 / m_cube:.2f}x, min_distance_internal "
+               f"{m_dc * 1e3:.2f} / {m_dc1 * 1e3:.2f} ms = {m_dc1 / m_dc:.2f}x")
     return {"collide": (t_cube, t_fcl, t_tm), "distance": (t_dc, t_df, t_dp)}
 
 
@@ -114,9 +165,13 @@ def main(argv=None):
     ap.add_argument("--meshes", type=int, default=5000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--load", type=int, default=0, help="spinning processes beside the run")
+    ap.add_argument("--load-seconds", type=float, default=1800)
     args = ap.parse_args(argv)
+    stop = start_load(args.load, args.load_seconds) if args.load > 0 else None
     out = [f"cube_collision {cc.__version__}, threads={args.threads} "
-           f"(0: the hardware's, {os.cpu_count()} here), medians of {args.repeat}"]
+           f"(0: the hardware's, {os.cpu_count()} here), medians of {args.repeat}, "
+           f"{args.load} busy processes beside"]
     t0 = time.perf_counter()
     prim = run_scene("primitives+convex", scenes.primitives_and_convex(args.primitives),
                      args.repeat, args.threads, out)
@@ -130,6 +185,8 @@ def main(argv=None):
                    f"(target >= 2x); min_distance_internal {t_dp / t_dc:.2f}x / "
                    f"{t_df / t_dc:.2f}x")
     out.append(f"total {time.perf_counter() - t0:.1f} s")
+    if stop is not None:
+        stop()
     print("\n".join(out))
 
 

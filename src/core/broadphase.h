@@ -19,6 +19,7 @@
 #include "core/pair_list.h"
 #include "core/rebuild_policy.h"
 #include "core/task_sink.h"
+#include "core/thread_policy.h"
 #include "core/traversal.h"
 #include "core/unbounded_list.h"
 #include "core/walk.h"
@@ -146,15 +147,11 @@ class Broadphase {
   /// pairs come in registration order (Config::canonical_pairs), or with a pair predicate (user
   /// code, asked on this thread in walk order).
   bool collideSelfTasks(TaskSink<S>& sink, int threads) const;
-  /// Objects in the cubes from which collideSelfSplit splits the walk: below, the walk takes
-  /// less time than a wave's threads take to start.
-  static constexpr std::size_t kSplitMin = 4096;
-  /// The tasks a split self walk is cut into (at least; fewer in a tree of fewer leaves).
-  static constexpr std::size_t kSplitTasks = 64;
-  /// The same for a walk whose tasks a TaskSink answers: they carry the narrow phase too, and a
-  /// clustered scene's tasks differ by orders of magnitude, so finer tasks balance the threads
-  /// (all run in one region: no wave to wait for).
-  static constexpr std::size_t kSinkTasks = 256;
+  /// Objects in the cubes from which collideSelfSplit splits the walk (thread_policy.h).
+  static constexpr std::size_t kSplitMin = kSplitMinObjects;
+  /// The tasks a split self walk is cut into, and those of a TaskSink's walk (thread_policy.h).
+  static constexpr std::size_t kSplitTasks = kSplitWalkTasks;
+  static constexpr std::size_t kSinkTasks = kSinkWalkTasks;
   /// Pairs (managed object, object of `body`) whose boxes overlap and that pass the filter bits
   /// (the body's per id, null: all default) and the predicate: one walk of the cubes, then of
   /// the unbounded list, against the body's view (BodyView), in walk order whatever

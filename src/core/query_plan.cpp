@@ -61,6 +61,10 @@ template <typename S>
   p.from_list = b == nullptr && pairs_.valid();
   p.split = b == nullptr && threads > 1 && !p.from_list && tree_.size() >= kSplitMin;
   p.threads = threads;
+  if (p.split) {  // large work: the team is sized now, once for the query (thread_policy.h)
+    p.threads = regionTeam(threads);
+    p.split = p.threads > 1;
+  }
   // An object query walks the tree whatever its size: its walk is already one box at a time.
   const bool object = b != nullptr && b->obj != nullptr;
   p.all_pairs_limit = object ? 0 : config_.all_pairs_limit;
@@ -157,6 +161,7 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
           if (!error) error = std::current_exception();
         }
       }
+      regionClosed(threads);
       if (error) std::rethrow_exception(error);
       for (std::size_t i = begin; i < end; ++i) {
         if (sink != nullptr) {

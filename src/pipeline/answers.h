@@ -2,7 +2,7 @@
 
 // What the narrow-phase pipeline's files (collide_stream.cpp, distance_search.cpp,
 // narrow_phase.cpp) share: how a pair was answered, when threads pay, and the steps of answering
-// one pair without the cache (cache.h holds those with it).
+// one pair without the cache (cache.h holds those with it). When threads pay: thread_policy.h.
 
 #include <fcl/narrowphase/collision_object.h>
 #include <fcl/narrowphase/collision_request.h>
@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "core/thread_policy.h"
 #include "cube_collision/narrow_phase.h"
 #include "pipeline/cull.h"
 
@@ -21,16 +22,13 @@ namespace detail {
 /// the cache, or by FCL.
 enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
 
-// When threads pay. Work is counted in candidate pairs of shapes: the cull (about 0.1 us) and,
-// for one pair in three or so, FCL's call (0.2-2 us): 0.25-0.5 us a pair here. A pair with a
-// mesh or an octree counts kHeavyPairWork (its FCL call takes 10-100 us). Opening a two-thread
-// region costs about 1 us while the other core idles and tens of us while it is busy, so a
-// region is opened only for kParallelMinWork or more: 30-60 us of work.
+// Work, the unit of thread_policy.h's thresholds, is counted in candidate pairs of shapes: the
+// cull (about 0.1 us) and, for one pair in three or so, FCL's call (0.2-2 us): 0.25-0.5 us a pair
+// here. A pair with a mesh or an octree counts kHeavyPairWork (its FCL call takes 10-100 us).
 constexpr std::size_t kHeavyPairWork = 64;
 // A pair of shapes that FCL 0.7 answers with libccd's GJK rather than in closed form (see
 // workOf): 1-3 us a call, against 0.1-0.3 for a closed form.
 constexpr std::size_t kGjkPairWork = 6;
-constexpr std::size_t kParallelMinWork = 128;
 
 inline void addStats(NarrowPhaseStats* out, const NarrowPhaseStats& s) {
   if (out == nullptr) return;
@@ -96,7 +94,7 @@ inline void count(NarrowPhaseStats& stats, Answer kind) {
   }
 }
 
-// What a pair handed to the threads costs, in kParallelMinWork's unit (a candidate pair of
+// What a pair handed to the threads costs, in thread_policy.h's unit (a candidate pair of
 // shapes): a pair with a mesh or an octree counts kHeavyPairWork. The objects' geometries are
 // read for their types (a cache miss on the calling thread for a pair not yet called).
 template <typename S>

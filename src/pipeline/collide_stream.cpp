@@ -23,21 +23,12 @@ namespace {
 
 // A collide stream answers pairs at once on the calling thread until it has seen kSerialWork of
 // work (every candidate pair counts 1, an FCL call on a mesh or an octree kHeavyPairWork more),
-// then gathers chunks of kFirstChunkWork, doubling up to kMaxChunkWork. Chunks cost more per
-// pair than answering at once (a result per pair, the contacts copied in the merge): a self-
-// collide of 1,000 uniform objects (800 pairs) took 137 us on one thread and 177 us on two when
-// it left after 8 FCL calls. Queries below kSerialWork (most object queries, robot checks, small
-// scenes of shapes) never open a region. Pairs culled on the object tables' records (about 20
-// ns a pair, on this thread) count only what their FCL call weighs beyond 1, read from the
-// records' kinds (workOf(flags)): threads share FCL's calls only, and for closed-form shape
-// pairs (0.2 us a call) a chunk's bookkeeping cost more than the second thread saved (41 ms on
-// one thread, 47 on two for 10,000 clustered boxes), so those stay on the calling thread; GJK
-// pairs (kGjkPairWork) and meshes go to the threads (compare.sh on self-collide of 10,000
-// clustered boxes, spheres and cylinders with the narrow phase on two threads: 0.76x the time
-// of counting only meshes; 10,000 primitives and convex polytopes from Python: 0.7-0.8x).
-constexpr std::size_t kSerialWork = 1024;
-constexpr std::size_t kFirstChunkWork = 256;
-constexpr std::size_t kMaxChunkWork = 4096;
+// then sizes its team (regionTeam, once) and, with more than one thread, gathers chunks of
+// kFirstChunkWork, doubling up to kMaxChunkWork (thread_policy.h sets them). Queries below
+// kSerialWork (most object queries, robot checks, small scenes of shapes) never open a region.
+// Pairs culled on the object tables' records (about 20 ns a pair, on this thread) count only
+// what their FCL call weighs beyond 1, read from the records' kinds (workOf(flags)): threads
+// share FCL's calls only, so closed-form shape pairs stay on the calling thread.
 // A chunk's pairs are answered in blocks of kBlock (CollideStream::cullBlock), reading the first
 // kObjectLines cache lines of an object (its geometry pointer and pose: the first 160 of 224 bytes
 // for double) and kGeometryLines of a geometry (120 bytes of base, then the shape's fields).
@@ -247,8 +238,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
     }
     // A request that may stop at its first contact stays on this thread: a chunk would call FCL
     // for pairs after the stop. Others go to the threads once the query proves large.
-    if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork)
-      serial_ = false;
+    if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork) leaveSerial();
     return done_;
   }
   // In chunks: the cache is looked up here (and the cull on volumes runs here: a pair it proves
@@ -317,7 +307,15 @@ void CollideStream<S>::answerSerialBlock() {
     answerNow(b.block[k].first, b.block[k].second, s.kind);
   }
   // A request that may stop at its first contact stays on this thread (see pushJudged).
-  if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork) serial_ = false;
+  if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork) leaveSerial();
+}
+
+// The query proved large: chunks on the threads if the machine has room for them now, else the
+// rest on this thread (threads_ 1 keeps it there).
+template <typename S>
+void CollideStream<S>::leaveSerial() {
+  threads_ = regionTeam(threads_);
+  serial_ = threads_ <= 1;
 }
 
 template <typename S>
@@ -475,8 +473,7 @@ void CollideStream<S>::flush() {
   const std::size_t n = chunk_.size();
   if (n == 0) return;
   if (!done_) {
-    // Threads only for work that pays for waking them (a region costs about 1 us here when
-    // the other core is idle, tens of us when it is busy).
+    // Threads only for work that pays for waking them (thread_policy.h).
     const int threads = pending_work_ >= kParallelMinWork ? threads_ : 1;
     // Blocks of pending pairs, whose memory is fetched together (cullBlock), but at least 8
     // a thread: a chunk of 64 mesh pairs in 4 blocks of 16 left a thread idle (1,000 meshes on

@@ -116,7 +116,9 @@ void DistanceSearch<S>::flush() {
         cache_ ? cache_->distance.find(*cache_, batch_[i].first, batch_[i].second) : nullptr;
     if (slots_[i].cached == nullptr) work += workOf(batch_[i]);
   }
-  detail::parallelFor(n, work >= kParallelMinWork ? threads_ : 1, [&](std::size_t i) {
+  // The team is sized at the first batch that pays for threads, once for the search.
+  if (work >= kParallelMinWork && team_ == 0) team_ = regionTeam(threads_);
+  detail::parallelFor(n, work >= kParallelMinWork ? team_ : 1, [&](std::size_t i) {
     Slot& s = slots_[i];
     const auto [a, b] = batch_[i];
     if (s.cached == nullptr) {

@@ -61,6 +61,7 @@ class DistanceSearch {
   NarrowPhaseStats* stats_out_;
   typename NarrowPhaseCache<S>::Impl* cache_;
   int threads_;
+  int team_ = 0;  // threads of its regions, sized at the first that pays (0: not yet)
   std::vector<ObjectPair<S>> batch_;
   std::vector<Slot> slots_;
   fcl::DistanceResult<S> result_;

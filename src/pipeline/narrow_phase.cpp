@@ -29,12 +29,11 @@ int hardwareThreads() {
 namespace {
 
 using detail::addStats;
+using detail::kParallelMinPairs;
 using detail::kParallelMinWork;
 using detail::plainRequest;
+using detail::regionTeam;
 using detail::resolveThreads;
-
-// forEachPair runs a caller's function of unknown cost: threads from this many pairs on.
-constexpr std::size_t kParallelMinPairs = 4;
 
 // A pair list from the caller: a null object would crash inside FCL, so it is refused first.
 template <typename S>
@@ -76,7 +75,7 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
     rest.push_back(i);
     work += detail::workOf(pairs[i]);
   }
-  const int threads = work >= kParallelMinWork ? resolveThreads(options.threads) : 1;
+  const int threads = work >= kParallelMinWork ? regionTeam(resolveThreads(options.threads)) : 1;
   detail::parallelFor(rest.size(), threads, [&](std::size_t k) {
     const std::size_t i = rest[k];
     kind[i] = detail::judge(request, pairs[i].first, pairs[i].second);
@@ -133,7 +132,8 @@ void forEachPair(
     int threads) {
   checkPairs(pairs, "forEachPair");
   if (!fn) throw std::invalid_argument("cube::forEachPair: empty function");
-  detail::parallelFor(pairs.size(), pairs.size() >= kParallelMinPairs ? resolveThreads(threads) : 1,
+  detail::parallelFor(pairs.size(),
+                      pairs.size() >= kParallelMinPairs ? regionTeam(resolveThreads(threads)) : 1,
                       [&](std::size_t i) { fn(i, pairs[i].first, pairs[i].second); });
 }
 

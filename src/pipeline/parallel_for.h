@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/thread_policy.h"
 #include "cube_collision/narrow_phase.h"
 
 namespace cube {
@@ -19,7 +20,8 @@ inline int resolveThreads(int threads) {
   return threads > 0 ? threads : hardwareThreads();
 }
 
-/// Runs body(scratch, i) for every i in [0, n) on `threads` threads, each thread with its own
+/// Runs body(scratch, i) for every i in [0, n) on `threads` threads (the caller sized the team:
+/// thread_policy.h), each thread with its own
 /// scratch from make() (made once per thread, on that thread). An exception stops nothing: the
 /// first one by index (a failed make() counts as index n) is rethrown once every call has run.
 /// Dynamic chunks of at most `grain_max` items, about 8 a thread: item costs differ by orders of
@@ -66,6 +68,7 @@ void parallelForWith(std::size_t n, int threads, std::size_t grain_max, const Ma
       for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
         if (scratch) run(*scratch, static_cast<std::size_t>(i));
     }
+    regionClosed(threads);
   }
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);

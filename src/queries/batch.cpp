@@ -23,14 +23,10 @@ using detail::batchError;
 namespace detail {
 namespace {
 
-// Threads open a region only from this many states: a state costs 1-10 µs, a region on this
-// 2-core machine tens of µs while the other core is busy. Measured with the OMPL example
-// (edges of about 40 states, one checkMotion each): 2 threads per call planned in 2.48x less
-// time than FCL's checker, one thread in 3.00-3.08x.
-constexpr std::size_t kParallelMinStates = 64;
-
+// The threads of a call over `states` independent states (thread_policy.h): a region only from
+// kParallelMinStates states, its team sized by regionTeam.
 int batchThreads(std::size_t states, int threads) {
-  return states < kParallelMinStates ? 1 : resolveThreads(threads);
+  return states < kParallelMinStates ? 1 : regionTeam(resolveThreads(threads));
 }
 
 // The number of states in `poses`, after checking it as the header says.
@@ -141,29 +137,48 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   std::vector<std::atomic<std::size_t>> best(edges);
   for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
   std::vector<std::pair<std::size_t, std::size_t>> bad;  // (item, pose index): rare
-  const int threads = batchThreads(states, options.threads);
   const std::size_t n = links.size();
-  parallelForWith(
-      states, threads, 4,
-      [&] { return std::make_unique<MotionScratch<S>>(core, links, on_demand); },
-      [&](auto& scratch, std::size_t i) {
-        const Item& item = items[i];
-        std::atomic<std::size_t>& b = best[item.edge];
-        if (item.rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
-        const int answer = scratch->checker.check(pose_at(*scratch, item.state),
-                                                  options.self_collision, false, false, nullptr);
-        if (answer == 0) return;
-        if (answer == StateChecker<S>::kBadPose) {
+  const auto make = [&] { return std::make_unique<MotionScratch<S>>(core, links, on_demand); };
+  const auto check = [&](auto& scratch, std::size_t i) {
+    const Item& item = items[i];
+    std::atomic<std::size_t>& b = best[item.edge];
+    if (item.rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
+    const int answer = scratch->checker.check(pose_at(*scratch, item.state), options.self_collision,
+                                              false, false, nullptr);
+    if (answer == 0) return;
+    if (answer == StateChecker<S>::kBadPose) {
       // As a contact: no state after it in the order is started, and the serial scan's
       // first event decides (a pose error before any contact throws).
 #pragma omp critical(cube_batch_bad_pose)
-          bad.emplace_back(i, item.state * n + scratch->checker.badLink());
-        }
-        std::size_t seen = b.load(std::memory_order_relaxed);
-        while (item.rank < seen &&
-               !b.compare_exchange_weak(seen, item.rank, std::memory_order_relaxed)) {
-        }
-      });
+      bad.emplace_back(i, item.state * n + scratch->checker.badLink());
+    }
+    std::size_t seen = b.load(std::memory_order_relaxed);
+    while (item.rank < seen &&
+           !b.compare_exchange_weak(seen, item.rank, std::memory_order_relaxed)) {
+    }
+  };
+  // Edges stop at their first colliding state (thread_policy.h): the first kMotionSerialStates
+  // states checked run on this thread; the items left go to the threads only if at least
+  // kMotionParallelMinStates of them belong to edges still undecided.
+  std::size_t next = 0;
+  {
+    auto scratch = make();
+    for (std::size_t checked = 0; next < states && checked < kMotionSerialStates; ++next) {
+      const Item& item = items[next];
+      if (item.rank > best[item.edge].load(std::memory_order_relaxed)) continue;
+      check(scratch, next);
+      ++checked;
+    }
+    std::size_t undecided = 0;
+    if (next < states && resolveThreads(options.threads) > 1)
+      for (std::size_t i = next; i < states; ++i)
+        undecided += best[items[i].edge].load(std::memory_order_relaxed) == kNoIndex;
+    if (undecided < kMotionParallelMinStates)
+      for (; next < states; ++next) check(scratch, next);
+  }
+  if (next < states)
+    parallelForWith(states - next, regionTeam(resolveThreads(options.threads)), 4, make,
+                    [&](auto& scratch, std::size_t k) { check(scratch, next + k); });
   // The earliest event of each edge in its order: a pose error there throws, edge by edge.
   std::sort(bad.begin(), bad.end());
   for (const auto& [i, pose] : bad)
