@@ -16,12 +16,14 @@ thread_local int in_python_callback = 0;
 void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
                       bool distance, const char* what) {
   std::size_t planes = 0, convexes = 0;
-  bool cube = false;  // a distance query on a cube manager runs the library's pipeline
+  // A distance query among cube managers only runs the library's pipeline; one with an
+  // FCL-backend manager calls fcl::distance on the cube side's objects too.
+  bool cube = true;
   for (const Manager* m : {a, b})
     if (m) {
       planes += m->planes();
       convexes += m->convexes();
-      cube = cube || m->isCube();
+      cube = cube && m->isCube();
     }
   for (const auto& k : kinds) {
     planes += k == "plane";

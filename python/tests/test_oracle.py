@@ -218,7 +218,10 @@ def test_what_crashes_fcl_is_refused():
     for call in (lambda: m.add_object("hull", hull), lambda: fcl_manager.min_distance_single(floor),
                  lambda: m.in_collision_single(hull),
                  lambda: cc.pair_in_collision(floor, np.eye(4), hull, np.eye(4)),
-                 lambda: cc.pair_distance(floor, np.eye(4), cc.sphere(1), np.eye(4))):
+                 lambda: cc.pair_distance(floor, np.eye(4), cc.sphere(1), np.eye(4)),
+                 # a cube manager's plane measured against an FCL-backend manager: fcl::distance
+                 lambda: m.min_distance_other(fcl_manager),
+                 lambda: fcl_manager.min_distance_other(m)):
         with pytest.raises(ValueError):
             call()
     other = cc.CollisionManager()
