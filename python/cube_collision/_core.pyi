@@ -54,7 +54,7 @@ def plane(normal: ArrayLike, offset: float = 0.0) -> Geometry:
 
 def pair_in_collision(geometry_a: GeometryLike, transform_a: Transform,
                       geometry_b: GeometryLike, transform_b: Transform) -> bool:
-    """fcl::collide on two placed geometries."""
+    """FCL's own fcl::collide on two placed geometries, its defects included."""
 def pair_distance(geometry_a: GeometryLike, transform_a: Transform,
                   geometry_b: GeometryLike, transform_b: Transform) -> float:
     """fcl::distance on two placed geometries (<= 0 when they touch); ValueError for a plane

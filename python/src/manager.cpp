@@ -18,7 +18,7 @@ void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std:
   std::size_t planes = 0, convexes = 0;
   // A distance query among cube managers only runs the library's pipeline; one with an
   // FCL-backend manager calls fcl::distance on the cube side's objects too.
-  bool cube = true;
+  bool cube = a != nullptr || b != nullptr;
   for (const Manager* m : {a, b})
     if (m) {
       planes += m->planes();

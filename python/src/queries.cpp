@@ -1312,8 +1312,10 @@ void bindQueries(py::module_& m) {
         return res.isCollision();
       },
       py::arg("geometry_a"), py::arg("transform_a"), py::arg("geometry_b"), py::arg("transform_b"),
-      "fcl::collide on two placed geometries (FCL's default request): no broadphase, for "
-      "checks and tests. TypeError / ValueError for bad geometry or transforms.");
+      "FCL's own fcl::collide on two placed geometries (FCL's default request): no broadphase, "
+      "for checks and tests; FCL 0.7's answer as it is (a cylinder against a plane: its "
+      "defective yes/no test, which the managers correct). TypeError / ValueError for bad "
+      "geometry or transforms.");
   m.def(
       "pair_distance",
       [pairObjects](py::handle ga, py::handle ta, py::handle gb, py::handle tb) {

@@ -345,7 +345,7 @@ def test_distances_to_tilted_planes_far_away_are_exact():
             pair.add_object("floor", floor)
             pair.add_object("thing", g, tf)
             assert abs(pair.min_distance_internal() - want) < 1e-6, (kind, rep)
-            other = cc.CollisionManager(backend="fcl")
+            other = cc.CollisionManager()
             other.add_object("thing", g, tf)
             assert abs(m.min_distance_other(other) - want) < 1e-6, (kind, rep)
             assert abs(other.min_distance_other(m) - want) < 1e-6, (kind, rep)
