@@ -159,6 +159,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   // states checked run on this thread; the items left go to the threads only if at least
   // kMotionParallelMinStates of them belong to edges still undecided.
   std::size_t next = 0;
+  int team = 1;
   {
     auto scratch = make();
     for (std::size_t checked = 0; next < states && checked < kMotionSerialStates; ++next) {
@@ -171,11 +172,12 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     if (next < states && resolveThreads(options.threads) > 1)
       for (std::size_t i = next; i < states; ++i)
         undecided += best[items[i].edge].load(std::memory_order_relaxed) == kNoIndex;
-    if (undecided < kMotionParallelMinStates)
+    if (undecided >= kMotionParallelMinStates) team = regionTeam(resolveThreads(options.threads));
+    if (team <= 1)
       for (; next < states; ++next) check(scratch, next);
   }
   if (next < states)
-    parallelForWith(states - next, regionTeam(resolveThreads(options.threads)), 4, make,
+    parallelForWith(states - next, team, 4, make,
                     [&](auto& scratch, std::size_t k) { check(scratch, next + k); });
   // The earliest event of each edge in its order: a pose error there throws, edge by edge.
   std::sort(bad.begin(), bad.end());
