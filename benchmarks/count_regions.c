@@ -10,6 +10,17 @@
 
 static atomic_long regions, threads_asked;
 
+/* libgomp's own entry: the next definition, or libgomp's where it was loaded with RTLD_LOCAL (a
+ * Python extension's). */
+static void* gomp(const char* name) {
+  void* f = dlsym(RTLD_NEXT, name);
+  if (!f) {
+    void* lib = dlopen("libgomp.so.1", RTLD_NOW | RTLD_NOLOAD);
+    if (lib) f = dlsym(lib, name);
+  }
+  return f;
+}
+
 static void report(void) __attribute__((destructor));
 static void report(void) {
   fprintf(stderr, "regions: %ld (threads asked: %ld)\n", (long)regions, (long)threads_asked);
@@ -17,7 +28,7 @@ static void report(void) {
 
 void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned flags) {
   static void (*next)(void (*)(void*), void*, unsigned, unsigned);
-  if (!next) next = dlsym(RTLD_NEXT, "GOMP_parallel");
+  if (!next) next = gomp("GOMP_parallel");
   ++regions;
   threads_asked += num_threads;
   next(fn, data, num_threads, flags);
@@ -26,7 +37,7 @@ void GOMP_parallel(void (*fn)(void*), void* data, unsigned num_threads, unsigned
 void GOMP_parallel_loop_dynamic(void (*fn)(void*), void* data, unsigned num_threads, long start,
                                 long end, long incr, long chunk, unsigned flags) {
   static void (*next)(void (*)(void*), void*, unsigned, long, long, long, long, unsigned);
-  if (!next) next = dlsym(RTLD_NEXT, "GOMP_parallel_loop_dynamic");
+  if (!next) next = gomp("GOMP_parallel_loop_dynamic");
   ++regions;
   threads_asked += num_threads;
   next(fn, data, num_threads, start, end, incr, chunk, flags);

@@ -87,9 +87,10 @@ struct BatchOptions {
   bool clearance = false;
   /// Threads (OpenMP) across states; 0 or less: hardwareThreads() (narrow_phase.h). Answers do
   /// not depend on it. A ceiling: checkStates with fewer than 64 states runs on the calling
-  /// thread, and checkMotion(s) checks its first 64 states there, handing the rest to the threads
-  /// only if at least 128 states of edges still undecided are left; a region then takes the count
-  /// less the other threads runnable on the machine at that moment, at least one.
+  /// thread; checkMotion checks an edge's first 64 states there and hands the rest to the threads
+  /// only if 128 or more are left and none of those collided; checkMotions of several edges uses
+  /// them from 64 states of undecided edges. A region then takes the count less the other threads
+  /// runnable on the machine at that moment, at least one.
   int threads = 0;
 };
 

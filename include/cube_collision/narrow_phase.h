@@ -88,7 +88,7 @@ struct NarrowPhaseOptions {
   /// Results are the same for every count. A count is a ceiling: a parallel region is opened
   /// only for large work (a collide that has seen more than a thousand candidate pairs' work, a
   /// mesh or an octree counting more; the self-collide of a CubeCollisionManager with 4,096
-  /// objects or more in its cubes; a pair list with meshes or octrees), and then with the count
+  /// objects or more in its cubes; a pair list of 128 pairs' work or more), and then with the count
   /// less the other threads runnable on the machine at that moment, at least one. The cache is
   /// always looked up on the calling thread. A collide that stops at its first contact
   /// (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any count, never more

@@ -55,13 +55,15 @@ constexpr std::size_t kSinkWalkTasks = 256;
 // checkStates opens a region from this many states (64-640 us of work). One state (a planner's
 // StateValidityChecker) is always checked on the calling thread.
 constexpr std::size_t kParallelMinStates = 64;
-// checkMotion(s) checks this many states on the calling thread first (edges stop at their first
-// colliding state: most of a planner's edges collide within their first states, and what other
-// threads started past that point is wasted) and hands the rest to the threads only if at least
-// kMotionParallelMinStates states of edges still undecided are left. With two threads per call
-// from the first state, the OMPL example planned in 2.5-3.1x less time than FCL's checker idle
-// but 0.17-0.23x loaded (edges of 150 states). Under this rule its edges (20-150 states) open no
-// region, and it plans in 3.2-5.5x less time than FCL's checker idle and loaded.
+// A lone edge (checkMotion) checks this many states on the calling thread first (an edge stops at
+// its first colliding state: most of a planner's edges collide within their first states, and
+// what other threads started past that point is wasted) and hands the rest to the threads only if
+// at least kMotionParallelMinStates states are still undecided. Several edges (checkMotions) are
+// independent scans and go to the threads from kParallelMinStates undecided states: with the
+// prefix too, 20 edges of 20-100 states on two threads took 1.0-1.4x the time idle. With two
+// threads per call from the first state, the OMPL example planned in 2.5-3.1x less time than FCL's
+// checker idle but 0.17-0.23x loaded (edges of 150 states). Under this rule its edges (20-150
+// states) open no region, and it plans in 3.2-5.5x less time than FCL's checker idle and loaded.
 constexpr std::size_t kMotionSerialStates = 64;
 constexpr std::size_t kMotionParallelMinStates = 128;
 

@@ -4,6 +4,8 @@
 
 #include "cube_collision/batch.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <atomic>
 #include <deque>
@@ -157,13 +159,20 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
            !b.compare_exchange_weak(seen, item.rank, std::memory_order_relaxed)) {
     }
   };
-  // Edges stop at their first colliding state (thread_policy.h): the first kMotionSerialStates
-  // states checked run on this thread; the items left go to the threads only if at least
-  // kMotionParallelMinStates of them belong to edges still undecided.
+  // An edge stops at its first colliding state (thread_policy.h): a lone edge's first
+  // kMotionSerialStates states checked run on this thread, and the items left go to the threads
+  // only if at least kMotionParallelMinStates of them are still undecided. Several edges are
+  // independent scans: their items go to the threads from kParallelMinStates undecided on.
   std::size_t next = 0;
+  int team = 1;
+  // The calling thread's checker: made once, kept for its share of a region (a checker costs
+  // as much to make as tens of states).
+  std::unique_ptr<MotionScratch<S>> mine = make();
   {
-    auto scratch = make();
-    for (std::size_t checked = 0; next < states && checked < kMotionSerialStates; ++next) {
+    auto& scratch = mine;
+    const std::size_t prefix = edges == 1 ? kMotionSerialStates : 0;
+    const std::size_t min_left = edges == 1 ? kMotionParallelMinStates : kParallelMinStates;
+    for (std::size_t checked = 0; next < states && checked < prefix; ++next) {
       const Item& item = items[next];
       if (item.rank > best[item.edge].load(std::memory_order_relaxed)) continue;
       check(scratch, next);
@@ -173,12 +182,18 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     if (next < states && resolveThreads(options.threads) > 1)
       for (std::size_t i = next; i < states; ++i)
         undecided += best[items[i].edge].load(std::memory_order_relaxed) == kNoIndex;
-    if (undecided < kMotionParallelMinStates)
+    if (undecided >= min_left) team = regionTeam(resolveThreads(options.threads));
+    if (team <= 1)
       for (; next < states; ++next) check(scratch, next);
   }
   if (next < states)
-    parallelForWith(states - next, regionTeam(resolveThreads(options.threads)), 4, make,
-                    [&](auto& scratch, std::size_t k) { check(scratch, next + k); });
+    parallelForWith(
+        states - next, team, 4,
+        [&]() -> std::unique_ptr<MotionScratch<S>> {
+          if (omp_get_thread_num() == 0 && mine) return std::move(mine);
+          return make();
+        },
+        [&](auto& scratch, std::size_t k) { check(scratch, next + k); });
   // The earliest event of each edge in its order: a pose error there throws, edge by edge.
   std::sort(bad.begin(), bad.end());
   for (const auto& [i, pose] : bad)
