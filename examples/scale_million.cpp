@@ -1,4 +1,4 @@
-// Scale check (issue 7): registers N objects (default 1,000,000), self-collides them, and reports
+// Scale check: registers N objects (default 1,000,000), self-collides them, and reports
 // the time and the bytes the manager owns per object. The candidate pair count must equal
 // fcl::DynamicAABBTreeCollisionManager's on the same objects; the exit status is non-zero if not.
 //

@@ -1,4 +1,4 @@
-// Bad input (issue 7): every documented case gives its documented answer, and nothing else
+// Bad input: every documented case gives its documented answer, and nothing else
 // changes. The oracle for "nothing else changed" is brute force over the objects' AABBs and
 // fcl::NaiveCollisionManager's narrow phase.
 

@@ -1,4 +1,4 @@
-// Randomized differential testing (issue 7): thousands of deterministic random operation
+// Randomized differential testing: thousands of deterministic random operation
 // sequences, each step checked against a brute-force model and fcl::NaiveCollisionManager.
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Issue 3: dynamic updates. After every kind of motion and every update variant, and along long
+// Dynamic updates. After every kind of motion and every update variant, and along long
 // interleaved sequences of registrations, removals, moves and queries, the cube manager answers
 // as brute force over the AABBs and fcl::NaiveCollisionManager do; validate() holds throughout;
 // the update policies rebuild when they should; a no-motion update keeps the callback order.

@@ -1,4 +1,4 @@
-// Filter bits, the pair predicate, margins and canonical pair order (issue 20), each against
+// Filter bits, the pair predicate, margins and canonical pair order, each against
 // brute force over every pair of objects.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -466,7 +466,7 @@ std::vector<Pair<S>> calls(const CubeCollisionManager<S>& m) {
   return c;
 }
 
-// Contracts stated in the headers (issue 38, item 7), each against what the calls do.
+// Contracts stated in the headers, each against what the calls do.
 namespace contracts {
 
 std::unique_ptr<Obj<double>> box(double x, double size = 1) {

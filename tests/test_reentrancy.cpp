@@ -1,4 +1,4 @@
-// Issue 21: (1) a manager mutated from inside a callback of one of its own queries, (2) validate()
+// (1) A manager mutated from inside a callback of one of its own queries, (2) validate()
 // and its running total of cube areas over scenes spanning 1e-6 to 1e9, (3) distances beyond the
 // range of float with a raised Config::unbounded_limit.
 //
@@ -1356,7 +1356,7 @@ TEST(ReFarDistance, ScatteredSceneMatchesNaive) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// User code off the manager's own query path (issue 38, items 3 and 4): the pair predicate
+// User code off the manager's own query path: the pair predicate
 // during sweptPairs and continuousCollideAll, and a collideConcurrently callback on whichever
 // thread runs it. Every kind of mutation is refused with std::logic_error there too, and the
 // manager keeps its objects and passes validate().

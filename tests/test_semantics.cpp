@@ -1,4 +1,4 @@
-// The numbered semantics of issue 2, each in its own test, plus bad input, configuration and the
+// The numbered semantics of docs/guarantees.md, each in its own test, plus bad input, config and
 // invariants of the tree, in double and float. Every expected answer comes from brute force over
 // the AABBs or from fcl::NaiveCollisionManager on the same objects.
 

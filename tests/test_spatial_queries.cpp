@@ -743,7 +743,7 @@ TYPED_TEST(ExactNarrowPhase, ExactTMatchesTheBisectionOnRotatedPrimitives) {
 // A segment that crosses a plane hits it, wherever it crosses: planes whose normal is along an
 // axis (their box has no thickness along it: the exact crossing and the box's exit are computed
 // by different formulas, a few ulps apart) and oblique ones, through raycastObject, raycastFirst
-// and raycastAll, at t within rounding of the crossing. Includes the segment of issue 38.
+// and raycastAll, at t within rounding of the crossing.
 TYPED_TEST(ExactNarrowPhase, SegmentsCrossingAPlaneHitIt) {
   using S = TypeParam;
   std::mt19937 rng(38);

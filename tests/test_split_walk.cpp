@@ -1,4 +1,4 @@
-// The self walk of a large scene split over threads (issue 19, item 2): collideAll and
+// The self walk of a large scene split over threads: collideAll and
 // collideConcurrently with split_walk, on a CubeCollisionManager of thousands of objects, gather
 // their candidate pairs with the walk cut into tasks that OpenMP threads walk. The cut tasks,
 // concatenated, are the serial walk (the same pairs in the same order); the callback sees the

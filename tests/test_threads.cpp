@@ -1,4 +1,4 @@
-// Several threads query one manager at once (issue 7): every const query is safe to run
+// Several threads query one manager at once: every const query is safe to run
 // concurrently and each thread gets Naive's answer. Meant to run under ThreadSanitizer too
 // (-DCUBE_COLLISION_SANITIZE=thread), where any data race fails the test.
 

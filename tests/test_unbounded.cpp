@@ -1,4 +1,4 @@
-// Unbounded and huge objects (issue 7): planes and halfspaces (AABBs of +-max), rotated or not,
+// Unbounded and huge objects: planes and halfspaces (AABBs of +-max), rotated or not,
 // mixed with boxes, spheres and an OcTree spanning the scene. Every query kind must report what
 // fcl::NaiveCollisionManager reports, and objects crossing between the cubes and the unbounded
 // list must keep working.
@@ -465,7 +465,7 @@ TEST(Unbounded, OnlyUnboundedObjects) {
 // The callback order after the first setup() depends on the live registrations alone
 // (docs/guarantees.md, point 11): a manager that had a plane registered and removed before
 // its first setup() calls back in the same order as one that never had it, for a self-collide,
-// an object query and a manager query (issue 38, item 5: a removal used to leave the unbounded
+// an object query and a manager query (a removal used to leave the unbounded
 // list in swap order).
 TEST(Unbounded, OrderAfterTheFirstSetupIgnoresRemovedObjects) {
   Scene s = mixedScene(38, 300, false);

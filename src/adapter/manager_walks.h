@@ -2,7 +2,7 @@
 
 // The library's own ways into a CubeCollisionManager's collide walks, beside FCL's interface:
 // walks that hand the pipeline (queries.h) each pair's object ids, so that it reads the object
-// tables' per-id volumes, and a self-collide whose walk runs on several threads (issue 19). Not
+// tables' per-id volumes, and a self-collide whose walk runs on several threads. Not
 // public: users get them through collideAll and collideConcurrently.
 
 #include "core/task_sink.h"
