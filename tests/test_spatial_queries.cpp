@@ -17,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -28,13 +29,15 @@
 #include "cube_collision/cube_collision_manager.h"
 #include "cube_collision/spatial_queries.h"
 #include "scenes.h"
+#include "support/spatial_world.h"
 
 namespace {
 
-template <typename S>
-using Obj = fcl::CollisionObject<S>;
-template <typename S>
-using V3 = fcl::Vector3<S>;
+using spatial::heldBox;
+using spatial::Obj;
+using spatial::segments;
+using spatial::V3;
+using spatial::World;
 
 // The box test of the contract, written apart from the library's: entry and exit along the
 // segment, or false.
@@ -56,139 +59,17 @@ bool slab(const fcl::AABB<S>& box, const V3<S>& from, const V3<S>& to, double& e
   return lo_t <= hi_t;
 }
 
-// A world of mixed objects: the scene generator's boxes, spheres and cylinders (half of them as
-// meshes), plus cones, ellipsoids, capsules, convexes, and one plane and one halfspace.
-template <typename S>
-struct World {
-  std::vector<std::unique_ptr<Obj<S>>> own;
-  std::vector<Obj<S>*> objs;
-
-  World(std::size_t n, std::uint32_t seed, bool flat = true) {
-    for (int mesh = 0; mesh < 2; ++mesh) {
-      cube::scenes::SceneOptions o;
-      o.n = n / 2;
-      o.seed = seed + mesh;
-      o.meshes = mesh == 1;
-      o.half_extent = 50;
-      o.overlaps_per_object = 2.0;
-      auto sc = cube::scenes::makeScene<S>(o);
-      for (auto& p : sc.objects) own.push_back(std::move(p));
-    }
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(-45, 45), size(0.5, 4);
-    std::normal_distribution<double> g(0, 1);
-    auto verts = std::make_shared<std::vector<V3<S>>>(
-        std::vector<V3<S>>{{-1, -1, -1}, {1, -1, -1}, {0, 1, -1}, {0, 0, 1}});
-    auto faces = std::make_shared<std::vector<int>>(
-        std::vector<int>{3, 0, 1, 2, 3, 0, 3, 1, 3, 1, 3, 2, 3, 2, 3, 0});
-    for (std::size_t i = 0; i < n / 10; ++i) {
-      std::shared_ptr<fcl::CollisionGeometry<S>> geo;
-      const S a = S(size(rng));
-      switch (i % 4) {
-        case 0:
-          geo = std::make_shared<fcl::Cone<S>>(a, 2 * a);
-          break;
-        case 1:
-          geo = std::make_shared<fcl::Ellipsoid<S>>(a, a / 2, a * S(0.7));
-          break;
-        case 2:
-          geo = std::make_shared<fcl::Capsule<S>>(a / 2, a);
-          break;
-        default:
-          geo = std::make_shared<fcl::Convex<S>>(verts, 4, faces, true);
-          break;
-      }
-      Eigen::Quaternion<double> q(g(rng), g(rng), g(rng), g(rng));
-      q.normalize();
-      fcl::Transform3<S> tf = fcl::Transform3<S>::Identity();
-      tf.linear() = q.toRotationMatrix().cast<S>();
-      tf.translation() = V3<S>(S(u(rng)), S(u(rng)), S(u(rng)));
-      own.push_back(std::make_unique<Obj<S>>(geo, tf));
-    }
-    if (flat) {
-      own.push_back(std::make_unique<Obj<S>>(std::make_shared<fcl::Plane<S>>(V3<S>(1, 0, 0), 30)));
-      own.push_back(std::make_unique<Obj<S>>(
-          std::make_shared<fcl::Halfspace<S>>(V3<S>(0.3, -1, 0.2).normalized(), 40)));
-    }
-    // Shuffled, so that registration order is not kind order.
-    std::shuffle(own.begin(), own.end(), rng);
-    for (auto& p : own) {
-      p->computeAABB();
-      objs.push_back(p.get());
-    }
-  }
-};
-
-// The segments of the tests: random, axis-parallel, zero-length, from inside an object, lying
-// on a box face, ending exactly on a box face.
-template <typename S>
-std::vector<std::pair<V3<S>, V3<S>>> segments(const std::vector<Obj<S>*>& objs, int n,
-                                              std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-60, 60);
-  std::uniform_int_distribution<std::size_t> pick(0, objs.size() - 1);
-  std::vector<std::pair<V3<S>, V3<S>>> out;
-  const auto point = [&] { return V3<S>(S(u(rng)), S(u(rng)), S(u(rng))); };
-  for (int i = 0; i < n; ++i) {
-    const V3<S> a = point();
-    V3<S> b = point();
-    const fcl::AABB<S>& box = objs[pick(rng)]->getAABB();
-    switch (i % 7) {
-      case 0:
-      case 1:
-        out.emplace_back(a, b);
-        break;
-      case 2: {  // axis-parallel
-        b = a;
-        b[i % 3] = S(u(rng));
-        out.emplace_back(a, b);
-        break;
-      }
-      case 3:  // zero length
-        out.emplace_back(a, a);
-        break;
-      case 4:  // from inside an object's box (usually the object)
-        if (std::isfinite(box.center()[0] + box.center()[1] + box.center()[2]))
-          out.emplace_back(box.center(), b);
-        break;
-      case 5: {  // on the box's max-x face, moving in y and z only
-        V3<S> f = box.center(), t = b;
-        f[0] = t[0] = box.max_[0];
-        if (std::isfinite(f.sum() + t.sum())) out.emplace_back(f, t);
-        break;
-      }
-      default: {  // along x, ending exactly on the box's min-x face
-        V3<S> f = box.center(), t = box.center();
-        f[0] = box.min_[0] - S(10);
-        t[0] = box.min_[0];
-        if (std::isfinite(f.sum() + t.sum())) out.emplace_back(f, t);
-        break;
-      }
-    }
-  }
-  return out;
-}
-
-// The box the manager holds for o: its AABB grown by its margin (0 unless margins are set).
-template <typename S>
-fcl::AABB<S> heldBox(const cube::CubeCollisionManager<S>& m, const Obj<S>* o) {
-  const S g = m.margin(o);
-  fcl::AABB<S> b = o->getAABB();
-  for (int k = 0; k < 3; ++k) {
-    b.min_[k] = b.min_[k] - g;
-    b.max_[k] = b.max_[k] + g;
-  }
-  return b;
-}
-
-// Every registered object tested: the box test above, then raycastObject.
+// Every registered object the filter lets through tested: the box test above, then
+// raycastObject.
 template <typename S>
 std::vector<cube::RayHit<S>> bruteRay(const cube::CubeCollisionManager<S>& m, const V3<S>& from,
-                                      const V3<S>& to, const cube::RayOptions<S>& opt) {
+                                      const V3<S>& to, const cube::RayOptions<S>& opt,
+                                      const std::optional<cube::QueryFilter>& filter = {}) {
   std::vector<Obj<S>*> objs;
   m.getObjects(objs);
   std::vector<cube::RayHit<S>> hits;
   for (Obj<S>* o : objs) {
+    if (!spatial::lets(m, o, filter)) continue;
     double entry;
     const fcl::AABB<S> box = heldBox(m, o);
     const bool met = slab(box, from, to, entry);
@@ -249,10 +130,12 @@ void checkRays(const cube::CubeCollisionManager<S>& m, const std::vector<Obj<S>*
 }
 
 template <typename S>
-std::vector<Obj<S>*> bruteInBox(const cube::CubeCollisionManager<S>& m, const fcl::AABB<S>& q) {
+std::vector<Obj<S>*> bruteInBox(const cube::CubeCollisionManager<S>& m, const fcl::AABB<S>& q,
+                                const std::optional<cube::QueryFilter>& filter = {}) {
   std::vector<Obj<S>*> objs, out;
   m.getObjects(objs);
   for (Obj<S>* o : objs) {
+    if (!spatial::lets(m, o, filter)) continue;
     const fcl::AABB<S> b = heldBox(m, o);
     bool in = true;
     for (int k = 0; k < 3; ++k) in = in && b.min_[k] <= q.max_[k] && q.min_[k] <= b.max_[k];
@@ -262,10 +145,12 @@ std::vector<Obj<S>*> bruteInBox(const cube::CubeCollisionManager<S>& m, const fc
 }
 
 template <typename S>
-std::vector<Obj<S>*> bruteNear(const cube::CubeCollisionManager<S>& m, const V3<S>& p, S r) {
+std::vector<Obj<S>*> bruteNear(const cube::CubeCollisionManager<S>& m, const V3<S>& p, S r,
+                               const std::optional<cube::QueryFilter>& filter = {}) {
   std::vector<Obj<S>*> objs, out;
   m.getObjects(objs);
   for (Obj<S>* o : objs) {
+    if (!spatial::lets(m, o, filter)) continue;
     const fcl::AABB<S> b = heldBox(m, o);
     double sum = 0;
     bool far = false;
@@ -302,6 +187,54 @@ void checkRegions(const cube::CubeCollisionManager<S>& m, const std::vector<Obj<
   std::vector<Obj<S>*> all;
   m.getObjects(all);
   EXPECT_EQ(cube::objectsNear(m, V3<S>(0, 0, 0), std::numeric_limits<S>::infinity()), all);
+}
+
+// Rays (all and first, boxes and narrow phase) and regions under each query filter of the tests,
+// against the loops over every object the filter lets through; and without a filter, every
+// object whatever its bits. Counts the answers a filter changed, so that a test can tell the
+// filters were not idle.
+template <typename S>
+std::size_t checkFiltered(const cube::CubeCollisionManager<S>& m, const std::vector<Obj<S>*>& objs,
+                          std::uint32_t seed) {
+  std::size_t changed = 0;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-60, 60), r(0, 15);
+  const auto segs = segments(objs, 24, seed);
+  std::vector<std::optional<cube::QueryFilter>> filters = {std::nullopt};
+  for (const cube::QueryFilter& f : spatial::queryFilters()) filters.emplace_back(f);
+  for (const auto& filter : filters) {
+    const std::string name =
+        filter ? "filter " + std::to_string(filter->category) + "/" + std::to_string(filter->mask)
+               : "no filter";
+    for (const bool narrow : {false, true}) {
+      cube::RayOptions<S> opt;
+      opt.narrow_phase = narrow;
+      for (std::size_t i = 0; i < segs.size(); ++i) {
+        const auto& [from, to] = segs[i];
+        const std::string where =
+            name + (narrow ? " narrow" : " box") + " segment " + std::to_string(i);
+        const auto want = bruteRay(m, from, to, opt, filter);
+        expectSameHits(cube::raycastAll(m, from, to, opt, filter), want, where);
+        const auto first = cube::raycastFirst(m, from, to, opt, filter);
+        EXPECT_EQ(first.has_value(), !want.empty()) << where;
+        if (first && !want.empty()) expectSameHits<S>({*first}, {want.front()}, where + " (first)");
+        changed += want.size() != bruteRay(m, from, to, opt).size();
+      }
+    }
+    for (int i = 0; i < 30; ++i) {
+      const fcl::AABB<S> q(V3<S>(S(u(rng)), S(u(rng)), S(u(rng))),
+                           V3<S>(S(u(rng)), S(u(rng)), S(u(rng))));
+      const auto in_box = bruteInBox(m, q, filter);
+      EXPECT_EQ(cube::objectsInBox(m, q, filter), in_box) << name << " box query " << i;
+      const V3<S> p(S(u(rng)), S(u(rng)), S(u(rng)));
+      const S radius = S(r(rng));
+      const auto near = bruteNear(m, p, radius, filter);
+      EXPECT_EQ(cube::objectsNear(m, p, radius, filter), near) << name << " near query " << i;
+      changed += in_box != bruteInBox(m, q);
+      changed += near != bruteNear(m, p, radius);
+    }
+  }
+  return changed;
 }
 
 template <typename S>
@@ -495,6 +428,66 @@ TYPED_TEST(SpatialQueries, ConcurrentQueriesAgree) {
     });
   for (auto& th : threads) th.join();
   for (int t = 0; t < 4; ++t) EXPECT_EQ(mismatches[t], 0) << "thread " << t;
+}
+
+// Filter bits in each layout: none set (every object the default bits), few kinds (the cubes
+// keep them apart after update(): whole cubes skipped or passed), the same bits set after the
+// build (the cubes know no groups until the next update()), and hundreds of random values (more
+// than the filter groups, tested object by object).
+TYPED_TEST(SpatialQueries, FilterBitsRuleRaysAndRegionsAsLoopsOverEveryObject) {
+  using S = TypeParam;
+  World<S> w(500, 71);
+  for (const int kinds : {-1, 4, 6, 0}) {
+    for (const bool regroup : {true, false}) {
+      if (kinds < 0 && !regroup) continue;
+      cube::CubeCollisionManager<S> m;
+      m.registerObjects(w.objs);
+      if (kinds >= 0) spatial::setBits(m, w.objs, kinds, 72 + kinds);
+      if (regroup) m.update();
+      ASSERT_TRUE(m.validate());
+      const std::string where =
+          "kinds " + std::to_string(kinds) + (regroup ? " after update" : " before update");
+      const std::size_t changed = checkFiltered(m, w.objs, 73 + kinds);
+      EXPECT_GT(changed, 20u) << where << ": the filters should change many answers";
+      // Objects unregistered, moved and updated: their bits go or stay with them.
+      for (std::size_t i = 0; i < w.objs.size(); i += 13) m.unregisterObject(w.objs[i]);
+      std::vector<Obj<S>*> left;
+      m.getObjects(left);
+      for (std::size_t i = 0; i < left.size(); i += 5)
+        left[i]->setTranslation(left[i]->getTranslation() + V3<S>(3, -2, 1));
+      for (Obj<S>* o : left) o->computeAABB();
+      m.update();
+      ASSERT_TRUE(m.validate());
+      checkFiltered(m, left, 74 + kinds);
+    }
+  }
+}
+
+// The filter's bits against the default bits of objects that have none of their own: all of
+// them pass, or none.
+TYPED_TEST(SpatialQueries, FilterAgainstDefaultBitsPassesAllOrNone) {
+  using S = TypeParam;
+  World<S> w(200, 75);
+  cube::CubeCollisionManager<S> m;
+  m.registerObjects(w.objs);
+  const fcl::AABB<S> all(V3<S>::Constant(-std::numeric_limits<S>::infinity()),
+                         V3<S>::Constant(std::numeric_limits<S>::infinity()));
+  std::vector<Obj<S>*> every;
+  m.getObjects(every);
+  EXPECT_EQ(cube::objectsInBox(m, all, cube::QueryFilter{}), every);
+  EXPECT_EQ(cube::objectsInBox(m, all, cube::QueryFilter{3, 1}), every);
+  EXPECT_TRUE(cube::objectsInBox(m, all, cube::QueryFilter{2, 2}).empty());
+  EXPECT_TRUE(cube::objectsInBox(m, all, cube::QueryFilter{1, 2}).empty());
+  EXPECT_TRUE(
+      cube::raycastAll(m, V3<S>(-60, -60, -60), V3<S>(60, 60, 60), {}, cube::QueryFilter{1, 2})
+          .empty());
+  // An object that pairs with nothing is still found without a filter.
+  m.setFilter(w.objs[0], 1, 0);
+  const auto found = cube::objectsInBox(m, all);
+  EXPECT_EQ(found, every);
+  const auto filtered = cube::objectsInBox(m, all, cube::QueryFilter{});
+  EXPECT_EQ(filtered.size(), every.size() - 1);
+  EXPECT_EQ(std::count(filtered.begin(), filtered.end(), w.objs[0]), 0);
 }
 
 TYPED_TEST(SpatialQueries, EmptyManagerFindsNothing) {

@@ -1,21 +1,35 @@
 #pragma once
 
 // Queries that FCL's managers do not have: the objects a segment (a ray of finite length) meets,
-// first or all, and the objects in a region (a box, or within a distance of a point). They walk
-// the manager's cube hierarchy, so a query reads the few cubes near the segment or region instead
-// of every object. Compiled into the library for S = double and S = float. Const and safe from
-// any number of threads at once, like the manager's other queries; they may be called from inside
-// a manager callback.
+// first or all, and the objects in a region (a box, within a distance of a point, or touching a
+// capsule). They walk the manager's cube hierarchy, so a query reads the few cubes near the
+// segment or region instead of every object. Each may take filter bits (QueryFilter) that the
+// objects' bits must let through. Compiled into the library for S = double and S = float. Const
+// and safe from any number of threads at once, like the manager's other queries; they may be
+// called from inside a manager callback.
 
 #include <fcl/math/bv/AABB.h>
 #include <fcl/narrowphase/collision_object.h>
 
+#include <cstdint>
 #include <optional>
 #include <vector>
 
 #include "cube_collision/cube_collision_manager.h"
 
 namespace cube {
+
+/// Filter bits of a ray or region query (as Box2D's b2QueryFilter): the query reports an object
+/// only if its bits (CubeCollisionManager::setFilter; default category 1, mask all ones) and
+/// these let the two pair by the rule pairs of objects follow: (object.category & mask) != 0 and
+/// (category & object.mask) != 0. The pair predicate (setPairFilter) rules pairs of objects and
+/// is not asked. A query given no filter (std::nullopt, the default) reports every object,
+/// whatever its bits; QueryFilter{} is the default bits, which an object whose mask leaves out
+/// category 1 rejects.
+struct QueryFilter {
+  std::uint64_t category = 1;
+  std::uint64_t mask = ~std::uint64_t(0);
+};
 
 /// What decided a ray hit.
 enum class HitKind {
@@ -55,20 +69,24 @@ struct RayOptions {
 /// the earliest registered, i.e. first in getObjects()). Each object is tested exactly as
 /// raycastObject() tests it, against the box the manager holds for it: its AABB as of the last
 /// registration or update(), grown by its margin if margins are set (setMargin). The answer
-/// equals the minimum of raycastObject() with that box over every registered object. A segment of
-/// length 0 is the point `from`. Throws std::invalid_argument if `from` or `to` is not finite
-/// (or their difference overflows) or the tolerance is negative or NaN.
+/// equals the minimum of raycastObject() with that box over every registered object that
+/// `filter` lets through (QueryFilter; none: every object). A segment of length 0 is the point
+/// `from`. Throws std::invalid_argument if `from` or `to` is not finite (or their difference
+/// overflows) or the tolerance is negative or NaN.
 template <typename S>
 std::optional<RayHit<S>> raycastFirst(const CubeCollisionManager<S>& manager,
                                       const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
-                                      const RayOptions<S>& options = {});
+                                      const RayOptions<S>& options = {},
+                                      std::optional<QueryFilter> filter = std::nullopt);
 
 /// Every object the segment meets, by t (equal t: registration order); equal to raycastObject()
-/// on every registered object, kept where it hits. Same input checks as raycastFirst.
+/// on every registered object that `filter` lets through (none: every object), kept where it
+/// hits. Same input checks as raycastFirst.
 template <typename S>
 std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
                                   const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
-                                  const RayOptions<S>& options = {});
+                                  const RayOptions<S>& options = {},
+                                  std::optional<QueryFilter> filter = std::nullopt);
 
 /// The per-object test behind raycastFirst and raycastAll, against `box` (the object's AABB as
 /// the manager holds it; obj.getAABB() outside one).
@@ -107,16 +125,18 @@ std::optional<RayHit<S>> raycastObject(const fcl::CollisionObject<S>& obj, const
                                        const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
                                        const RayOptions<S>& options = {});
 
-/// Every registered object whose AABB (the box the manager holds, as for raycastFirst) overlaps
-/// `box` (closed: touching counts), in registration order. Infinite bounds are allowed (a
-/// half-open region). Throws std::invalid_argument if a bound is NaN or box.min_ exceeds
-/// box.max_ on some axis.
+/// Every registered object that `filter` lets through (QueryFilter; none: every object) and
+/// whose AABB (the box the manager holds, as for raycastFirst) overlaps `box` (closed: touching
+/// counts), in registration order. Infinite bounds are allowed (a half-open region). Throws
+/// std::invalid_argument if a bound is NaN or box.min_ exceeds box.max_ on some axis.
 template <typename S>
-std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>& manager,
-                                                   const fcl::AABB<S>& box);
+std::vector<fcl::CollisionObject<S>*> objectsInBox(
+    const CubeCollisionManager<S>& manager, const fcl::AABB<S>& box,
+    std::optional<QueryFilter> filter = std::nullopt);
 
-/// Every registered object whose AABB (the box the manager holds, as for raycastFirst) lies
-/// within `radius` of `point` (closed), in registration order. The distance is the Euclidean one
+/// Every registered object that `filter` lets through (QueryFilter; none: every object) and
+/// whose AABB (the box the manager holds, as for raycastFirst) lies within `radius` of `point`
+/// (closed), in registration order. The distance is the Euclidean one
 /// from the point to the box (0 inside), tested in double as: every per-axis gap at most radius,
 /// and the sum of the squared gaps at most radius squared (for radius above 1e150, of the squared
 /// gaps divided by radius, at most 1). This is the box's distance, not the geometry's: a box
@@ -124,6 +144,31 @@ std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>
 /// std::invalid_argument if `point` is not finite or radius is negative or NaN.
 template <typename S>
 std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>& manager,
-                                                  const fcl::Vector3<S>& point, S radius);
+                                                  const fcl::Vector3<S>& point, S radius,
+                                                  std::optional<QueryFilter> filter = std::nullopt);
+
+/// Every registered object that `filter` lets through (QueryFilter; none: every object) and that
+/// the capsule of radius `radius` about the segment from `a` to `b` touches, in registration
+/// order. The capsule is FCL's: fcl::Capsule<S>(radius, lz = (b - a).norm()), its axis (local z)
+/// turned onto the segment by Eigen::Quaternion<S>::FromTwoVectors(UnitZ, b - a) (the identity
+/// if a == b), centred at a + (b - a) / 2. A segment of length 0 is a ball of that radius about
+/// `a`; radius 0 is the segment itself.
+///
+/// An object is reported if and only if FCL's narrow phase (fcl::collide with a default request,
+/// the library's answers where FCL 0.7 is wrong, as the manager's collide pipeline) says the
+/// capsule and the object, at its current transform, collide; touching counts as FCL counts it.
+/// The boxes the manager holds (as for raycastFirst) only choose the objects put to FCL: those
+/// whose box, widened per axis by radius plus a rounding allowance (1e-5 of radius + the
+/// segment's largest coordinate + 1), the segment meets; an object whose box is current (update()
+/// since it last moved) and farther from the segment than that cannot touch the capsule. Objects
+/// without a geometry are never reported.
+///
+/// Throws std::invalid_argument (nothing read) if `a` or `b` is not finite, their difference
+/// overflows, radius is negative, NaN or infinite, or the square of the capsule's extent
+/// (|b - a| + 2 radius) overflows in S.
+template <typename S>
+std::vector<fcl::CollisionObject<S>*> objectsInCapsule(
+    const CubeCollisionManager<S>& manager, const fcl::Vector3<S>& a, const fcl::Vector3<S>& b,
+    S radius, std::optional<QueryFilter> filter = std::nullopt);
 
 }  // namespace cube

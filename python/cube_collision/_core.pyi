@@ -158,16 +158,19 @@ class CollisionManager:
         its exact distance, -1 when they meet."""
 
     def ray_first(self, origins: ArrayLike, ends: ArrayLike, narrow_phase: bool = True,
-                  tolerance: float = 1e-6) -> Tuple[npt.NDArray[np.object_],
-                                                    npt.NDArray[np.float64],
-                                                    npt.NDArray[np.float64]]:
-        """(names or None, t or NaN, points) of the first hit of each segment."""
+                  tolerance: float = 1e-6, *, filter: Optional[Tuple[int, int]] = None
+                  ) -> Tuple[npt.NDArray[np.object_], npt.NDArray[np.float64],
+                             npt.NDArray[np.float64]]:
+        """(names or None, t or NaN, points) of the first hit of each segment; filter: the
+        query's (category, mask) bits (None: every object)."""
     def ray_all(self, origin: ArrayLike, end: ArrayLike, narrow_phase: bool = True,
-                tolerance: float = 1e-6) -> Tuple[List[str], npt.NDArray[np.float64],
-                                                  npt.NDArray[np.float64]]:
+                tolerance: float = 1e-6, *, filter: Optional[Tuple[int, int]] = None
+                ) -> Tuple[List[str], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(names, t, points) of every hit of one segment, by t."""
-    def objects_in_box(self, lower: ArrayLike, upper: ArrayLike) -> List[str]: ...
-    def objects_near(self, point: ArrayLike, radius: float) -> List[str]: ...
+    def objects_in_box(self, lower: ArrayLike, upper: ArrayLike, *,
+                       filter: Optional[Tuple[int, int]] = None) -> List[str]: ...
+    def objects_near(self, point: ArrayLike, radius: float, *,
+                     filter: Optional[Tuple[int, int]] = None) -> List[str]: ...
 
     def check_states(self, body: Body, poses: ArrayLike, *, self_collision: bool = False,
                      first_pair: bool = False, clearance: bool = False,

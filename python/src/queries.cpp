@@ -583,6 +583,19 @@ py::object distanceReturn(const DistOut& o, bool names, bool data, Kind kind) {
 
 // Rays and regions. The FCL backend loops over every object with the same per-object test
 // (cube::raycastObject on the object's box, grown by its margin as the cube manager's is).
+// A query's filter bits (none: every object) against each object's, as in
+// cube::QueryFilter.
+using Bits = std::optional<std::pair<std::uint64_t, std::uint64_t>>;
+
+std::optional<cube::QueryFilter> queryFilter(const Bits& bits) {
+  if (!bits) return std::nullopt;
+  return cube::QueryFilter{bits->first, bits->second};
+}
+
+bool lets(const Entry& e, const Bits& bits) {
+  return !bits || ((e.category & bits->second) != 0 && (bits->first & e.mask) != 0);
+}
+
 struct Ray {
   std::string name;
   double t, distance;
@@ -590,23 +603,26 @@ struct Ray {
 };
 
 std::vector<Ray> rayAll(const Manager& m, const fcl::Vector3d& from, const fcl::Vector3d& to,
-                        const cube::RayOptions<double>& opt, bool first_only) {
+                        const cube::RayOptions<double>& opt, bool first_only, const Bits& bits) {
   std::vector<Ray> out;
   auto add = [&](const cube::RayHit<double>& h) {
     out.push_back({nameOf(h.object), h.t, h.distance, h.point});
   };
   if (m.isCube()) {
     if (first_only) {
-      if (auto h = cube::raycastFirst(*m.cube(), from, to, opt)) add(*h);
+      if (auto h = cube::raycastFirst(*m.cube(), from, to, opt, queryFilter(bits))) add(*h);
     } else {
-      for (const auto& h : cube::raycastAll(*m.cube(), from, to, opt)) add(h);
+      for (const auto& h : cube::raycastAll(*m.cube(), from, to, opt, queryFilter(bits))) add(h);
     }
     return out;
   }
   std::vector<std::pair<cube::RayHit<double>, std::uint64_t>> hits;
   for (const Entry* e : m.ordered())
-    if (auto h = cube::raycastObject<double>(*e->obj, e->obj->getAABB(), from, to, opt))
+    if (!lets(*e, bits)) {
+      continue;
+    } else if (auto h = cube::raycastObject<double>(*e->obj, e->obj->getAABB(), from, to, opt)) {
       hits.emplace_back(*h, e->seq);
+    }
   std::stable_sort(hits.begin(), hits.end(),
                    [](const auto& x, const auto& y) { return x.first.t < y.first.t; });
   if (first_only && hits.size() > 1) hits.resize(1);
@@ -615,15 +631,16 @@ std::vector<Ray> rayAll(const Manager& m, const fcl::Vector3d& from, const fcl::
 }
 
 std::vector<std::string> region(const Manager& m, const fcl::AABBd* box, const fcl::Vector3d* point,
-                                double radius) {
+                                double radius, const Bits& bits) {
   std::vector<std::string> out;
   if (m.isCube()) {
-    const auto objs =
-        box ? cube::objectsInBox(*m.cube(), *box) : cube::objectsNear(*m.cube(), *point, radius);
+    const auto objs = box ? cube::objectsInBox(*m.cube(), *box, queryFilter(bits))
+                          : cube::objectsNear(*m.cube(), *point, radius, queryFilter(bits));
     for (auto* o : objs) out.push_back(nameOf(o));
     return out;
   }
   for (const Entry* e : m.ordered()) {
+    if (!lets(*e, bits)) continue;
     const fcl::AABBd& b = e->obj->getAABB();
     bool in = true;
     if (box) {
@@ -892,7 +909,8 @@ filter bits let them pair. Returns distance, plus the (name here, name there) tu
 data dict, as min_distance_internal.)doc")
       .def(
           "ray_first",
-          [](const Manager& m, py::handle origins, py::handle ends, bool narrow, double tol) {
+          [](const Manager& m, py::handle origins, py::handle ends, bool narrow, double tol,
+             const Bits& bits) {
             Array o = floats(origins, "origins", {-1, 3});
             Array e = floats(ends, "ends", {o.shape(0), 3});
             if (!(tol >= 0)) throw py::value_error("tolerance must be >= 0");
@@ -905,7 +923,7 @@ data dict, as min_distance_internal.)doc")
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
               for (std::size_t i = 0; i < n; ++i) {
-                auto r = rayAll(m, vec3(o.data() + 3 * i), vec3(e.data() + 3 * i), opt, true);
+                auto r = rayAll(m, vec3(o.data() + 3 * i), vec3(e.data() + 3 * i), opt, true, bits);
                 if (!r.empty()) hits[i] = r[0];
               }
             }
@@ -924,16 +942,18 @@ data dict, as min_distance_internal.)doc")
             return py::make_tuple(arr, t, pts);
           },
           py::arg("origins"), py::arg("ends"), py::arg("narrow_phase") = true,
-          py::arg("tolerance") = 1e-6, R"doc(
+          py::arg("tolerance") = 1e-6, py::kw_only(), py::arg("filter") = py::none(), R"doc(
 The first object each segment meets: origins and ends are (n, 3) arrays, segment i from
 origins[i] to ends[i]. Returns (names (n,) object array, None for a miss; t (n,) in [0, 1] along
 the segment, NaN for a miss; points (n, 3), NaN for a miss). narrow_phase=False: the objects'
 boxes decide. Exact for primitives, within `tolerance` (a length) for meshes, cones and convexes
-(cube_collision/spatial_queries.h). Ties: the earlier added object. ValueError for non-finite
-or mis-shaped points, a negative tolerance.)doc")
+(cube_collision/spatial_queries.h). Ties: the earlier added object. filter: the query's
+(category, mask) filter bits: only objects whose bits (set_filter) pair with them are hit
+(None: every object). ValueError for non-finite or mis-shaped points, a negative tolerance.)doc")
       .def(
           "ray_all",
-          [](const Manager& m, py::handle origin, py::handle end, bool narrow, double tol) {
+          [](const Manager& m, py::handle origin, py::handle end, bool narrow, double tol,
+             const Bits& bits) {
             Array o = floats(origin, "origin", {3});
             Array e = floats(end, "end", {3});
             if (!(tol >= 0)) throw py::value_error("tolerance must be >= 0");
@@ -944,7 +964,7 @@ or mis-shaped points, a negative tolerance.)doc")
             {
               py::gil_scoped_release nogil;
               ReadLocks lock(m);
-              hits = rayAll(m, vec3(o.data()), vec3(e.data()), opt, false);
+              hits = rayAll(m, vec3(o.data()), vec3(e.data()), opt, false, bits);
             }
             const auto n = static_cast<py::ssize_t>(hits.size());
             py::list names;
@@ -959,12 +979,12 @@ or mis-shaped points, a negative tolerance.)doc")
             return py::make_tuple(names, t, pts);
           },
           py::arg("origin"), py::arg("end"), py::arg("narrow_phase") = true,
-          py::arg("tolerance") = 1e-6, R"doc(
+          py::arg("tolerance") = 1e-6, py::kw_only(), py::arg("filter") = py::none(), R"doc(
 Every object the segment from origin (3,) to end (3,) meets, by t (ties: the earlier added).
-Returns (names list, t (k,), points (k, 3)). As ray_first otherwise.)doc")
+Returns (names list, t (k,), points (k, 3)). As ray_first otherwise (filter too).)doc")
       .def(
           "objects_in_box",
-          [](const Manager& m, py::handle lower, py::handle upper) {
+          [](const Manager& m, py::handle lower, py::handle upper, const Bits& bits) {
             Array lo = floats(lower, "lower", {3}, false);
             Array hi = floats(upper, "upper", {3}, false);
             fcl::AABBd box;
@@ -976,26 +996,29 @@ Returns (names list, t (k,), points (k, 3)). As ray_first otherwise.)doc")
             }
             py::gil_scoped_release nogil;
             ReadLocks lock(m);
-            return region(m, &box, nullptr, 0);
+            return region(m, &box, nullptr, 0, bits);
           },
-          py::arg("lower"), py::arg("upper"), R"doc(
+          py::arg("lower"), py::arg("upper"), py::kw_only(), py::arg("filter") = py::none(),
+          R"doc(
 The names of the objects whose box (the AABB, grown by the margin) overlaps the box
-[lower, upper] (touching counts; infinite bounds allowed), in the order added. ValueError for a
-NaN bound or lower > upper.)doc")
+[lower, upper] (touching counts; infinite bounds allowed), in the order added. filter: the
+query's (category, mask) filter bits, as ray_first's (None: every object). ValueError for a NaN
+bound or lower > upper.)doc")
       .def(
           "objects_near",
-          [](const Manager& m, py::handle point, double radius) {
+          [](const Manager& m, py::handle point, double radius, const Bits& bits) {
             Array p = floats(point, "point", {3});
             if (!(radius >= 0)) throw py::value_error("radius must be >= 0");
             const fcl::Vector3d c = vec3(p.data());
             py::gil_scoped_release nogil;
             ReadLocks lock(m);
-            return region(m, nullptr, &c, radius);
+            return region(m, nullptr, &c, radius, bits);
           },
-          py::arg("point"), py::arg("radius"), R"doc(
+          py::arg("point"), py::arg("radius"), py::kw_only(), py::arg("filter") = py::none(),
+          R"doc(
 The names of the objects whose box (the AABB, grown by the margin) lies within radius of point
-(the distance to the box, not to the geometry), in the order added. ValueError for a non-finite
-point or a negative or NaN radius.)doc")
+(the distance to the box, not to the geometry), in the order added. filter: as objects_in_box's.
+ValueError for a non-finite point or a negative or NaN radius.)doc")
       .def(
           "_collide_python",
           [](const Manager& m, py::function fn, py::object target) {

@@ -50,3 +50,43 @@ def test_regions_equal_a_loop_over_every_object():
         assert cube.objects_near(p, r) == loop.objects_near(p, r)
     assert cube.objects_in_box([-np.inf] * 3, [np.inf] * 3) == cube.names
     assert cube.objects_near([0, 0, 0], np.inf) == cube.names
+
+
+def test_filter_bits_rule_rays_and_regions_as_a_loop_over_every_object():
+    """Each backend's filtered answer is its unfiltered one less the objects the query's bits
+    reject (written here: each one's category meets the other's mask)."""
+    scene = mixed_scene(120, 10)
+    cube, loop = build(scene), build(scene, "fcl")
+    layouts = [(1, 2**64 - 1), (2, 2 | 4), (4, 1 | 4), (8, 0)]
+    bits = {}
+    for i, name in enumerate(cube.names):
+        bits[name] = layouts[i % len(layouts)]
+        for m in (cube, loop):
+            m.set_filter(name, *bits[name])
+
+    def keep(names, f):
+        return [n for n in names if (bits[n][0] & f[1]) and (f[0] & bits[n][1])]
+
+    rng = np.random.default_rng(3)
+    changed = 0
+    for f in [(1, 2**64 - 1), (2, 2**64 - 1), (4, 8), (6, 1 | 2), (1, 0)]:
+        for m in (cube, loop):
+            o = rng.uniform(-1, 8, (20, 3))
+            e = rng.uniform(-1, 8, (20, 3))
+            for i in range(20):
+                full = m.ray_all(o[i], e[i])
+                got = m.ray_all(o[i], e[i], filter=f)
+                want = [(n, t) for n, t in zip(full[0], full[1]) if keep([n], f)]
+                assert list(zip(got[0], got[1])) == want
+                first = m.ray_first(o[i:i + 1], e[i:i + 1], filter=f)
+                assert first[0][0] == (want[0][0] if want else None)
+                changed += len(full[0]) != len(got[0])
+            for _ in range(10):
+                lo = rng.uniform(0, 6, 3)
+                hi = lo + rng.uniform(0, 3, 3)
+                assert m.objects_in_box(lo, hi, filter=f) == keep(m.objects_in_box(lo, hi), f)
+                p, r = rng.uniform(0, 6, 3), rng.uniform(0, 2)
+                assert m.objects_near(p, r, filter=f) == keep(m.objects_near(p, r), f)
+                changed += len(m.objects_in_box(lo, hi, filter=f)) != len(m.objects_in_box(lo, hi))
+        assert cube.objects_in_box([-np.inf] * 3, [np.inf] * 3, filter=f) == keep(cube.names, f)
+    assert changed > 20

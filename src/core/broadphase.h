@@ -16,6 +16,7 @@
 #include "core/cube_tree.h"
 #include "core/kernels/box_ops.h"
 #include "core/object_table.h"
+#include "core/pair_gate.h"
 #include "core/pair_list.h"
 #include "core/rebuild_policy.h"
 #include "core/task_sink.h"
@@ -29,23 +30,57 @@
 namespace cube {
 namespace detail {
 
-/// Broadphase::search's visitor of walkTree: the region's choices, cube by cube.
+/// Hands region.leaf the runs of consecutive objects of items[0, n) that pass the query's filter
+/// bits (gate.query) against their own: the regions need not know about filters.
 template <typename S, class Region>
+void filteredLeaf(Region& region, const PairGate<S>& gate, const Item<S>* items, std::uint32_t n,
+                  const std::uint32_t* seq) {
+  const auto pass = [&](const Item<S>& it) {
+    return it.obj != nullptr && gate.bitsPass(it.id, kNone);
+  };
+  std::uint32_t i = 0;
+  while (i < n) {
+    while (i < n && !pass(items[i])) ++i;
+    std::uint32_t j = i;
+    while (j < n && pass(items[j])) ++j;
+    if (j > i) region.leaf(items + i, j - i, seq);
+    i = j;
+  }
+}
+
+/// Broadphase::search's visitor of walkTree: the region's choices, cube by cube. Gated: the
+/// query's filter bits too; a cube whose filter group they reject is not entered, a leaf whose
+/// group they pass is handed on whole, the others object by object (filteredLeaf).
+template <typename S, class Region, bool Gated = false>
 struct RegionGuide {
   using State = typename Region::State;
   static constexpr bool kOrdered = Region::kOrdered;
   const View<S>& cubes;
   const std::uint32_t* seq;
   Region& region;
+  const PairGate<S>* gate = nullptr;  ///< Gated: the query's bits (query) and the objects'
   static bool before(const State& x, const State& y) { return Region::before(x, y); }
   bool worth(const State& s) const { return region.worth(s); }
+  /// 1: every object of the cube passes the bits, 0: none does, -1: unknown.
+  int groupPasses(std::uint32_t cube) const {
+    return cubes.groups == nullptr ? -1 : gate->groupsPass(cubes.groups[cube], kMixedGroup, true);
+  }
   bool enter(std::uint32_t child, int, const State&, State& out) {
     const Node& n = cubes.nodes[child];
+    if constexpr (Gated) {
+      if (groupPasses(child) == 0) return false;
+    }
     return region.enters(n.lo, n.hi, out);
   }
   Step at(std::uint32_t cube, const State&) {
     const Node& n = cubes.nodes[cube];
     if (!n.isLeaf()) return Step::open;
+    if constexpr (Gated) {
+      if (groupPasses(cube) != 1) {
+        filteredLeaf(region, *gate, cubes.items + n.first, n.count, seq);
+        return Step::skip;
+      }
+    }
     region.leaf(cubes.items + n.first, n.count, seq);
     return Step::skip;
   }
@@ -184,9 +219,11 @@ class Broadphase {
   /// `bool worth(State)` as walkTree's visitor; `bool enters(const float* lo, const float* hi,
   /// State& out)` for a cube (and the root); `void leaf(const Item<S>* items, std::uint32_t n,
   /// const std::uint32_t* seq)` for a run of objects, dead slots (obj null) included, seq the
-  /// registration numbers by id.
+  /// registration numbers by id. With `bits` (null: every object), only the objects whose filter
+  /// bits and `bits` pass filtersPass reach the region (as an object query's id kNone: the gate's
+  /// bits and groups, not its other rules, which rule pairs of objects).
   template <class Region>
-  void search(Region& region) const;
+  void search(Region& region, const Filter* bits = nullptr) const;
 
   /// Registered objects in registration order.
   void objects(std::vector<Object*>& out) const { table_.objects(out); }
@@ -376,15 +413,38 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
 
 template <typename S>
 template <class Region>
-void Broadphase<S>::search(Region& region) const {
+void Broadphase<S>::search(Region& region, const Filter* bits) const {
+  std::optional<PairGate<S>> gated;
+  if (bits != nullptr) {
+    Against query;
+    query.bits = *bits;
+    gated = gate(&query);
+    // Objects without bits of their own all have the default: one answer for every object.
+    if (!gated->hasBits()) {
+      if (!filtersPass(Filter{}, *bits)) return;
+      gated.reset();
+    }
+  }
   const std::uint32_t* seq = table_.seqs();
-  if (!unbounded_.empty()) region.leaf(unbounded_.items().data(), unbounded_.size(), seq);
+  if (!unbounded_.empty()) {
+    if (gated)
+      filteredLeaf(region, *gated, unbounded_.items().data(), std::uint32_t(unbounded_.size()),
+                   seq);
+    else
+      region.leaf(unbounded_.items().data(), unbounded_.size(), seq);
+  }
   const View<S> cubes = tree_.view();
   if (cubes.root == kNone) return;
   typename Region::State start{};
   const Node& root = cubes.nodes[cubes.root];
-  if (!region.enters(root.lo, root.hi, start)) return;
-  RegionGuide<S, Region> guide{cubes, seq, region};
+  if (!gated) {
+    if (!region.enters(root.lo, root.hi, start)) return;
+    RegionGuide<S, Region> guide{cubes, seq, region};
+    walkTree(cubes.nodes, cubes.root, start, guide);
+    return;
+  }
+  RegionGuide<S, Region, true> guide{cubes, seq, region, &*gated};
+  if (guide.groupPasses(cubes.root) == 0 || !region.enters(root.lo, root.hi, start)) return;
   walkTree(cubes.nodes, cubes.root, start, guide);
 }
 

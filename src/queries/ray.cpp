@@ -164,6 +164,15 @@ struct FirstRegion {
   }
 };
 
+// The core's search of the region, under the filter's bits if any.
+template <typename S, class R>
+void search(const CubeCollisionManager<S>& manager, R& region,
+            const std::optional<QueryFilter>& filter) {
+  if (!filter) return detail::coreOf(manager).search(region);
+  const detail::Filter bits{filter->category, filter->mask};
+  detail::coreOf(manager).search(region, &bits);
+}
+
 }  // namespace
 
 template <typename S>
@@ -188,13 +197,14 @@ std::optional<RayHit<S>> raycastObject(const fcl::CollisionObject<S>& obj, const
 template <typename S>
 std::optional<RayHit<S>> raycastFirst(const CubeCollisionManager<S>& manager,
                                       const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
-                                      const RayOptions<S>& options) {
+                                      const RayOptions<S>& options,
+                                      std::optional<QueryFilter> filter) {
   checkRay(from, to, options);
   RayQuery<S> q(from, to, options);
   std::optional<Found<S>> best;
   std::vector<std::pair<double, std::uint32_t>> order;
   FirstRegion<S> r{q, best, order};
-  detail::coreOf(manager).search(r);
+  search(manager, r, filter);
   if (!best) return std::nullopt;
   return publish(*best, from, to);
 }
@@ -202,12 +212,12 @@ std::optional<RayHit<S>> raycastFirst(const CubeCollisionManager<S>& manager,
 template <typename S>
 std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
                                   const fcl::Vector3<S>& from, const fcl::Vector3<S>& to,
-                                  const RayOptions<S>& options) {
+                                  const RayOptions<S>& options, std::optional<QueryFilter> filter) {
   checkRay(from, to, options);
   RayQuery<S> q(from, to, options);
   std::vector<Found<S>> found;
   AllRegion<S> r{q, found};
-  detail::coreOf(manager).search(r);
+  search(manager, r, filter);
   std::sort(found.begin(), found.end(), earlier<S>);
   std::vector<RayHit<S>> out;
   out.reserve(found.size());
@@ -216,12 +226,12 @@ std::vector<RayHit<S>> raycastAll(const CubeCollisionManager<S>& manager,
 }
 
 #define CUBE_RAY_INSTANTIATE(S)                                                                    \
-  template std::optional<RayHit<S>> raycastFirst<S>(const CubeCollisionManager<S>&,                \
-                                                    const fcl::Vector3<S>&,                        \
-                                                    const fcl::Vector3<S>&, const RayOptions<S>&); \
+  template std::optional<RayHit<S>> raycastFirst<S>(                                               \
+      const CubeCollisionManager<S>&, const fcl::Vector3<S>&, const fcl::Vector3<S>&,              \
+      const RayOptions<S>&, std::optional<QueryFilter>);                                           \
   template std::vector<RayHit<S>> raycastAll<S>(const CubeCollisionManager<S>&,                    \
                                                 const fcl::Vector3<S>&, const fcl::Vector3<S>&,    \
-                                                const RayOptions<S>&);                             \
+                                                const RayOptions<S>&, std::optional<QueryFilter>); \
   template std::optional<RayHit<S>> raycastObject<S>(                                              \
       const fcl::CollisionObject<S>&, const fcl::AABB<S>&, const fcl::Vector3<S>&,                 \
       const fcl::Vector3<S>&, const RayOptions<S>&);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -50,10 +51,16 @@ struct Region {
 
 template <typename S, class Pred>
 std::vector<fcl::CollisionObject<S>*> region(const CubeCollisionManager<S>& manager,
-                                             const Pred& pred) {
+                                             const Pred& pred,
+                                             const std::optional<QueryFilter>& filter) {
   std::vector<std::pair<std::uint32_t, fcl::CollisionObject<S>*>> found;
   Region<S, Pred> r{pred, found};
-  detail::coreOf(manager).search(r);
+  if (filter) {
+    const detail::Filter bits{filter->category, filter->mask};
+    detail::coreOf(manager).search(r, &bits);
+  } else {
+    detail::coreOf(manager).search(r);
+  }
   std::sort(found.begin(), found.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<fcl::CollisionObject<S>*> out;
@@ -97,7 +104,8 @@ struct Near {
 
 template <typename S>
 std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>& manager,
-                                                   const fcl::AABB<S>& box) {
+                                                   const fcl::AABB<S>& box,
+                                                   std::optional<QueryFilter> filter) {
   InBox pred;
   for (int k = 0; k < 3; ++k) {
     pred.lo[k] = double(box.min_[k]);
@@ -107,25 +115,26 @@ std::vector<fcl::CollisionObject<S>*> objectsInBox(const CubeCollisionManager<S>
     if (pred.lo[k] > pred.hi[k])
       throw std::invalid_argument("cube::objectsInBox: the box's min exceeds its max");
   }
-  return region(manager, pred);
+  return region(manager, pred, filter);
 }
 
 template <typename S>
 std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>& manager,
-                                                  const fcl::Vector3<S>& point, S radius) {
+                                                  const fcl::Vector3<S>& point, S radius,
+                                                  std::optional<QueryFilter> filter) {
   Near pred;
   for (int k = 0; k < 3; ++k) pred.p[k] = double(point[k]);
   checkFinite(pred.p, "cube::objectsNear: the point");
   pred.r = double(radius);
   if (!(pred.r >= 0)) throw std::invalid_argument("cube::objectsNear: radius is negative or NaN");
-  return region(manager, pred);
+  return region(manager, pred, filter);
 }
 
-#define CUBE_REGION_INSTANTIATE(S)                                                               \
-  template std::vector<fcl::CollisionObject<S>*> objectsInBox<S>(const CubeCollisionManager<S>&, \
-                                                                 const fcl::AABB<S>&);           \
-  template std::vector<fcl::CollisionObject<S>*> objectsNear<S>(const CubeCollisionManager<S>&,  \
-                                                                const fcl::Vector3<S>&, S);
+#define CUBE_REGION_INSTANTIATE(S)                                                      \
+  template std::vector<fcl::CollisionObject<S>*> objectsInBox<S>(                       \
+      const CubeCollisionManager<S>&, const fcl::AABB<S>&, std::optional<QueryFilter>); \
+  template std::vector<fcl::CollisionObject<S>*> objectsNear<S>(                        \
+      const CubeCollisionManager<S>&, const fcl::Vector3<S>&, S, std::optional<QueryFilter>);
 
 CUBE_REGION_INSTANTIATE(double)
 CUBE_REGION_INSTANTIATE(float)
