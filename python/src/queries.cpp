@@ -617,12 +617,11 @@ std::vector<Ray> rayAll(const Manager& m, const fcl::Vector3d& from, const fcl::
     return out;
   }
   std::vector<std::pair<cube::RayHit<double>, std::uint64_t>> hits;
-  for (const Entry* e : m.ordered())
-    if (!lets(*e, bits)) {
-      continue;
-    } else if (auto h = cube::raycastObject<double>(*e->obj, e->obj->getAABB(), from, to, opt)) {
+  for (const Entry* e : m.ordered()) {
+    if (!lets(*e, bits)) continue;
+    if (auto h = cube::raycastObject<double>(*e->obj, e->obj->getAABB(), from, to, opt))
       hits.emplace_back(*h, e->seq);
-    }
+  }
   std::stable_sort(hits.begin(), hits.end(),
                    [](const auto& x, const auto& y) { return x.first.t < y.first.t; });
   if (first_only && hits.size() > 1) hits.resize(1);
