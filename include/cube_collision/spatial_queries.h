@@ -151,15 +151,15 @@ std::vector<fcl::CollisionObject<S>*> objectsNear(const CubeCollisionManager<S>&
 /// the capsule of radius `radius` about the segment from `a` to `b` touches, in registration
 /// order. The capsule is FCL's: fcl::Capsule<S>(radius, lz = (b - a).norm()), its axis (local z)
 /// turned onto the segment by Eigen::Quaternion<S>::FromTwoVectors(UnitZ, b - a) (the identity
-/// if a == b), centred at a + (b - a) / 2. A segment of length 0 is a ball of that radius about
+/// where lz is 0), centred at a + (b - a) / 2. A segment of length 0 is a ball of that radius about
 /// `a`; radius 0 is the segment itself.
 ///
 /// An object is reported if and only if FCL's narrow phase (fcl::collide with a default request,
 /// the library's answers where FCL 0.7 is wrong, as the manager's collide pipeline) says the
 /// capsule and the object, at its current transform, collide; touching counts as FCL counts it.
 /// The boxes the manager holds (as for raycastFirst) only choose the objects put to FCL: those
-/// whose box, widened per axis by radius plus a rounding allowance (1e-5 of radius + the
-/// segment's largest coordinate + 1), the segment meets; an object whose box is current (update()
+/// whose box, widened per axis by radius plus a rounding allowance (1e-5 times radius + 1 + the
+/// largest |coordinate| of a and b), the segment meets; an object whose box is current (update()
 /// since it last moved) and farther from the segment than that cannot touch the capsule. Objects
 /// without a geometry are never reported.
 ///
