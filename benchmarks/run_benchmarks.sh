@@ -14,7 +14,7 @@ cmake --build "$build" -j2 --target cube_bench
 
 mkdir -p benchmarks/results
 json=benchmarks/results/cube_bench.json
-# The drift study (bench_drift.cpp, issue 3's threshold choice) is left out: it has its own table.
+# The drift study (bench_drift.cpp, the rebuild threshold's choice) is left out: it has its own table.
 filter=${CUBE_BENCH_FILTER:--^drift/}
 cmd="$build/benchmarks/cube_bench --benchmark_filter=$filter --benchmark_repetitions=$reps --benchmark_min_time=$min_time --benchmark_out=$json --benchmark_out_format=json"
 echo "+ $cmd"
