@@ -566,7 +566,9 @@ def bullet_text(path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("json")
+    ap.add_argument("json", nargs="?",
+                    help="cube_bench's JSON output; without it only the --bullet and --trimesh "
+                    "tables are made")
     ap.add_argument("--readme", help="README to update between the table markers")
     ap.add_argument("--plot-data", help="write gnuplot data for plot.gp here")
     ap.add_argument("--command", default="", help="the command that made the run")
@@ -577,22 +579,26 @@ def main():
     ap.add_argument("--clock", choices=["cpu", "real"], default="cpu",
                     help="cpu (default): CPU time, except hand-timed cases; real: wall time")
     args = ap.parse_args()
-    context, medians, counters, errors, reps = load(args.json, args.clock)
-    text = render(context, medians, counters, errors, reps, args.command, args.machine)
-    features = feature_text(args.json, args.batch)
+    errors = {}
+    text = features = ""
+    if args.json:
+        context, medians, counters, errors, reps = load(args.json, args.clock)
+        text = render(context, medians, counters, errors, reps, args.command, args.machine)
+        features = feature_text(args.json, args.batch)
     python_text = trimesh_text(args.trimesh) if args.trimesh else ""
     bullet = bullet_text(args.bullet) if args.bullet else ""
-    if args.plot_data:
+    if args.plot_data and args.json:
         plot_data(medians, args.plot_data)
     if args.readme:
         with open(args.readme) as f:
             readme = f.read()
         if BEGIN not in readme or END not in readme:
             sys.exit(f"{args.readme}: markers not found")
-        head, rest = readme.split(BEGIN, 1)
-        _, tail = rest.split(END, 1)
-        readme = head + BEGIN + "\n\n" + text + "\n" + END + tail
-        if FEATURE_BEGIN in readme and FEATURE_END in readme:
+        if args.json:
+            head, rest = readme.split(BEGIN, 1)
+            _, tail = rest.split(END, 1)
+            readme = head + BEGIN + "\n\n" + text + "\n" + END + tail
+        if args.json and FEATURE_BEGIN in readme and FEATURE_END in readme:
             head, rest = readme.split(FEATURE_BEGIN, 1)
             _, tail = rest.split(FEATURE_END, 1)
             readme = head + FEATURE_BEGIN + "\n\n" + features + "\n" + FEATURE_END + tail

@@ -32,4 +32,8 @@ if command -v gnuplot >/dev/null; then
 else
   echo "tables: benchmarks/README.md; no plot: gnuplot is missing (apt-get install gnuplot-nox)"
 fi
+# Bullet's broadphases, where Debian's libbullet-dev is installed.
+if pkg-config --exists bullet; then
+  bash benchmarks/run_bullet.sh "$build" || status=1
+fi
 exit $status
