@@ -17,8 +17,9 @@ thread_local int in_python_callback = 0;
 void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
                       bool distance, const char* what) {
   std::size_t planes = 0, convexes = 0;
-  // A distance query among cube managers only runs the library's pipeline; one with an
-  // FCL-backend manager calls fcl::distance on the cube side's objects too.
+  // The 'fcl' backend keeps the limits of FCL's own managers, which crash on a distance to a
+  // plane: a distance query in which one takes part is refused with a plane (the pipeline that
+  // answers it would not crash; a comparison with FCL's managers should not pass where they fail).
   bool cube = a != nullptr || b != nullptr;
   for (const Manager* m : {a, b})
     if (m) {

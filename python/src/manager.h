@@ -158,8 +158,8 @@ class Manager {
 /// FCL 0.7 crashes (segmentation fault) in fcl::distance with a plane, and in fcl::collide between
 /// a plane and a convex: ValueError instead, before any work. `kinds` are those a query brings
 /// besides the managers' (a query geometry, a body's links); `distance`: the query computes
-/// distances, refused with a plane only when no 'cube' manager takes part (the library answers
-/// a distance to a plane in closed form; FCL's managers call fcl::distance).
+/// distances, refused with a plane when an 'fcl'-backend manager (or none) takes part (the
+/// library answers a distance to a plane in closed form; FCL's own managers crash).
 void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
                       bool distance, const char* what);
 
