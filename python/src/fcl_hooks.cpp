@@ -186,7 +186,6 @@ void bindFclHooks(ManagerClass& cls) {
             py::list contacts = result.attr("contacts");
             const std::size_t prior_count = py::len(contacts);
             Target t = targetOf(m, target, "collide");
-            if (!m.isCube()) throw py::value_error("_fcl_collide_all: a cube manager only");
             struct Row {
               ObjPtr a, b;
               fcl::Contactd c;
@@ -197,7 +196,7 @@ void bindFclHooks(ManagerClass& cls) {
             {
               py::gil_scoped_release nogil;
               lock.emplace(m, t.other);
-              const auto& c = *m.cube();
+              const auto& c = m.broadphase();
               const std::vector<cube::ObjectPair<double>> pairs =
                   t.query   ? cube::overlappingPairs(c, t.query.get())
                   : t.other ? cube::overlappingPairs(c, t.other->broadphase())
@@ -273,7 +272,6 @@ void bindFclHooks(ManagerClass& cls) {
              py::dict geoms, py::object other_geoms, py::object query_geom) {
             const fcl::DistanceRequestd req = distanceRequestOf(request);
             Target t = targetOf(m, target, "distance");
-            if (!m.isCube()) throw py::value_error("_fcl_distance_all: a cube manager only");
             DistOut o;
             {
               py::gil_scoped_release nogil;
