@@ -110,12 +110,12 @@ bool Manager::ignoredPair(const Entry* a, const Entry* b) const {
 }
 
 std::pair<std::uint64_t, std::uint64_t> Manager::filterOf(const Entry& e) const {
-  return cube_ ? cube_->filter(e.obj.get()) : fcl_->filter(e.obj.get());
+  return rules([&](auto& r) { return r.filter(e.obj.get()); });
 }
 
 double Manager::marginOf(const Entry* e) const {
   const fcl::CollisionObjectd* o = e ? e->obj.get() : nullptr;
-  return cube_ ? cube_->margin(o) : fcl_->margin(o);
+  return rules([&](auto& r) { return r.margin(o); });
 }
 
 std::vector<std::pair<std::string, std::string>> Manager::ignored() const {
@@ -127,10 +127,7 @@ std::vector<std::pair<std::string, std::string>> Manager::ignored() const {
 
 void Manager::setPairFilter(
     std::function<bool(fcl::CollisionObjectd*, fcl::CollisionObjectd*)> keep) {
-  if (cube_)
-    cube_->setPairFilter(std::move(keep));
-  else
-    fcl_->setPairFilter(std::move(keep));
+  rules([&](auto& r) { r.setPairFilter(std::move(keep)); });
 }
 
 void Manager::installPredicate() {
@@ -196,18 +193,10 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
   for (std::size_t i = 0; i < made.size(); ++i) {
     const NewObject& o = objects[i];
     fcl::CollisionObjectd* obj = made[i]->obj.get();
-    if (o.category != 1 || o.mask != ~std::uint64_t(0)) {
-      if (cube_)
-        cube_->setFilter(obj, o.category, o.mask);
-      else
-        fcl_->setFilter(obj, o.category, o.mask);
-    }
-    if (o.margin >= 0) {
-      if (cube_)
-        cube_->setMargin(obj, o.margin);
-      else
-        fcl_->setMargin(obj, o.margin);
-    }
+    rules([&](auto& r) {
+      if (o.category != 1 || o.mask != ~std::uint64_t(0)) r.setFilter(obj, o.category, o.mask);
+      if (o.margin >= 0) r.setMargin(obj, o.margin);
+    });
   }
   if (!cube_ && raw.size() == 1)
     bp_->update(raw[0]);  // FCL rebalances its tree incrementally, as after any update
@@ -289,10 +278,7 @@ void Manager::setFilter(const std::string& name, std::uint64_t category, std::ui
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   Entry* e = find(name);
-  if (cube_)
-    cube_->setFilter(e->obj.get(), category, mask);
-  else
-    fcl_->setFilter(e->obj.get(), category, mask);
+  rules([&](auto& r) { r.setFilter(e->obj.get(), category, mask); });
 }
 
 void Manager::ignorePair(const std::string& a, const std::string& b, bool ignore) {
@@ -337,16 +323,11 @@ void Manager::setMargin(double margin, const std::string* name) {
   std::unique_lock lock(mutex);
   if (name) {
     Entry* e = find(*name);
-    if (cube_)
-      cube_->setMargin(e->obj.get(), margin);
-    else
-      fcl_->setMargin(e->obj.get(), margin);
+    rules([&](auto& r) { r.setMargin(e->obj.get(), margin); });
     if (!e->own_margin) ++own_margins_;
     e->own_margin = true;
-  } else if (cube_) {
-    cube_->setMargin(margin);
   } else {
-    fcl_->setMargin(margin);
+    rules([&](auto& r) { r.setMargin(margin); });
   }
 }
 

@@ -138,6 +138,12 @@ class Manager {
     const auto x = std::min(a->seq, b->seq), y = std::max(a->seq, b->seq);
     return x * 0x9E3779B97F4A7C15ull ^ (y + (x << 20));
   }
+  /// f(broadphase) on the one that keeps the pair rules: the cube manager, or FCL's tree's
+  /// backend, which answer the same calls (setFilter, filter, setMargin, margin, setPairFilter).
+  template <class F>
+  decltype(auto) rules(F&& f) const {
+    return cube_ ? f(*cube_) : f(*fcl_);
+  }
   bool ignoredPair(const Entry* a, const Entry* b) const;
   void installPredicate();
   void setPairFilter(std::function<bool(fcl::CollisionObjectd*, fcl::CollisionObjectd*)> keep);
