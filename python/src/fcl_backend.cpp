@@ -9,19 +9,31 @@ namespace cubepy {
 // One query's callback behind the rules: the bits of both objects (each read from the manager
 // that holds it), the predicate within this manager, never an object with itself.
 struct FclBackend::Gate {
+  Gate(const FclBackend* s, const fcl::BroadPhaseCollisionManagerd* o, void* d,
+       fcl::CollisionCallBack<double> c, fcl::DistanceCallBack<double> dc)
+      : self(s),
+        other(o),
+        other_fcl(dynamic_cast<const FclBackend*>(o)),
+        other_cube(dynamic_cast<const cube::CubeCollisionManagerd*>(o)),
+        cdata(d),
+        collide_cb(c),
+        distance_cb(dc) {}
+
   const FclBackend* self;
   const fcl::BroadPhaseCollisionManagerd* other;  // the other side's manager, or null
+  const FclBackend* other_fcl;                    // other, if of these two kinds
+  const cube::CubeCollisionManagerd* other_cube;
   void* cdata;
-  fcl::CollisionCallBack<double> collide_cb = nullptr;
-  fcl::DistanceCallBack<double> distance_cb = nullptr;
+  fcl::CollisionCallBack<double> collide_cb;
+  fcl::DistanceCallBack<double> distance_cb;
   bool stopped = false;
 
   std::pair<std::uint64_t, std::uint64_t> bits(const Obj* o) const {
-    if (self->rules_.count(o)) return self->filter(o);
-    if (const auto* f = dynamic_cast<const FclBackend*>(other)) return f->filter(o);
-    if (const auto* c = dynamic_cast<const cube::CubeCollisionManagerd*>(other))
-      return c->filter(o);
-    return {1, ~std::uint64_t(0)};
+    const auto it = self->rules_.find(o);
+    if (it != self->rules_.end()) return {it->second.category, it->second.mask};
+    if (other_fcl) return other_fcl->filter(o);
+    if (other_cube) return other_cube->filter(o);
+    return {1, ~std::uint64_t(0)};  // a query object
   }
   bool pass(Obj* a, Obj* b) const {
     if (a == b) return false;
@@ -113,29 +125,29 @@ void FclBackend::clear() {
 }
 
 void FclBackend::collide(Obj* obj, void* cdata, fcl::CollisionCallBack<double> cb) const {
-  Gate g{this, nullptr, cdata, cb};
+  Gate g(this, nullptr, cdata, cb, nullptr);
   tree_.collide(obj, &g, &Gate::collide);
 }
 
 void FclBackend::distance(Obj* obj, void* cdata, fcl::DistanceCallBack<double> cb) const {
-  Gate g{this, nullptr, cdata, nullptr, cb};
+  Gate g(this, nullptr, cdata, nullptr, cb);
   tree_.distance(obj, &g, &Gate::distance);
 }
 
 void FclBackend::collide(void* cdata, fcl::CollisionCallBack<double> cb) const {
-  Gate g{this, nullptr, cdata, cb};
+  Gate g(this, nullptr, cdata, cb, nullptr);
   tree_.collide(&g, &Gate::collide);
 }
 
 void FclBackend::distance(void* cdata, fcl::DistanceCallBack<double> cb) const {
-  Gate g{this, nullptr, cdata, nullptr, cb};
+  Gate g(this, nullptr, cdata, nullptr, cb);
   tree_.distance(&g, &Gate::distance);
 }
 
 void FclBackend::collide(fcl::BroadPhaseCollisionManagerd* other, void* cdata,
                          fcl::CollisionCallBack<double> cb) const {
   if (other == this) return collide(cdata, cb);
-  Gate g{this, other, cdata, cb};
+  Gate g(this, other, cdata, cb, nullptr);
   if (auto* f = dynamic_cast<FclBackend*>(other))
     return tree_.collide(&f->tree_, &g, &Gate::collide);
   std::vector<Obj*> objs;
@@ -149,7 +161,7 @@ void FclBackend::collide(fcl::BroadPhaseCollisionManagerd* other, void* cdata,
 void FclBackend::distance(fcl::BroadPhaseCollisionManagerd* other, void* cdata,
                           fcl::DistanceCallBack<double> cb) const {
   if (other == this) return distance(cdata, cb);
-  Gate g{this, other, cdata, nullptr, cb};
+  Gate g(this, other, cdata, nullptr, cb);
   if (auto* f = dynamic_cast<FclBackend*>(other))
     return tree_.distance(&f->tree_, &g, &Gate::distance);
   std::vector<Obj*> objs;
