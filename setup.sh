@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 
 mode=${1:-demo}
 packages=(build-essential cmake pkg-config libfcl-dev libccd-dev libeigen3-dev liboctomap-dev
-          libgtest-dev libgmock-dev libbenchmark-dev libcairo2-dev libompl-dev
+          libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev libcairo2-dev libompl-dev
           python3-dev python3-numpy python3-pybind11 pybind11-dev python3-pytest
           python3-distributed python3-venv)
 # CI's ThreadSanitizer stage (.ci/run) builds with clang and LLVM's OpenMP runtime, whose Archer

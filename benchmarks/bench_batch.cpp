@@ -1,4 +1,4 @@
-// Batched state and motion checks (issue 37): a 30-link robot in batches of states against a
+// Batched state and motion checks: a 30-link robot in batches of states against a
 // static world, checkStates / checkMotions against every FCL manager used the way FCL users do
 // it today. Per state: each link's setTransform and computeAABB, then the faster of (a) a robot
 // manager's update() (of the world's kind) and world->collide(robot), (b) world->collide(link) link

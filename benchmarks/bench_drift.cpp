@@ -1,4 +1,4 @@
-// The rebuild-threshold study of issue 3: a scene whose objects drift steadily, N steps of
+// The rebuild-threshold study: a scene whose objects drift steadily, N steps of
 // move + update() + self-collide, for several values of Config::rebuild_threshold and the two
 // forced policies, with FCL's tree manager on the same motion for reference. The default
 // threshold in config.h was chosen from this case.

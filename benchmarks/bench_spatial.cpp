@@ -1,4 +1,4 @@
-// Ray and region queries (spatial_queries.h, issue 20) on the uniform scene of cube_bench at
+// Ray and region queries (spatial_queries.h) on the uniform scene of cube_bench at
 // 1,000, 10,000 and 100,000 objects: the cube query against a loop over every registered object
 // (the box test on each AABB, then, with the narrow phase, raycastObject on those the segment
 // meets). The loop reads a contiguous copy of the AABBs, made before timing: reading them

@@ -1,4 +1,4 @@
-// The self walk split over threads (issue 19, item 2): collideAll on 2 threads, every contact,
+// The self walk split over threads: collideAll on 2 threads, every contact,
 // with the candidate pairs gathered by the serial walk (NarrowPhaseOptions::split_walk off, the
 // default) and by the split walk (on), in the same run; and the serial walk alone, for its share
 // of the serial query. Each

@@ -619,7 +619,7 @@ enum class Case {
   update_vector,
   churn,          // unregister + register + setup(), FCL's documented sequence
   churn_nosetup,  // unregister + register, relying on incremental insertion
-  // With FCL's narrow phase in the loop (issue 19): cube runs its pipeline (collideAll), the FCL
+  // With FCL's narrow phase in the loop: cube runs its pipeline (collideAll), the FCL
   // managers FCL's default callback.
   selfcollide_narrow_mt,  // cube only, on the hardware's threads; read against selfcollide_narrow
   queries_narrow,         // 1,000 object queries, every contact
@@ -629,7 +629,7 @@ enum class Case {
   // selfcollide_narrow
   selfcollide_cullcb,
   // cube only, with the pipeline's default options (the hardware's threads): read against the
-  // FCL managers of queries_narrow, robot_narrow and objdistance (issue 40)
+  // FCL managers of queries_narrow, robot_narrow and objdistance
   queries_narrow_mt,
   robot_narrow_mt,
   objdistance_mt,
@@ -1304,7 +1304,7 @@ bool runs(Case c, const std::string& scene, std::size_t n, Mgr m) {
   if ((c == Case::queries_narrow || c == Case::motion_narrow || c == Case::robot_narrow) &&
       n > 10000)
     return false;
-  // The update(vector) and churn cases of issue 3 run at 1,000 and 10,000 objects.
+  // The update(vector) and churn cases run at 1,000 and 10,000 objects.
   if ((c == Case::update_vector || isChurn(c)) && (n < 1000 || n > 10000)) return false;
   // FCL 0.7's IntervalTree corrupts the heap under unregister/register churn (glibc aborts with
   // "corrupted size vs. prev_size in fastbins" at 1,000 objects).

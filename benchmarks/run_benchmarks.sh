@@ -14,7 +14,7 @@ cmake --build "$build" -j2 --target cube_bench
 
 mkdir -p benchmarks/results
 json=benchmarks/results/cube_bench.json
-# The drift study (bench_drift.cpp, issue 3's threshold choice) is left out: it has its own table.
+# The drift study (bench_drift.cpp, the rebuild threshold's choice) is left out: it has its own table.
 filter=${CUBE_BENCH_FILTER:--^drift/}
 cmd="$build/benchmarks/cube_bench --benchmark_filter=$filter --benchmark_repetitions=$reps --benchmark_min_time=$min_time --benchmark_out=$json --benchmark_out_format=json"
 echo "+ $cmd"
@@ -31,5 +31,9 @@ if command -v gnuplot >/dev/null; then
   echo "tables: benchmarks/README.md; plot: benchmarks/results/time_vs_n.png"
 else
   echo "tables: benchmarks/README.md; no plot: gnuplot is missing (apt-get install gnuplot-nox)"
+fi
+# Bullet's broadphases, where Debian's libbullet-dev is installed.
+if pkg-config --exists bullet; then
+  bash benchmarks/run_bullet.sh "$build" || status=1
 fi
 exit $status

@@ -127,7 +127,7 @@ struct Config {
   /// trees were built, rebuilt or refitted; FCL's narrow phase, which is not symmetric, then
   /// gives the same contacts. Distance queries keep their nearest-first order (the bound needs
   /// it) but orient self pairs the same way. Trade-off: a collide gathers its pairs and sorts
-  /// them before the first callback (about 10 ns per pair), so a callback's `true` no longer
+  /// them before the first callback (a sort of the pairs), so a callback's `true` no longer
   /// saves the rest of the walk; QueryStats then count no box tests.
   bool canonical_pairs = false;
 

@@ -92,8 +92,8 @@ void collideConcurrently(const fcl::BroadPhaseCollisionManager<S>& manager, void
 /// value of S when the manager holds fewer than two objects; it is <= 0 for touching objects
 /// (the search stops at the first such pair). Without a cache it runs on the calling thread
 /// whatever options.threads says, as FCL's default callback does (one accumulating result, which
-/// prunes mesh pairs' searches): a branch and bound is sequential, and batches of pairs on two
-/// threads made object queries among meshes 1.5-2x slower. With a cache each pair gets a fresh
+/// prunes mesh pairs' searches): a branch and bound is sequential, and pairs answered in batches
+/// would each miss the bound the others set. With a cache each pair gets a fresh
 /// fcl::distance, options.threads pairs at a time, on the threads when they hold meshes or
 /// octrees. The minimum is the same for every thread count, and its nearest points are those of
 /// the first pair in walk order that reaches it. A pair with a plane or a halfspace, on which FCL

@@ -2,14 +2,17 @@
 """Same-run comparison for issue #39: trimesh's collision calls on three managers.
 
   cube        cube_collision.CollisionManager() (the cube hierarchy and its narrow-phase pipeline)
-  fcl         CollisionManager(backend="fcl"): FCL's DynamicAABBTreeCollisionManager, FCL's
-              narrow phase per candidate pair, in C++
-  fcl+py      the FCL backend driven the way trimesh drives python-fcl: the manager calls a Python
-              callback per candidate pair, which calls FCL's narrow phase on the pair through the
-              binding and keeps its contacts as Python objects, and the names are collected in
-              Python afterwards. Two requests: "names" asks one contact per pair (what the names
-              need); "trimesh" is trimesh's own in_collision_internal(return_names=True) request
-              (enable_contact, num_max_contacts=100000: every contact of every pair).
+  fcl         CollisionManager(backend="fcl"): FCL's DynamicAABBTreeCollisionManager as the
+              broadphase, the same pair rules and narrow-phase pipeline as cube, in C++ (the
+              broadphases compared; labelled "fcl backend, narrow phase in C++")
+  fcl+py      FCL's tree driven the way trimesh drives python-fcl: the manager calls a Python
+              callback per candidate pair, which calls fcl::collide / fcl::distance on the pair
+              (python-fcl's compiled calls, re-created in the benchmark module
+              cube_collision_bench, python/benchmarks/fcl_way.cpp) and keeps its contacts as
+              Python objects, and the names are collected in Python afterwards. Two requests:
+              "names" asks one contact per pair (what the names need); "trimesh" is trimesh's
+              own in_collision_internal(return_names=True) request (enable_contact,
+              num_max_contacts=100000: every contact of every pair).
 
 Calls timed: in_collision_internal(return_names=True) on each scene, min_distance_internal() on
 the same scene with its colliding objects removed (so that the search does not stop at the first

@@ -6,8 +6,9 @@ path they take today, step for step, over the same FCL manager (backend="fcl"):
   object for each side (CollisionManager._collide_python / _distance_python);
 - the callback is python-fcl's defaultCollisionCallback / defaultDistanceCallback (below, in
   Python as in python-fcl), reading cdata.request / result / done;
-- it calls fcl.collide / fcl.distance, compiled in python-fcl (Cython) and here (C++:
-  cube_collision._fcl_collide / _fcl_distance): the request read from the Python request's
+- it calls fcl.collide / fcl.distance, compiled in python-fcl (Cython) and here (C++: the
+  benchmark-only module cube_collision_bench, python/benchmarks/fcl_way.cpp, built beside the
+  package and never installed): the request read from the Python request's
   attributes, FCL's narrow phase, each contact made a Python Contact with numpy arrays;
 - trimesh then maps each contact's geometry to a name with a dict keyed by id(geometry).
 The request is trimesh's: in_collision_internal(return_names=True) asks for every contact
@@ -19,7 +20,7 @@ the 1,019 colliding pairs); TrimeshManager(max_contacts=...) raises it for compl
 
 import numpy as np
 
-import cube_collision as cc
+import cube_collision_bench as bench
 
 
 class CollisionRequest:
@@ -82,7 +83,7 @@ def collide(o1, o2, request=None, result=None):
         request = CollisionRequest()
     if result is None:
         result = CollisionResult()
-    return cc._fcl_collide(o1, o2, request, result, Contact)
+    return bench.fcl_collide(o1, o2, request, result, Contact)
 
 
 def distance(o1, o2, request=None, result=None):
@@ -90,7 +91,7 @@ def distance(o1, o2, request=None, result=None):
         request = DistanceRequest()
     if result is None:
         result = DistanceResult()
-    return cc._fcl_distance(o1, o2, request, result)
+    return bench.fcl_distance(o1, o2, request, result)
 
 
 def defaultCollisionCallback(o1, o2, cdata):

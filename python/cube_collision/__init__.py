@@ -31,7 +31,6 @@ from ._core import (  # noqa: F401
     plane,
     sphere,
 )
-from ._core import _fcl_collide, _fcl_distance, _Handle  # noqa: F401  (benchmark hooks)
 
 __version__ = "0.1.0"
 

@@ -15,7 +15,6 @@ from ._core import (
     plane as plane,
     sphere as sphere,
 )
-from ._core import _fcl_collide as _fcl_collide, _fcl_distance as _fcl_distance, _Handle as _Handle
 
 __version__: str
 __all__: list[str]

@@ -14,9 +14,10 @@ namespace cubepy {
 
 namespace {
 
+/// What the BodySet does not answer of a link: the Python geometry it was made from and its
+/// filter bits (pickling). Its margin and the allowed pairs are read from the BodySet.
 struct Link {
   GeometryPtr geometry;
-  double margin;
   std::uint64_t category, mask;
 };
 
@@ -24,14 +25,13 @@ struct Link {
 struct Body {
   cube::BodySet<double> set;
   std::vector<Link> links;
-  std::vector<std::pair<std::size_t, std::size_t>> allowed;
 
   std::size_t addLink(GeometryPtr g, double margin, std::uint64_t category, std::uint64_t mask) {
     if (g->kind == "plane") throw py::value_error("add_link: a link must be bounded (no plane)");
     if (!std::isfinite(margin) || margin < 0)
       throw py::value_error("add_link: margin must be finite and >= 0");
     const std::size_t i = set.addLink(g->fcl, margin, category, mask);
-    links.push_back({g, margin, category, mask});
+    links.push_back({g, category, mask});
     return i;
   }
   std::vector<std::string> kinds() const {
@@ -44,7 +44,14 @@ struct Body {
       throw py::value_error("allow_pair: two different link indices below " +
                             std::to_string(links.size()) + " expected");
     set.allowPair(i, j);
-    allowed.emplace_back(i, j);
+  }
+  /// The pairs of links never checked, (i, j) with i < j, sorted.
+  std::vector<std::pair<std::size_t, std::size_t>> allowed() const {
+    std::vector<std::pair<std::size_t, std::size_t>> out;
+    for (std::size_t i = 0; i < links.size(); ++i)
+      for (std::size_t j = i + 1; j < links.size(); ++j)
+        if (!set.checked(i, j)) out.emplace_back(i, j);
+    return out;
   }
 };
 
@@ -202,13 +209,16 @@ a plane or a negative or non-finite margin; TypeError for something not a geomet
            "an unknown index or i == j.")
       .def("__len__", [](const Body& b) { return b.links.size(); })
       .def_property_readonly(
-          "allowed_pairs", [](const Body& b) { return b.allowed; }, "The allowed (i, j) pairs.")
+          "allowed_pairs", [](const Body& b) { return b.allowed(); },
+          "The allowed pairs, as (i, j) with i < j, sorted.")
       .def(py::pickle(
           [](const Body& b) {
             py::list links;
-            for (const auto& l : b.links)
-              links.append(py::make_tuple(l.geometry, l.margin, l.category, l.mask));
-            return py::make_tuple(links, b.allowed);
+            for (std::size_t i = 0; i < b.links.size(); ++i) {
+              const Link& l = b.links[i];
+              links.append(py::make_tuple(l.geometry, b.set.margin(i), l.category, l.mask));
+            }
+            return py::make_tuple(links, b.allowed());
           },
           [](py::tuple t) {
             auto b = std::make_shared<Body>();

@@ -60,7 +60,6 @@ GeometryPtr geometryOf(py::handle obj);
 
 void bindGeometry(py::module_& m);
 void bindManager(py::module_& m);
-void bindQueries(py::module_& m);
 void bindBatch(py::module_& m);
 
 }  // namespace cubepy

@@ -1,12 +1,13 @@
 #pragma once
 
 // The Python manager: named objects over a broadphase (the cube manager, or FCL's dynamic AABB
-// tree for backend="fcl"), with the pair rules (filter bits, ignored pairs, margins) kept so that
-// both backends and pickling see the same world.
+// tree under the same pair rules for backend="fcl", fcl_backend.h), which keeps the objects'
+// filter bits and margins: queries and pickling read them there.
 
 #include <cube_collision/cube_collision_manager.h>
 #include <fcl/narrowphase/collision_object.h>
 
+#include <functional>
 #include <memory>
 #include <shared_mutex>
 #include <stdexcept>
@@ -17,10 +18,11 @@
 #include <vector>
 
 #include "common.h"
+#include "fcl_backend.h"
 
 namespace cubepy {
 
-/// An FCL object whose AABB can be grown by a margin (the FCL backend's broadphase reads it).
+/// An FCL object whose AABB can be grown by a margin (FCL's tree reads the grown box).
 class Object : public fcl::CollisionObjectd {
  public:
   Object(const std::shared_ptr<fcl::CollisionGeometryd>& g, const fcl::Transform3d& tf)
@@ -54,6 +56,9 @@ inline py::handle geometryArg(py::handle geometry, py::handle mesh, const char* 
   return geometry.is_none() ? mesh : geometry;
 }
 
+/// ValueError unless m is finite and >= 0.
+void checkMargin(double m);
+
 /// A name argument as a std::string. TypeError if it is not a str.
 std::string nameOfArg(py::handle h);
 
@@ -66,9 +71,10 @@ struct Entry {
   std::uint64_t seq = 0;  ///< registration number: order of names, pickling, ties
   GeometryPtr geometry;   ///< what the user gave (its FCL geometry may be cloned into obj)
   std::unique_ptr<Object> obj;
-  std::uint64_t category = 1, mask = ~std::uint64_t(0);
-  double margin = -1;  ///< own margin; < 0: the manager-wide one
-  int ignores = 0;     ///< how many ignored pairs name it
+  /// Whether set_margin(name=) gave it a margin of its own (the broadphase keeps the value; it
+  /// answers an object's margin, not whether it is its own, which pickling keeps).
+  bool own_margin = false;
+  int ignores = 0;  ///< how many ignored pairs name it
 };
 
 /// Reads or writes on a manager from any Python thread: queries take it shared, mutations
@@ -109,12 +115,12 @@ class Manager {
   }
   /// The name of the object whose (possibly cloned) FCL geometry is g, or null.
   const Entry* byGeometry(const fcl::CollisionGeometryd* g) const;
-  /// Filter bits and ignored pairs: may a and b (objects of this manager, or null for a query
-  /// object with the default bits) pair?
-  bool allowed(const Entry* a, const Entry* b) const;
-  double marginOf(const Entry* e) const { return e && e->margin >= 0 ? e->margin : margin_; }
-  bool anyMargin() const { return margin_ > 0 || own_margins_ > 0; }
-  double managerMargin() const { return margin_; }
+  /// {category, mask} of an object, as the broadphase keeps them.
+  std::pair<std::uint64_t, std::uint64_t> filterOf(const Entry& e) const;
+  /// An object's margin (its own, else the manager-wide one); null: the manager-wide one.
+  double marginOf(const Entry* e) const;
+  bool anyMargin() const { return managerMargin() > 0 || own_margins_ > 0; }
+  double managerMargin() const { return marginOf(nullptr); }
   std::size_t size() const { return entries_.size(); }
   /// Objects whose geometry is a mesh (FCL's BVH: many contacts per pair).
   std::size_t meshes() const { return meshes_; }
@@ -132,18 +138,24 @@ class Manager {
     const auto x = std::min(a->seq, b->seq), y = std::max(a->seq, b->seq);
     return x * 0x9E3779B97F4A7C15ull ^ (y + (x << 20));
   }
+  /// f(broadphase) on the one that keeps the pair rules: the cube manager, or FCL's tree's
+  /// backend, which answer the same calls (setFilter, filter, setMargin, margin, setPairFilter).
+  template <class F>
+  decltype(auto) rules(F&& f) const {
+    return cube_ ? f(*cube_) : f(*fcl_);
+  }
   bool ignoredPair(const Entry* a, const Entry* b) const;
   void installPredicate();
-  void refresh(Entry& e);
+  void setPairFilter(std::function<bool(fcl::CollisionObjectd*, fcl::CollisionObjectd*)> keep);
 
   std::string backend_;
   int threads_;
   std::unique_ptr<fcl::BroadPhaseCollisionManagerd> bp_;
-  cube::CubeCollisionManagerd* cube_ = nullptr;
+  cube::CubeCollisionManagerd* cube_ = nullptr;  // one of the two: bp_
+  FclBackend* fcl_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Entry>> entries_;
   std::unordered_map<const fcl::CollisionGeometryd*, Entry*> by_geometry_;
   std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
-  double margin_ = 0;
   std::size_t own_margins_ = 0;
   std::size_t meshes_ = 0, planes_ = 0, convexes_ = 0;
   std::uint64_t next_seq_ = 0;
@@ -152,8 +164,8 @@ class Manager {
 /// FCL 0.7 crashes (segmentation fault) in fcl::distance with a plane, and in fcl::collide between
 /// a plane and a convex: ValueError instead, before any work. `kinds` are those a query brings
 /// besides the managers' (a query geometry, a body's links); `distance`: the query computes
-/// distances, refused with a plane only when no 'cube' manager takes part (the library answers
-/// a distance to a plane in closed form; FCL's managers call fcl::distance).
+/// distances, refused with a plane when an 'fcl'-backend manager (or none) takes part (the
+/// library answers a distance to a plane in closed form; FCL's own managers crash).
 void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std::string>& kinds,
                       bool distance, const char* what);
 
@@ -176,7 +188,14 @@ class CallbackScope {
 
 namespace cubepy {
 using ManagerClass = py::class_<Manager, std::shared_ptr<Manager>>;
-/// Adds the queries (queries.cpp) and the batched checks (batch.cpp) to the manager's class.
-void bindManagerQueries(ManagerClass& cls);
+/// The manager's calls by file: mutations and pickling (manager_binding.cpp), collision queries
+/// (collide.cpp), distances (distance.cpp), rays and regions (spatial.cpp), the python-fcl
+/// layer's hooks (fcl_hooks.cpp), the batched checks (batch.cpp).
+void bindCollideQueries(ManagerClass& cls);
+void bindDistanceQueries(ManagerClass& cls);
+void bindSpatialQueries(ManagerClass& cls);
+void bindFclHooks(ManagerClass& cls);
 void bindManagerBatch(ManagerClass& cls);
+/// Module-level pair calls (pair_in_collision, the python-fcl layer's collide / distance).
+void bindPairCalls(py::module_& m);
 }  // namespace cubepy

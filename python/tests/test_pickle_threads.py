@@ -38,6 +38,73 @@ def test_body_pickles():
     assert len(b) == 2 and b.allowed_pairs == [(0, 1)]
 
 
+def test_manager_pickle_keeps_own_margins_apart_from_the_managers(backend):
+    """An object's own margin stays its own after a round trip (an own margin equal to the
+    manager's included), and the others follow the manager's margin when it changes."""
+    m = build(mixed_scene(40, 23), backend)
+    m.set_margin(0.05)
+    m.set_margin(0.3, "o6")
+    m.set_margin(0.05, "o8")
+    c = pickle.loads(pickle.dumps(m))
+    for manager in (m, c):
+        manager.set_margin(0.15)
+    for n in m.names:
+        assert c.get_margin(n) == m.get_margin(n)
+    assert c.get_margin("o6") == 0.3 and c.get_margin("o8") == 0.05 and c.get_margin("o7") == 0.15
+    assert c.in_collision_internal(return_names=True) == m.in_collision_internal(return_names=True)
+
+
+def test_manager_pickle_keeps_filter_bits_that_decide_pairs(backend):
+    m = build(mixed_scene(60, 29), backend)
+    pairs = m.in_collision_internal(return_names=True)[1]
+    a, b = sorted(pairs)[0]
+    m.set_filter(a, 2, 1)
+    m.set_filter(b, 1, 1)  # a's category 2 is not in b's mask: the pair is never tested
+    c = pickle.loads(pickle.dumps(m))
+    assert c.get_filter(a) == (2, 1) and c.get_filter(b) == (1, 1)
+    got = c.in_collision_internal(return_names=True)[1]
+    assert (a, b) not in got and got == m.in_collision_internal(return_names=True)[1]
+
+
+def test_body_pickle_keeps_link_margins_bits_and_allowed_pairs():
+    """The copy answers every state as the original, on states where the links' margins, filter
+    bits and allowed pairs each decide an answer."""
+    world = cc.CollisionManager()
+    world.add_object("b", cc.sphere(0.5), category=4, mask=4)  # meets category-4 links only
+    world.add_object("c", cc.sphere(0.5), scenes.pose(np.eye(3), [10.0, 0, 0]))
+
+    def make(margin, category, allow):
+        body = cc.Body()
+        for _ in range(3):
+            body.add_link(cc.sphere(0.3), margin=margin, category=category)
+        if allow:
+            body.allow_pair(0, 1)
+        return body
+
+    def at(*xs):
+        return np.stack([scenes.pose(np.eye(3), [x, 50.0 * k, 0]) for k, x in enumerate(xs)])
+
+    far = (100.0, 200.0, 300.0)
+    states = np.stack([
+        at(10.9, far[1], far[2]),   # link 0 0.1 from c: touching within the margin only
+        at(0.0, far[1], far[2]),    # link 0 inside b: only with category 4
+        np.stack([scenes.pose(np.eye(3), [-20.0, 0, 0]), scenes.pose(np.eye(3), [-20.2, 0, 0]),
+                  scenes.pose(np.eye(3), [far[2], 0, 0])]),  # links 0 and 1 overlap
+    ])
+    body = make(0.2, 4, True)
+    copy = pickle.loads(pickle.dumps(body))
+    assert copy.allowed_pairs == body.allowed_pairs == [(0, 1)]
+
+    def answers(b):
+        return world.check_states(b, states, self_collision=True)["colliding"].tolist()
+
+    expected = answers(body)
+    assert answers(copy) == expected
+    # Each kind of state decides an answer here: a body without it answers otherwise.
+    for other in (make(0.0, 4, True), make(0.2, 1, True), make(0.2, 4, False)):
+        assert answers(other) != expected
+
+
 def test_concurrent_queries_equal_serial_answers():
     scene = mixed_scene(150, 19)
     m = build(scene)
