@@ -3,11 +3,14 @@
 // same box tests on the boxes its backend grew by the margins.
 
 #include <cube_collision/spatial_queries.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/narrowphase/collision.h>
 #include <pybind11/stl.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <utility>
 
@@ -90,6 +93,32 @@ std::vector<std::string> region(const Manager& m, const fcl::AABBd* box, const f
       in = in && (std::isinf(radius) || sum <= radius * radius);
     }
     if (in) out.push_back(e->name);
+  }
+  return out;
+}
+
+// objectsInCapsule; FCL's tree puts every object the filter lets through to fcl::collide with
+// the capsule the contract places.
+std::vector<std::string> capsule(const Manager& m, const fcl::Vector3d& a, const fcl::Vector3d& b,
+                                 double radius, const Bits& bits) {
+  std::vector<std::string> out;
+  if (m.isCube()) {
+    for (auto* o : cube::objectsInCapsule(*m.cube(), a, b, radius, queryFilter(bits)))
+      out.push_back(nameOf(o));
+    return out;
+  }
+  const fcl::Vector3d d = b - a;
+  const double length = d.norm();
+  fcl::Matrix3d rot = fcl::Matrix3d::Identity();
+  if (length != 0)
+    rot = Eigen::Quaterniond::FromTwoVectors(fcl::Vector3d::UnitZ(), d).toRotationMatrix();
+  const fcl::CollisionObjectd cap(std::make_shared<fcl::Capsuled>(radius, length), rot,
+                                  fcl::Vector3d(a + d / 2));
+  for (const Entry* e : m.ordered()) {
+    if (!lets(m, *e, bits) || e->obj->collisionGeometry() == nullptr) continue;
+    fcl::CollisionRequestd request;
+    fcl::CollisionResultd result;
+    if (fcl::collide(&cap, e->obj.get(), request, result) > 0) out.push_back(e->name);
   }
   return out;
 }
@@ -212,7 +241,27 @@ bound or lower > upper.)doc")
           R"doc(
 The names of the objects whose box (the AABB, grown by the margin) lies within radius of point
 (the distance to the box, not to the geometry), in the order added. filter: as objects_in_box's.
-ValueError for a non-finite point or a negative or NaN radius.)doc");
+ValueError for a non-finite point or a negative or NaN radius.)doc")
+      .def(
+          "objects_in_capsule",
+          [](const Manager& m, py::handle a, py::handle b, double radius, const Bits& bits) {
+            Array pa = floats(a, "a", {3});
+            Array pb = floats(b, "b", {3});
+            const fcl::Vector3d va = vec3(pa.data()), vb = vec3(pb.data());
+            const double extent = (vb - va).norm() + 2 * radius;
+            if (!(radius >= 0) || !std::isfinite(radius) || !std::isfinite(extent * extent))
+              throw py::value_error(
+                  "objects_in_capsule: radius must be finite and >= 0, the capsule not too long");
+            py::gil_scoped_release nogil;
+            ReadLocks lock(m);
+            return capsule(m, va, vb, radius, bits);
+          },
+          py::arg("a"), py::arg("b"), py::arg("radius"), py::kw_only(),
+          py::arg("filter") = py::none(), R"doc(
+The names of the objects that the capsule of `radius` about the segment from a (3,) to b (3,)
+touches, as FCL's narrow phase says (a segment of length 0: a ball), in the order added.
+filter: as objects_in_box's. ValueError for a non-finite point, a negative, NaN or infinite
+radius, or a capsule whose extent squared overflows.)doc");
 }
 
 }  // namespace cubepy

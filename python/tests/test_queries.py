@@ -90,3 +90,53 @@ def test_filter_bits_rule_rays_and_regions_as_a_loop_over_every_object():
                 changed += len(m.objects_in_box(lo, hi, filter=f)) != len(m.objects_in_box(lo, hi))
         assert cube.objects_in_box([-np.inf] * 3, [np.inf] * 3, filter=f) == keep(cube.names, f)
     assert changed > 20
+
+
+def test_capsules_equal_fcl_on_every_object():
+    """objects_in_capsule: the cube backend against FCL's tree putting every object to
+    fcl::collide with the same capsule, with and without filter bits; a segment of length 0
+    against spheres is a ball."""
+    scene = mixed_scene(120, 11)
+    cube, loop = build(scene), build(scene, "fcl")
+    for i, name in enumerate(cube.names):
+        for m in (cube, loop):
+            m.set_filter(name, *[(1, 2**64 - 1), (2, 2 | 4), (4, 1 | 4)][i % 3])
+    rng = np.random.default_rng(4)
+    found = 0
+    for i in range(40):
+        a, b = rng.uniform(-1, 8, 3), rng.uniform(-1, 8, 3)
+        if i % 5 == 0:
+            b = a
+        r = 0.0 if i % 7 == 0 else rng.uniform(0.1, 2)
+        want = loop.objects_in_capsule(a, b, r)
+        assert cube.objects_in_capsule(a, b, r) == want
+        found += len(want)
+        for f in [(2, 2**64 - 1), (1, 2)]:
+            assert cube.objects_in_capsule(a, b, r, filter=f) == \
+                loop.objects_in_capsule(a, b, r, filter=f)
+    assert found > 20
+
+    m = cc.CollisionManager()
+    centres = rng.uniform(-5, 5, (50, 3))
+    for i, c in enumerate(centres):
+        t = np.eye(4)
+        t[:3, 3] = c
+        m.add_object(f"s{i}", cc.sphere(0.5), t)
+    for _ in range(20):
+        p, r = rng.uniform(-5, 5, 3), rng.uniform(0.2, 2)
+        gaps = np.linalg.norm(centres - p, axis=1) - 0.5 - r
+        got = set(m.objects_in_capsule(p, p, r))
+        for i, g in enumerate(gaps):
+            if abs(g) > 1e-6:
+                assert (f"s{i}" in got) == (g < 0)
+
+
+@pytest.mark.parametrize("args", [([np.nan, 0, 0], [1, 0, 0], 1.0), ([0, 0, 0], [1, 0, 0], -1.0),
+                                  ([0, 0, 0], [1, 0, 0], np.inf), ([0, 0, 0], [1, 0, 0], np.nan),
+                                  ([0, 0, 0], [0, 0, 0], 1e200)])
+def test_bad_capsules_raise_value_error(backend, args):
+    m = cc.CollisionManager(backend=backend)
+    m.add_object("ball", cc.sphere(1.0))
+    with pytest.raises(ValueError):
+        m.objects_in_capsule(*args)
+    assert m.objects_in_capsule([0, 0, 0], [1, 0, 0], 0.5) == ["ball"]
