@@ -97,6 +97,9 @@ const Entry* Manager::byGeometry(const fcl::CollisionGeometryd* g) const {
 }
 
 bool Manager::ignoredPair(const Entry* a, const Entry* b) const {
+  // The cube backend's ignored pairs are its manager's excluded pairs, decided in its walks.
+  if (cube_) return cube_->isExcluded(a->obj.get(), b->obj.get());
+  if (!a->ignores || !b->ignores) return false;
   auto [lo, hi] = ignored_.equal_range(key(a, b));
   for (auto it = lo; it != hi; ++it)
     if ((it->second.first == a && it->second.second == b) ||
@@ -109,28 +112,19 @@ bool Manager::allowed(const Entry* a, const Entry* b) const {
   const std::uint64_t ca = a ? a->category : 1, ma = a ? a->mask : ~std::uint64_t(0);
   const std::uint64_t cb = b ? b->category : 1, mb = b ? b->mask : ~std::uint64_t(0);
   if ((ca & mb) == 0 || (cb & ma) == 0) return false;
-  if (a && b && a->ignores && b->ignores && ignoredPair(a, b)) return false;
+  if (a && b && ignoredPair(a, b)) return false;
   return true;
 }
 
 std::vector<std::pair<std::string, std::string>> Manager::ignored() const {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const auto& [k, p] : ignored_) out.emplace_back(p.first->name, p.second->name);
+  if (cube_)
+    for (const auto& [a, b] : cube_->excludedPairs())
+      out.emplace_back(entryOf(a)->name, entryOf(b)->name);
+  else
+    for (const auto& [k, p] : ignored_) out.emplace_back(p.first->name, p.second->name);
   std::sort(out.begin(), out.end());
   return out;
-}
-
-void Manager::installPredicate() {
-  if (!cube_) return;  // the FCL backend's callbacks ask allowed() themselves
-  if (ignored_.empty()) {
-    cube_->setPairFilter({});
-    return;
-  }
-  cube_->setPairFilter([this](fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
-    const Entry* ea = entryOf(a);
-    const Entry* eb = entryOf(b);
-    return !(ea && eb && ea->ignores && eb->ignores && ignoredPair(ea, eb));
-  });
 }
 
 void Manager::refresh(Entry& e) {
@@ -220,6 +214,7 @@ void Manager::remove(const std::string& name) {
   Entry* e = find(name);
   bp_->unregisterObject(e->obj.get());
   if (!cube_) bp_->setup();
+  // The cube manager forgot the object's excluded pairs as it unregistered it.
   if (e->ignores)
     for (auto it = ignored_.begin(); it != ignored_.end();) {
       if (it->second.first == e || it->second.second == e) {
@@ -238,7 +233,6 @@ void Manager::remove(const std::string& name) {
   const auto it = entries_.find(name);
   dead = std::move(it->second);
   entries_.erase(it);
-  installPredicate();
 }
 
 void Manager::setTransforms(const std::vector<std::string>& names,
@@ -287,6 +281,10 @@ void Manager::ignorePair(const std::string& a, const std::string& b, bool ignore
   Entry* ea = find(a);
   Entry* eb = find(b);
   if (ea == eb) throw py::value_error("ignore_pair: an object never pairs with itself");
+  if (cube_) {
+    cube_->excludePair(ea->obj.get(), eb->obj.get(), ignore);
+    return;
+  }
   const bool present = ignoredPair(ea, eb);
   if (ignore && !present) {
     ignored_.emplace(key(ea, eb), std::make_pair(ea, eb));
@@ -303,16 +301,16 @@ void Manager::ignorePair(const std::string& a, const std::string& b, bool ignore
     ea->ignores--;
     eb->ignores--;
   }
-  installPredicate();
 }
 
 void Manager::clearIgnored() {
   noCallback("clear_ignored");
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
+  if (cube_)
+    for (const auto& [a, b] : cube_->excludedPairs()) cube_->excludePair(a, b, false);
   ignored_.clear();
   for (auto& [n, e] : entries_) e->ignores = 0;
-  installPredicate();
 }
 
 void Manager::setMargin(double margin, const std::string* name) {
@@ -586,7 +584,8 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
             std::shared_lock lock(self.mutex);
             return self.ignored();
           },
-          "The ignored pairs, sorted, as (name, name) tuples.")
+          "The ignored pairs, sorted, as (name, name) tuples (on the cube backend each in the "
+          "order the objects were added).")
       .def(
           "set_margin",
           [](Manager& self, double margin, py::object name) {

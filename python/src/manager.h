@@ -68,7 +68,8 @@ struct Entry {
   std::unique_ptr<Object> obj;
   std::uint64_t category = 1, mask = ~std::uint64_t(0);
   double margin = -1;  ///< own margin; < 0: the manager-wide one
-  int ignores = 0;     ///< how many ignored pairs name it
+  int ignores = 0;     ///< how many ignored pairs name it (the FCL backend's; the cube
+                       ///< backend's are its manager's excluded pairs)
 };
 
 /// Reads or writes on a manager from any Python thread: queries take it shared, mutations
@@ -133,7 +134,6 @@ class Manager {
     return x * 0x9E3779B97F4A7C15ull ^ (y + (x << 20));
   }
   bool ignoredPair(const Entry* a, const Entry* b) const;
-  void installPredicate();
   void refresh(Entry& e);
 
   std::string backend_;
@@ -142,6 +142,7 @@ class Manager {
   cube::CubeCollisionManagerd* cube_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Entry>> entries_;
   std::unordered_map<const fcl::CollisionGeometryd*, Entry*> by_geometry_;
+  // The FCL backend's ignored pairs (the cube backend's: CubeCollisionManager::excludePair).
   std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
   double margin_ = 0;
   std::size_t own_margins_ = 0;

@@ -92,6 +92,14 @@ class Broadphase {
   bool setFilter(const Object* obj, const Filter& f);
   /// The filter bits of a registered object, or of any other (the default).
   Filter filter(const Object* obj) const;
+  /// Excludes the pair of registered objects a != b (on), or admits it again: the table's
+  /// exclusion, which the gate reads at every query. False if either is not registered.
+  bool exclude(const Object* a, const Object* b, bool on) {
+    const ObjectId x = table_.find(a), y = table_.find(b);
+    if (x == kNone || y == kNone) return false;
+    table_.exclude(x, y, on);
+    return true;
+  }
   /// The predicate every pair must pass after the filter bits (empty: none).
   void setPredicate(PairPredicate<S> p) { predicate_ = std::move(p); }
   const PairPredicate<S>& predicate() const { return predicate_; }
@@ -155,9 +163,10 @@ class Broadphase {
   /// Pairs (managed object, object of `body`) whose boxes overlap and that pass the filter bits
   /// (the body's per id, null: all default) and the predicate: one walk of the cubes, then of
   /// the unbounded list, against the body's view (BodyView), in walk order whatever
-  /// canonical_pairs says; fn gets the body's ids.
+  /// canonical_pairs says; fn gets the body's ids. `table_ids`: per body id, the object's id in
+  /// this table, for the rules read by id (a sweep's movers); null: objects of no table.
   bool collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
-               QueryStats* stats) const;
+               QueryStats* stats, const ObjectId* table_ids = nullptr) const;
   /// A sweep of registered objects: objects `ids` (registered, each once) at boxes `boxes` (each
   /// grown here by its object's margin) with one another, then with every other registered
   /// object at its own box, under the gate of a self query (filter bits, the predicate; pairs of
@@ -264,7 +273,15 @@ class Broadphase {
     Object* obj = nullptr;               ///< a query object: the object
     Filter bits{};                       ///< a query object: its filter bits
     const Filter* ids = nullptr;         ///< a body: bits per body id (null: all default)
+    /// Side b's ids in this table (a body's, another table's), for the rules read by id; null:
+    /// none there (a body), or none needed (no exclusions here).
+    const ObjectId* here = nullptr;
+    /// Another table: this table's ids in it (null: none needed, no exclusions there).
+    const ObjectId* there = nullptr;
   };
+  /// The other side of a query against another broadphase. Where either table excludes pairs,
+  /// `ids` holds each side's ids in the other table (Against::here, there).
+  Against otherSide(const Broadphase& other, std::vector<ObjectId> (&ids)[2]) const;
   /// What plan() decided.
   struct Plan {
     std::optional<PairGate<S>> gate;  ///< set when a rule is (walks without one ask nothing)

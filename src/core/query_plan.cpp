@@ -26,6 +26,8 @@ PairGate<S> Broadphase<S>::gate(const Against* b) const {
   g.filters_a = table_.filters();
   g.groups_a = table_.groupFilters();
   g.predicate = predicate_ ? &predicate_ : nullptr;
+  ExcludedView& mine = g.excluded_ids.mine;  // side b's ids seen in this table
+  mine.set = table_.exclusions();
   if (b == nullptr) {
     g.filters_b = g.filters_a;
     g.groups_b = g.groups_a;
@@ -33,11 +35,49 @@ PairGate<S> Broadphase<S>::gate(const Against* b) const {
   } else if (b->other != nullptr) {
     g.filters_b = b->other->table_.filters();
     g.groups_b = b->other->table_.groupFilters();
+    mine.b = b->here;  // otherSide() made it where mine.set is
+    ExcludedView& theirs = g.excluded_ids.theirs;
+    theirs.set = b->other->table_.exclusions();
+    theirs.a = b->there;
   } else {
     g.filters_b = b->ids;
     g.query = b->bits;
+    if (mine.set != nullptr) {
+      if (b->obj != nullptr) {  // a registered query object brings its pairs
+        mine.query = table_.find(b->obj);
+        if (mine.query == kNone) mine.set = nullptr;
+      } else if (b->here != nullptr) {
+        mine.b = b->here;
+      } else {
+        mine.set = nullptr;  // a body of no table: no pair of it is excluded here
+      }
+    }
   }
   return g;
+}
+
+template <typename S>
+typename Broadphase<S>::Against Broadphase<S>::otherSide(const Broadphase& other,
+                                                         std::vector<ObjectId> (&ids)[2]) const {
+  Against b;
+  b.other = &other;
+  // Per id of `seen`, its object's id in `rules`; only objects in a pair `rules` excludes need
+  // one, the rest stay kNone.
+  const auto idsIn = [](const ObjectTable<S>& rules, const ObjectTable<S>& seen,
+                        std::vector<ObjectId>& out) -> const ObjectId* {
+    const ExcludedSet* set = rules.exclusions();
+    if (set == nullptr) return nullptr;
+    out.assign(seen.idBound(), kNone);
+    for (ObjectId r = 0; r < set->n; ++r) {
+      if (set->count[r] == 0) continue;
+      const ObjectId s = seen.find(rules.object(r));
+      if (s != kNone) out[s] = r;
+    }
+    return out.data();
+  };
+  b.here = idsIn(table_, other.table_, ids[0]);
+  b.there = idsIn(other.table_, table_, ids[1]);
+  return b;
 }
 
 // Inline into each entry, as are forViews and collideRun: a short object query spent a tenth of
@@ -47,10 +87,10 @@ template <typename S>
                                                                                int threads) const {
   Plan p;
   // Most queries have no rule to test: the gate is built only where one may be set.
-  const bool maybe =
-      table_.filters() != nullptr || predicate_ || (b == nullptr && config_.canonical_pairs) ||
-      (b != nullptr && (b->ids != nullptr || !b->bits.isDefault() ||
-                        (b->other != nullptr && b->other->table_.filters() != nullptr)));
+  const bool maybe = table_.pairRules() || predicate_ ||
+                     (b == nullptr && config_.canonical_pairs) ||
+                     (b != nullptr && (b->ids != nullptr || !b->bits.isDefault() ||
+                                       (b->other != nullptr && b->other->table_.pairRules())));
   if (maybe) {
     const PairGate<S> g = gate(b);
     if (g.active()) p.gate = g;
@@ -258,10 +298,11 @@ bool Broadphase<S>::collide(const Probe& probe, void* data, CollideFn<S> fn,
 
 template <typename S>
 bool Broadphase<S>::collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
-                            QueryStats* stats) const {
+                            QueryStats* stats, const ObjectId* table_ids) const {
   Against b;
   b.view = &body;
   b.ids = bits;
+  b.here = table_ids;
   return collideRun(&b, 1, data, fn, stats);
 }
 
@@ -286,8 +327,8 @@ bool Broadphase<S>::collideSelfTasks(TaskSink<S>& sink, int threads) const {
 template <typename S>
 bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
-  Against b;
-  b.other = &other;
+  std::vector<ObjectId> ids[2];
+  const Against b = otherSide(other, ids);
   return collideRun(&b, 1, data, fn, stats);
 }
 
@@ -317,8 +358,8 @@ bool Broadphase<S>::distanceSelf(void* data, DistanceFn<S> fn, S& best, QuerySta
 template <typename S>
 bool Broadphase<S>::distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
-  Against b;
-  b.other = &other;
+  std::vector<ObjectId> ids[2];
+  const Against b = otherSide(other, ids);
   return distanceRun(&b, data, fn, best, stats);
 }
 
@@ -401,18 +442,20 @@ bool Broadphase<S>::collideMoving(const ObjectId* ids, const Box<S>* boxes, std:
   }
   body.refit();
   Movers<S> movers{&id_of, &moving, data, fn};
-  // Movers with movers: this table's gate, its per-id columns read per body position.
+  // Movers with movers: this table's gate, its per-id columns read per body position, its
+  // other rules by id through id_of.
   PairGate<S> g = gate(nullptr);
   g.filters_a = g.filters_b = bits.empty() ? nullptr : bits.data();
   g.groups_a = g.groups_b = nullptr;
   if (g.seq != nullptr) g.seq = seq.data();
+  g.readIdsThrough(id_of.data(), id_of.data());
   const View<S> v = body.view();
   if (collideViews(v, v, CollideFn<S>(&Movers<S>::withMover), &movers, true, 0, nullptr,
                    g.active() ? &g : nullptr))
     return true;
   // Movers with the objects that stay: the body query, the world's side first.
   return collide(v, bits.empty() ? nullptr : bits.data(), &movers,
-                 CollideFn<S>(&Movers<S>::withStill), nullptr);
+                 CollideFn<S>(&Movers<S>::withStill), nullptr, id_of.data());
 }
 
 template class Broadphase<float>;
