@@ -284,18 +284,32 @@ class Broadphase {
   Against otherSide(const Broadphase& other, std::vector<ObjectId> (&ids)[2]) const;
   /// What plan() decided.
   struct Plan {
-    std::optional<PairGate<S>> gate;  ///< set when a rule is (walks without one ask nothing)
-    bool canonical = false;           ///< gather the pairs, then call in registration order
-    bool from_list = false;           ///< a self query read from the valid pair list
-    bool split = false;               ///< a self walk cut into tasks for `threads` threads
-    bool one_object = false;          ///< an object query without a gate: collideObject's walk
+    const PairGate<S>* gate = nullptr;  ///< set when a rule is (walks without one ask nothing)
+    bool canonical = false;             ///< gather the pairs, then call in registration order
+    bool from_list = false;             ///< a self query read from the valid pair list
+    bool split = false;                 ///< a self walk cut into tasks for `threads` threads
+    bool one_object = false;            ///< an object query without a gate: collideObject's walk
     int threads = 1;
     std::size_t all_pairs_limit = 0;  ///< views up to this many slots take the all-pairs test
-    const PairGate<S>* walkGate() const { return gate ? &*gate : nullptr; }
+    const PairGate<S>* walkGate() const { return gate; }
+  };
+  /// A query's room for its gate and the excluded pairs the gate reads: left unset (nothing
+  /// written, as most queries have no rule) until plan() or gate() fills it.
+  struct GateRoom {
+    GateRoom() {}
+    union {
+      PairGate<S> gate;
+    };
+    Exclusions exclusions;
   };
   /// The gate of a query against `b` (null: a self query): the one place where a gate is built.
-  PairGate<S> gate(const Against* b) const;
-  Plan plan(const Against* b, int threads) const;
+  /// `room`: the query's room for the excluded pairs, filled if a table excludes some (the gate
+  /// then points at it). Not inlined: the queries without a rule (most) would set up the whole
+  /// gate before plan() knows it is not needed.
+  [[gnu::noinline]] PairGate<S> gate(const Against* b, Exclusions& room) const;
+  /// The gate of a query against `b`, built in `room`, if a rule is set; else null.
+  const PairGate<S>* gateIn(const Against* b, GateRoom& room) const;
+  Plan plan(const Against* b, int threads, GateRoom& room) const;
   /// Runs run(a, b, self) on the view pairs of a query against `b` (null: self) until one returns
   /// true: the cubes, then the unbounded list.
   template <class Run>

@@ -54,12 +54,13 @@ struct ExcludedSet {
 
 /// One table's excluded pairs seen from a query's two sides: side a's and side b's ids in that
 /// table (a null map: the side's ids are the table's own; side b's query object, id kNone, is
-/// `query`, kNone if not registered there). A null set: none.
+/// `query`, kNone if not registered there). A null set: none. No initializers: a query's room
+/// for it costs nothing until a gate fills it (Broadphase::gate).
 struct ExcludedView {
-  const ExcludedSet* set = nullptr;
-  const ObjectId* a = nullptr;
-  const ObjectId* b = nullptr;
-  ObjectId query = kNone;
+  const ExcludedSet* set;
+  const ObjectId* a;
+  const ObjectId* b;
+  ObjectId query;
   bool has(ObjectId x, ObjectId y) const {
     return set != nullptr && set->has(a != nullptr ? a[x] : x, y == kNone     ? query
                                                                : b != nullptr ? b[y]
@@ -71,7 +72,6 @@ struct ExcludedView {
 /// and against another table also that one's, so that either manager's exclusion drops a pair.
 struct Exclusions {
   ExcludedView mine, theirs;
-  bool any() const { return mine.set != nullptr || theirs.set != nullptr; }
   /// Whether the pair of side a's x and side b's y is excluded.
   bool has(ObjectId x, ObjectId y) const { return mine.has(x, y) || theirs.has(x, y); }
 };
@@ -95,20 +95,14 @@ struct PairGate {
   /// a pair never reported; null: none.
   const std::uint8_t* excluded = nullptr;
   std::size_t excluded_n = 0;
-  /// The object tables' excluded pairs (CubeCollisionManager::excludePair); none by default.
-  Exclusions excluded_ids;
+  /// The object tables' excluded pairs (CubeCollisionManager::excludePair), in the query's room
+  /// for them; null: none.
+  const Exclusions* excluded_ids = nullptr;
 
   /// Whether any rule is set: a walk without one reports every pair of overlapping boxes.
   bool active() const {
     return filters_a != nullptr || filters_b != nullptr || !query.isDefault() ||
-           predicate != nullptr || seq != nullptr || excluded != nullptr || excluded_ids.any();
-  }
-  /// The gate for sides whose positions stand for this table's ids a[p] and b[p] (a sweep's
-  /// movers, as a body): every rule read by id reads through them. The filter bits are the
-  /// caller's, per position.
-  void readIdsThrough(const ObjectId* a, const ObjectId* b) {
-    excluded_ids.mine.a = a;
-    excluded_ids.mine.b = b;
+           predicate != nullptr || seq != nullptr || excluded != nullptr || excluded_ids != nullptr;
   }
   /// The gate without the predicate: for walks on other threads, whose pairs are put to the
   /// predicate (user code) on the calling thread with predicatePasses.
@@ -164,7 +158,7 @@ struct PairGate {
   template <class T, class IdOf, class ObjOf, class Then>
   bool finish(const T& x, const T& y, IdOf&& id, ObjOf&& obj, Then&& then) const {
     if (excluded != nullptr && excluded[std::size_t(id(x)) * excluded_n + id(y)]) return false;
-    if (excluded_ids.has(id(x), id(y))) return false;
+    if (excluded_ids != nullptr && excluded_ids->has(id(x), id(y))) return false;
     const bool swap = seq != nullptr && seq[id(y)] < seq[id(x)];
     const T& first = swap ? y : x;
     const T& second = swap ? x : y;

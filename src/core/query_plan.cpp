@@ -12,6 +12,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <new>
 #include <vector>
 
 #include "core/body_view.h"
@@ -21,13 +22,14 @@ namespace cube {
 namespace detail {
 
 template <typename S>
-PairGate<S> Broadphase<S>::gate(const Against* b) const {
+PairGate<S> Broadphase<S>::gate(const Against* b, Exclusions& room) const {
   PairGate<S> g;
   g.filters_a = table_.filters();
   g.groups_a = table_.groupFilters();
   g.predicate = predicate_ ? &predicate_ : nullptr;
-  ExcludedView& mine = g.excluded_ids.mine;  // side b's ids seen in this table
-  mine.set = table_.exclusions();
+  room = Exclusions{{table_.exclusions(), nullptr, nullptr, kNone},
+                    {nullptr, nullptr, nullptr, kNone}};
+  ExcludedView& mine = room.mine;  // side b's ids seen in this table
   if (b == nullptr) {
     g.filters_b = g.filters_a;
     g.groups_b = g.groups_a;
@@ -36,9 +38,8 @@ PairGate<S> Broadphase<S>::gate(const Against* b) const {
     g.filters_b = b->other->table_.filters();
     g.groups_b = b->other->table_.groupFilters();
     mine.b = b->here;  // otherSide() made it where mine.set is
-    ExcludedView& theirs = g.excluded_ids.theirs;
-    theirs.set = b->other->table_.exclusions();
-    theirs.a = b->there;
+    room.theirs.set = b->other->table_.exclusions();
+    room.theirs.a = b->there;
   } else {
     g.filters_b = b->ids;
     g.query = b->bits;
@@ -53,6 +54,7 @@ PairGate<S> Broadphase<S>::gate(const Against* b) const {
       }
     }
   }
+  if (mine.set != nullptr || room.theirs.set != nullptr) g.excluded_ids = &room;
   return g;
 }
 
@@ -80,21 +82,26 @@ typename Broadphase<S>::Against Broadphase<S>::otherSide(const Broadphase& other
   return b;
 }
 
-// Inline into each entry, as are forViews and collideRun: a short object query spent a tenth of
-// its instructions passing the plan and the views between them.
 template <typename S>
-[[gnu::always_inline]] inline typename Broadphase<S>::Plan Broadphase<S>::plan(const Against* b,
-                                                                               int threads) const {
-  Plan p;
+[[gnu::always_inline]] inline const PairGate<S>* Broadphase<S>::gateIn(const Against* b,
+                                                                       GateRoom& room) const {
   // Most queries have no rule to test: the gate is built only where one may be set.
   const bool maybe = table_.pairRules() || predicate_ ||
                      (b == nullptr && config_.canonical_pairs) ||
                      (b != nullptr && (b->ids != nullptr || !b->bits.isDefault() ||
                                        (b->other != nullptr && b->other->table_.pairRules())));
-  if (maybe) {
-    const PairGate<S> g = gate(b);
-    if (g.active()) p.gate = g;
-  }
+  if (!maybe) return nullptr;
+  const PairGate<S> g = gate(b, room.exclusions);
+  return g.active() ? new (&room.gate) PairGate<S>(g) : nullptr;
+}
+
+// Inline into each entry, as are forViews and collideRun: a short object query spent a tenth of
+// its instructions passing the plan and the views between them.
+template <typename S>
+[[gnu::always_inline]] inline typename Broadphase<S>::Plan Broadphase<S>::plan(
+    const Against* b, int threads, GateRoom& room) const {
+  Plan p;
+  p.gate = gateIn(b, room);
   const bool body = b != nullptr && b->other == nullptr && b->obj == nullptr;
   // A body's pairs come in walk order whatever canonical_pairs says (its ids are its own).
   p.canonical = config_.canonical_pairs && !body;
@@ -126,7 +133,8 @@ template <typename S>
 [[gnu::always_inline]] inline bool Broadphase<S>::collideRun(const Against* b, int threads,
                                                              void* data, CollideFn<S> fn,
                                                              QueryStats* stats) const {
-  const Plan p = plan(b, threads);
+  GateRoom room;  // filled only if a rule is set
+  const Plan p = plan(b, threads, room);
   const PairGate<S>* g = p.walkGate();
   if (!p.canonical) {
     if (p.from_list)
@@ -256,8 +264,8 @@ bool Broadphase<S>::callInOrder(const std::vector<std::uint64_t>& found, const A
 template <typename S>
 bool Broadphase<S>::distanceRun(const Against* b, void* data, DistanceFn<S> fn, S& best,
                                 QueryStats* stats) const {
-  const PairGate<S> g = gate(b);
-  const PairGate<S>* gp = g.active() ? &g : nullptr;
+  GateRoom room;
+  const PairGate<S>* gp = gateIn(b, room);
   return forViews(b, [&](const View<S>& x, const View<S>& y, bool self) {
     return distancePairs(x, y, self, data, fn, best, stats, gp);
   });
@@ -318,7 +326,8 @@ bool Broadphase<S>::collideSelfSplit(void* data, CollideFn<S> fn, int threads) c
 
 template <typename S>
 bool Broadphase<S>::collideSelfTasks(TaskSink<S>& sink, int threads) const {
-  const Plan p = plan(nullptr, threads);
+  GateRoom room;
+  const Plan p = plan(nullptr, threads, room);
   if (!p.split || p.canonical || (p.gate && p.gate->predicate != nullptr)) return false;
   collideSplit(p, nullptr, CollideFn<S>(typename CollideFn<S>::Plain(nullptr)), nullptr, &sink);
   return true;
@@ -444,11 +453,12 @@ bool Broadphase<S>::collideMoving(const ObjectId* ids, const Box<S>* boxes, std:
   Movers<S> movers{&id_of, &moving, data, fn};
   // Movers with movers: this table's gate, its per-id columns read per body position, its
   // other rules by id through id_of.
-  PairGate<S> g = gate(nullptr);
+  Exclusions room;
+  PairGate<S> g = gate(nullptr, room);
   g.filters_a = g.filters_b = bits.empty() ? nullptr : bits.data();
   g.groups_a = g.groups_b = nullptr;
   if (g.seq != nullptr) g.seq = seq.data();
-  g.readIdsThrough(id_of.data(), id_of.data());
+  room.mine.a = room.mine.b = id_of.data();
   const View<S> v = body.view();
   if (collideViews(v, v, CollideFn<S>(&Movers<S>::withMover), &movers, true, 0, nullptr,
                    g.active() ? &g : nullptr))
