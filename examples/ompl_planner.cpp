@@ -358,7 +358,7 @@ int main(int argc, char** argv) {
   fcl_world.setup();
   cube::BodySet<S> body;
   for (const auto& g : geometry) body.addLink(g);
-  for (int i = 0; i + 1 < kJoints; ++i) body.allowPair(i, i + 1);
+  for (int i = 0; i + 1 < kJoints; ++i) body.excludePair(i, i + 1);
 
   std::printf(
       "RRTConnect, %d-joint arm, %zu obstacles, %d problems, cube on %d thread(s) (0: the "

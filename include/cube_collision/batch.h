@@ -6,7 +6,7 @@
 // per state, no computeAABB() and no update() by the caller. Every contact is decided by FCL's
 // narrow phase (fcl::collide, and fcl::distance for margins and clearance), after the broadphase
 // of the world's cubes and the cull of the pipeline (callbacks.h): the answers are those of
-// checking every link against every world object and every non-allowed pair of links with FCL.
+// checking every link against every world object and every pair of links not excluded with FCL.
 
 #include <fcl/common/types.h>
 #include <fcl/geometry/collision_geometry.h>
@@ -58,7 +58,9 @@ class BodySet {
                       std::uint64_t category = 1, std::uint64_t mask = ~std::uint64_t(0));
   /// Links i and j are never checked against each other (adjacent links, say). Throws
   /// std::invalid_argument, changing nothing, for an unknown index or i == j.
-  void allowPair(std::size_t i, std::size_t j);
+  void excludePair(std::size_t i, std::size_t j);
+  /// The former name of excludePair (the pair is "allowed" to touch), kept for existing code.
+  void allowPair(std::size_t i, std::size_t j) { excludePair(i, j); }
   /// Whether links i and j are checked against each other (i != j, both known).
   bool checked(std::size_t i, std::size_t j) const;
   /// The number of links.
@@ -76,7 +78,7 @@ class BodySet {
 
 /// What checkStates and checkMotion compute, beyond "colliding or not".
 struct BatchOptions {
-  /// Also check the links against each other (pairs not allowed by BodySet::allowPair).
+  /// Also check the links against each other (pairs not excluded by BodySet::excludePair).
   bool self_collision = false;
   /// Report each colliding state's first pair (StateResult): the pair whose lower link index is
   /// smallest; for that link, world objects (lowest registration number first) before links

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "cube_collision/callable.h"
@@ -135,6 +136,23 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// the querying thread: concurrent const queries call it concurrently. An empty function
   /// removes it.
   void setPairFilter(std::function<bool(Object*, Object*)> keep);
+  /// Registered objects a and b never pair (`excluded` true), or pair again (false; no effect
+  /// if they were not excluded): from the next query on, no query of this manager reports the
+  /// pair or calls the pair filter or a callback for it (self, object, manager against manager,
+  /// distance, the pair list, and the queries of queries.h, continuous.h and batch.h built on
+  /// them). The exclusion is kept through update(), setup() and rebuilds, and forgotten when
+  /// either object is unregistered (registered again, it is excluded from nothing). A query
+  /// object registered here brings its exclusions; against another CubeCollisionManager a pair
+  /// is dropped if either manager excludes it. O(1) on average; managers that exclude nothing
+  /// keep no memory for it. Throws std::invalid_argument (nothing changed) if a or b is null,
+  /// either is not registered, or a == b; std::logic_error from inside one of this manager's
+  /// query callbacks.
+  void excludePair(Object* a, Object* b, bool excluded = true);
+  /// Whether excludePair(a, b) is in force: false unless a and b are two registered objects.
+  bool isExcluded(const Object* a, const Object* b) const;
+  /// Every excluded pair, each as (earlier registered, later registered), sorted by the
+  /// registration order of the first, then of the second.
+  std::vector<std::pair<Object*, Object*>> excludedPairs() const;
   /// Manager-wide margin (>= 0, finite), for every object without one of its own and for query
   /// objects not registered here: queries report the pairs whose AABBs overlap once each is
   /// grown by its margin. Between managers: against another CubeCollisionManager, each side's

@@ -101,6 +101,9 @@ const Entry* Manager::byGeometry(const fcl::CollisionGeometryd* g) const {
 }
 
 bool Manager::ignoredPair(const Entry* a, const Entry* b) const {
+  // The cube backend's ignored pairs are its manager's excluded pairs, decided in its walks.
+  if (cube_) return cube_->isExcluded(a->obj.get(), b->obj.get());
+  if (!a->ignores || !b->ignores) return false;
   auto [lo, hi] = ignored_.equal_range(key(a, b));
   for (auto it = lo; it != hi; ++it)
     if ((it->second.first == a && it->second.second == b) ||
@@ -120,7 +123,11 @@ double Manager::marginOf(const Entry* e) const {
 
 std::vector<std::pair<std::string, std::string>> Manager::ignored() const {
   std::vector<std::pair<std::string, std::string>> out;
-  for (const auto& [k, p] : ignored_) out.emplace_back(p.first->name, p.second->name);
+  if (cube_)
+    for (const auto& [a, b] : cube_->excludedPairs())
+      out.emplace_back(entryOf(a)->name, entryOf(b)->name);
+  else
+    for (const auto& [k, p] : ignored_) out.emplace_back(p.first->name, p.second->name);
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -131,6 +138,7 @@ void Manager::setPairFilter(
 }
 
 void Manager::installPredicate() {
+  if (cube_) return;  // the cube manager's excluded pairs need no predicate
   if (ignored_.empty()) {
     setPairFilter({});
     return;
@@ -223,6 +231,7 @@ void Manager::remove(const std::string& name) {
   Entry* e = find(name);
   bp_->unregisterObject(e->obj.get());
   if (!cube_) bp_->setup();
+  // The cube manager forgot the object's excluded pairs as it unregistered it.
   if (e->ignores)
     for (auto it = ignored_.begin(); it != ignored_.end();) {
       if (it->second.first == e || it->second.second == e) {
@@ -288,6 +297,10 @@ void Manager::ignorePair(const std::string& a, const std::string& b, bool ignore
   Entry* ea = find(a);
   Entry* eb = find(b);
   if (ea == eb) throw py::value_error("ignore_pair: an object never pairs with itself");
+  if (cube_) {
+    cube_->excludePair(ea->obj.get(), eb->obj.get(), ignore);
+    return;
+  }
   const bool present = ignoredPair(ea, eb);
   if (ignore && !present) {
     ignored_.emplace(key(ea, eb), std::make_pair(ea, eb));
@@ -311,6 +324,8 @@ void Manager::clearIgnored() {
   noCallback("clear_ignored");
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
+  if (cube_)
+    for (const auto& [a, b] : cube_->excludedPairs()) cube_->excludePair(a, b, false);
   ignored_.clear();
   for (auto& [n, e] : entries_) e->ignores = 0;
   installPredicate();

@@ -74,7 +74,8 @@ struct Entry {
   /// Whether set_margin(name=) gave it a margin of its own (the broadphase keeps the value; it
   /// answers an object's margin, not whether it is its own, which pickling keeps).
   bool own_margin = false;
-  int ignores = 0;  ///< how many ignored pairs name it
+  int ignores = 0;  ///< how many ignored pairs name it (the FCL backend's; the cube backend's
+                    ///< are its manager's excluded pairs)
 };
 
 /// Reads or writes on a manager from any Python thread: queries take it shared, mutations
@@ -155,6 +156,7 @@ class Manager {
   FclBackend* fcl_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Entry>> entries_;
   std::unordered_map<const fcl::CollisionGeometryd*, Entry*> by_geometry_;
+  // The FCL backend's ignored pairs (the cube backend's: CubeCollisionManager::excludePair).
   std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
   std::size_t own_margins_ = 0;
   std::size_t meshes_ = 0, planes_ = 0, convexes_ = 0;

@@ -257,7 +257,8 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
             std::shared_lock lock(self.mutex);
             return self.ignored();
           },
-          "The ignored pairs, sorted, as (name, name) tuples.")
+          "The ignored pairs, sorted, as (name, name) tuples (on the cube backend each in the "
+          "order the objects were added).")
       .def(
           "set_margin",
           [](Manager& self, double margin, py::object name) {

@@ -448,6 +448,33 @@ void CubeCollisionManager<S>::setPairFilter(std::function<bool(Object*, Object*)
   core_->setPredicate(std::move(keep));
 }
 
+template <typename S>
+void CubeCollisionManager<S>::excludePair(Object* a, Object* b, bool excluded) {
+  refuseInsideQuery(core_.get(), "excludePair");
+  if (a == nullptr || b == nullptr) fail("excludePair", "null object");
+  if (a == b) fail("excludePair", "an object never pairs with itself");
+  if (!core_->exclude(a, b, excluded)) fail("excludePair", "the object is not registered");
+}
+
+template <typename S>
+bool CubeCollisionManager<S>::isExcluded(const Object* a, const Object* b) const {
+  const detail::ObjectTable<S>& table = core_->table();
+  return table.excluded(table.find(a), table.find(b));
+}
+
+template <typename S>
+std::vector<
+    std::pair<typename CubeCollisionManager<S>::Object*, typename CubeCollisionManager<S>::Object*>>
+CubeCollisionManager<S>::excludedPairs() const {
+  const detail::ObjectTable<S>& table = core_->table();
+  std::vector<std::pair<detail::ObjectId, detail::ObjectId>> ids;
+  table.excludedPairs(ids);
+  std::vector<std::pair<Object*, Object*>> out;
+  out.reserve(ids.size());
+  for (const auto& [x, y] : ids) out.emplace_back(table.object(x), table.object(y));
+  return out;
+}
+
 namespace {
 
 template <typename S>

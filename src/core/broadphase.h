@@ -127,6 +127,14 @@ class Broadphase {
   bool setFilter(const Object* obj, const Filter& f);
   /// The filter bits of a registered object, or of any other (the default).
   Filter filter(const Object* obj) const;
+  /// Excludes the pair of registered objects a != b (on), or admits it again: the table's
+  /// exclusion, which the gate reads at every query. False if either is not registered.
+  bool exclude(const Object* a, const Object* b, bool on) {
+    const ObjectId x = table_.find(a), y = table_.find(b);
+    if (x == kNone || y == kNone) return false;
+    table_.exclude(x, y, on);
+    return true;
+  }
   /// The predicate every pair must pass after the filter bits (empty: none).
   void setPredicate(PairPredicate<S> p) { predicate_ = std::move(p); }
   const PairPredicate<S>& predicate() const { return predicate_; }
@@ -190,9 +198,10 @@ class Broadphase {
   /// Pairs (managed object, object of `body`) whose boxes overlap and that pass the filter bits
   /// (the body's per id, null: all default) and the predicate: one walk of the cubes, then of
   /// the unbounded list, against the body's view (BodyView), in walk order whatever
-  /// canonical_pairs says; fn gets the body's ids.
+  /// canonical_pairs says; fn gets the body's ids. `table_ids`: per body id, the object's id in
+  /// this table, for the rules read by id (a sweep's movers); null: objects of no table.
   bool collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
-               QueryStats* stats) const;
+               QueryStats* stats, const ObjectId* table_ids = nullptr) const;
   /// A sweep of registered objects: objects `ids` (registered, each once) at boxes `boxes` (each
   /// grown here by its object's margin) with one another, then with every other registered
   /// object at its own box, under the gate of a self query (filter bits, the predicate; pairs of
@@ -301,21 +310,43 @@ class Broadphase {
     Object* obj = nullptr;               ///< a query object: the object
     Filter bits{};                       ///< a query object: its filter bits
     const Filter* ids = nullptr;         ///< a body: bits per body id (null: all default)
+    /// Side b's ids in this table (a body's, another table's), for the rules read by id; null:
+    /// none there (a body), or none needed (no exclusions here).
+    const ObjectId* here = nullptr;
+    /// Another table: this table's ids in it (null: none needed, no exclusions there).
+    const ObjectId* there = nullptr;
   };
+  /// The other side of a query against another broadphase. Where either table excludes pairs,
+  /// `ids` holds each side's ids in the other table (Against::here, there).
+  Against otherSide(const Broadphase& other, std::vector<ObjectId> (&ids)[2]) const;
   /// What plan() decided.
   struct Plan {
-    std::optional<PairGate<S>> gate;  ///< set when a rule is (walks without one ask nothing)
-    bool canonical = false;           ///< gather the pairs, then call in registration order
-    bool from_list = false;           ///< a self query read from the valid pair list
-    bool split = false;               ///< a self walk cut into tasks for `threads` threads
-    bool one_object = false;          ///< an object query without a gate: collideObject's walk
+    const PairGate<S>* gate = nullptr;  ///< set when a rule is (walks without one ask nothing)
+    bool canonical = false;             ///< gather the pairs, then call in registration order
+    bool from_list = false;             ///< a self query read from the valid pair list
+    bool split = false;                 ///< a self walk cut into tasks for `threads` threads
+    bool one_object = false;            ///< an object query without a gate: collideObject's walk
     int threads = 1;
     std::size_t all_pairs_limit = 0;  ///< views up to this many slots take the all-pairs test
-    const PairGate<S>* walkGate() const { return gate ? &*gate : nullptr; }
+    const PairGate<S>* walkGate() const { return gate; }
+  };
+  /// A query's room for its gate and the excluded pairs the gate reads: left unset (nothing
+  /// written, as most queries have no rule) until plan() or gate() fills it.
+  struct GateRoom {
+    GateRoom() {}
+    union {
+      PairGate<S> gate;
+    };
+    Exclusions exclusions;
   };
   /// The gate of a query against `b` (null: a self query): the one place where a gate is built.
-  PairGate<S> gate(const Against* b) const;
-  Plan plan(const Against* b, int threads) const;
+  /// `room`: the query's room for the excluded pairs, filled if a table excludes some (the gate
+  /// then points at it). Not inlined: the queries without a rule (most) would set up the whole
+  /// gate before plan() knows it is not needed.
+  [[gnu::noinline]] PairGate<S> gate(const Against* b, Exclusions& room) const;
+  /// The gate of a query against `b`, built in `room`, if a rule is set; else null.
+  const PairGate<S>* gateIn(const Against* b, GateRoom& room) const;
+  Plan plan(const Against* b, int threads, GateRoom& room) const;
   /// Runs run(a, b, self) on the view pairs of a query against `b` (null: self) until one returns
   /// true: the cubes, then the unbounded list.
   template <class Run>

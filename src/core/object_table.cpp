@@ -136,6 +136,7 @@ void ObjectTable<S>::remove(ObjectId id) {
   }
   index_[hole] = 0;
   leaveGroup(id);
+  if (id < excluded_count_.size() && excluded_count_[id] != 0) dropExcluded(id);
   obj_[id] = nullptr;
   loc_[id] = kNone;
   free_.push_back(id);
@@ -202,6 +203,139 @@ void ObjectTable<S>::setOwnMargin(ObjectId id, S margin) {
 }
 
 template <typename S>
+void ObjectTable<S>::viewExcluded() {
+  excluded_set_ = ExcludedSet{excluded_count_.data(), excluded_count_.size(), excluded_keys_.data(),
+                              excluded_keys_.size() - 1};
+}
+
+template <typename S>
+void ObjectTable<S>::placeExcluded(std::uint64_t key) {
+  const std::size_t mask = excluded_keys_.size() - 1;
+  std::size_t i = hashKey(key) & mask;
+  while (excluded_keys_[i] != kNoPair) i = (i + 1) & mask;
+  excluded_keys_[i] = key;
+}
+
+template <typename S>
+void ObjectTable<S>::eraseExcluded(std::uint64_t key) {
+  // Backward-shift deletion, as the pointer map's.
+  const std::size_t mask = excluded_keys_.size() - 1;
+  std::size_t hole = hashKey(key) & mask;
+  while (excluded_keys_[hole] != key) hole = (hole + 1) & mask;
+  for (std::size_t j = (hole + 1) & mask; excluded_keys_[j] != kNoPair; j = (j + 1) & mask) {
+    const std::size_t home = hashKey(excluded_keys_[j]) & mask;
+    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+    if (!stays) {
+      excluded_keys_[hole] = excluded_keys_[j];
+      hole = j;
+    }
+  }
+  excluded_keys_[hole] = kNoPair;
+  for (const ObjectId id : {ObjectId(key >> 32), ObjectId(key)}) --excluded_count_[id];
+  if (--excluded_ == 0) {  // the last one: the memory goes with it (assigning {} keeps it)
+    std::vector<std::uint32_t>().swap(excluded_count_);
+    std::vector<std::uint64_t>().swap(excluded_keys_);
+    excluded_set_ = ExcludedSet{};
+  }
+}
+
+template <typename S>
+bool ObjectTable<S>::exclude(ObjectId a, ObjectId b, bool on) {
+  assert(a != b && a < obj_.size() && b < obj_.size() && obj_[a] != nullptr && obj_[b] != nullptr);
+  const std::uint64_t key = pairKey(a, b);
+  if (excluded(a, b) == on) return false;
+  if (!on) {
+    eraseExcluded(key);
+    return true;
+  }
+  // Room first, so that a failed allocation changes nothing.
+  const std::size_t need = std::size_t(std::max(a, b)) + 1;
+  std::vector<std::uint32_t> count;
+  if (need > excluded_count_.size()) {  // up to every id there is: one growth per id bound
+    count.assign(obj_.size(), 0);
+    std::copy(excluded_count_.begin(), excluded_count_.end(), count.begin());
+  }
+  std::vector<std::uint64_t> keys;
+  if (2 * (excluded_ + 1) > excluded_keys_.size())
+    keys.assign(std::max<std::size_t>(16, 2 * excluded_keys_.size()), kNoPair);
+  if (!count.empty()) excluded_count_.swap(count);
+  if (!keys.empty()) {
+    excluded_keys_.swap(keys);
+    for (const std::uint64_t k : keys)
+      if (k != kNoPair) placeExcluded(k);
+  }
+  placeExcluded(key);
+  ++excluded_count_[a];
+  ++excluded_count_[b];
+  ++excluded_;
+  viewExcluded();
+  return true;
+}
+
+template <typename S>
+void ObjectTable<S>::dropExcluded(ObjectId id) {
+  std::vector<std::uint64_t> mine;
+  mine.reserve(excluded_count_[id]);
+  for (const std::uint64_t k : excluded_keys_)
+    if (k != kNoPair && (ObjectId(k >> 32) == id || ObjectId(k) == id)) mine.push_back(k);
+  for (const std::uint64_t k : mine) eraseExcluded(k);
+}
+
+template <typename S>
+bool ObjectTable<S>::validateExcluded(std::string* why) const {
+  std::ostringstream msg;
+  auto fail = [&]() {
+    if (why) *why = msg.str();
+    return false;
+  };
+  if (excluded_ == 0) {
+    if (!excluded_count_.empty() || !excluded_keys_.empty() || excluded_set_.n != 0)
+      return msg << "object table: excluded-pair arrays kept without a pair", fail();
+    return true;
+  }
+  const std::size_t cap = excluded_keys_.size();
+  if (cap < 16 || (cap & (cap - 1)) != 0 || 2 * excluded_ > cap ||
+      excluded_count_.size() > obj_.size() || excluded_set_.count != excluded_count_.data() ||
+      excluded_set_.n != excluded_count_.size() || excluded_set_.keys != excluded_keys_.data() ||
+      excluded_set_.mask != cap - 1)
+    return msg << "object table: the excluded-pair set is misshapen", fail();
+  std::vector<std::uint32_t> count(excluded_count_.size(), 0);
+  std::size_t pairs = 0;
+  for (const std::uint64_t k : excluded_keys_) {
+    if (k == kNoPair) continue;
+    ++pairs;
+    const ObjectId x = ObjectId(k >> 32), y = ObjectId(k);
+    if (!(x < y) || y >= count.size() || obj_[x] == nullptr || obj_[y] == nullptr)
+      return msg << "object table: excluded pair (" << x << ", " << y << ") is not of two live ids",
+             fail();
+    if (!excluded_set_.has(x, y))
+      return msg << "object table: excluded pair (" << x << ", " << y << ") cannot be found",
+             fail();
+    ++count[x];
+    ++count[y];
+  }
+  if (pairs != excluded_ || count != excluded_count_)
+    return msg << "object table: excluded-pair counts wrong", fail();
+  return true;
+}
+
+template <typename S>
+void ObjectTable<S>::excludedPairs(std::vector<std::pair<ObjectId, ObjectId>>& out) const {
+  out.clear();
+  out.reserve(excluded_);
+  for (const std::uint64_t k : excluded_keys_) {
+    if (k == kNoPair) continue;
+    ObjectId x = ObjectId(k >> 32), y = ObjectId(k);
+    if (seq_[y] < seq_[x]) std::swap(x, y);
+    out.emplace_back(x, y);
+  }
+  std::sort(out.begin(), out.end(), [&](const auto& p, const auto& q) {
+    return seq_[p.first] != seq_[q.first] ? seq_[p.first] < seq_[q.first]
+                                          : seq_[p.second] < seq_[q.second];
+  });
+}
+
+template <typename S>
 bool ObjectTable<S>::separable(int limit) const {
   if (filter_.empty() || mixed_users_ > 0 || limit <= 0) return false;
   Group used[kMixedGroup];
@@ -233,6 +367,10 @@ void ObjectTable<S>::clear() {
   group_users_ = {};
   mixed_users_ = 0;
   margin_ = {};
+  std::vector<std::uint32_t>().swap(excluded_count_);
+  std::vector<std::uint64_t>().swap(excluded_keys_);
+  excluded_ = 0;
+  excluded_set_ = ExcludedSet{};
   free_ = {};
   index_ = {};
   live_ = 0;
@@ -257,8 +395,10 @@ std::size_t ObjectTable<S>::bytes() const {
              sizeof(std::uint32_t) +
          (filter_.capacity() + group_filter_.capacity()) * sizeof(Filter) +
          group_.capacity() * sizeof(Group) + group_users_.capacity() * sizeof(std::uint32_t) +
-         margin_.capacity() * sizeof(S) + sphere_.capacity() * sizeof(VolumeSphere) +
-         shape_.capacity() * sizeof(VolumeShape) + source_.capacity() * sizeof(VolumeSource);
+         margin_.capacity() * sizeof(S) + excluded_count_.capacity() * sizeof(std::uint32_t) +
+         excluded_keys_.capacity() * sizeof(std::uint64_t) +
+         sphere_.capacity() * sizeof(VolumeSphere) + shape_.capacity() * sizeof(VolumeShape) +
+         source_.capacity() * sizeof(VolumeSource);
 }
 
 template <typename S>
@@ -324,7 +464,7 @@ bool ObjectTable<S>::validate(std::string* why) const {
   std::size_t entries = 0;
   for (std::uint32_t e : index_) entries += e != 0;
   if (entries != live_) return msg << "object table: map holds " << entries << " entries", fail();
-  return true;
+  return validateExcluded(why);
 }
 
 template class ObjectTable<float>;

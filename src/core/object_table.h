@@ -11,9 +11,11 @@
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/geometry.h"
+#include "core/pair_gate.h"
 #include "core/volume.h"
 
 namespace cube {
@@ -84,6 +86,20 @@ class ObjectTable {
   S ownMargin(ObjectId id) const { return margin_.empty() ? S(-1) : margin_[id]; }
   /// Sets it; the first call since clear() allocates the per-id margins.
   void setOwnMargin(ObjectId id, S margin);
+  /// Excludes the pair of live ids a != b (on), or admits it again; returns whether it changed.
+  /// O(1) on average; the first exclusion since none allocates the set and a count per id up to
+  /// the larger of the two. A removed id's pairs are dropped with it (O(excluded pairs)).
+  bool exclude(ObjectId a, ObjectId b, bool on);
+  /// Whether a rule read by id when pairs are reported is set (filter bits, excluded pairs):
+  /// queries build a gate only then.
+  bool pairRules() const { return !filter_.empty() || excluded_ != 0; }
+  /// The excluded pairs for the gate; null while none is (queries then skip the test).
+  const ExcludedSet* exclusions() const { return excluded_ == 0 ? nullptr : &excluded_set_; }
+  /// Whether the pair of ids a and b is excluded (false for kNone or a free id).
+  bool excluded(ObjectId a, ObjectId b) const { return excluded_ != 0 && excluded_set_.has(a, b); }
+  /// The excluded pairs, each (earlier registered, later registered), sorted by the
+  /// registration numbers of the pair.
+  void excludedPairs(std::vector<std::pair<ObjectId, ObjectId>>& out) const;
 
   /// Whether the table may keep the volumes below (Config::tight_volumes). Set before the
   /// first registration.
@@ -126,7 +142,9 @@ class ObjectTable {
   void objects(std::vector<Object*>& out) const;
   /// Heap bytes owned.
   std::size_t bytes() const;
-  /// Checks the map, the free list and the registration numbers; on failure says why.
+  /// Checks the map, the free list, the registration numbers, the filter groups and the
+  /// excluded pairs (each of two live ids, found where it lies, counted per id); on failure says
+  /// why.
   bool validate(std::string* why) const;
 
  private:
@@ -143,6 +161,11 @@ class ObjectTable {
   void grow(std::size_t objects);  // sizes the map for `objects` live ids and puts them all
   void leaveGroup(ObjectId id);
   Group joinGroup(const Filter& f);  // the group of bits f, made if new; counts one user
+  void dropExcluded(ObjectId id);    // forgets every excluded pair of id
+  void eraseExcluded(std::uint64_t key);
+  void placeExcluded(std::uint64_t key);  // into the set, which has room
+  void viewExcluded();                    // excluded_set_ from the arrays
+  bool validateExcluded(std::string* why) const;
 
   std::vector<Object*> obj_;          // per id; nullptr: free
   std::vector<std::uint32_t> seq_;    // per id: registration number
@@ -163,8 +186,15 @@ class ObjectTable {
   std::vector<Filter> group_filter_;        // per group: its bits; empty with filter_
   std::vector<std::uint32_t> group_users_;  // per group: live ids in it (0: free, but group 0)
   std::size_t mixed_users_ = 0;             // live ids without a group
-  std::vector<S> margin_;       // per id: own margin, < 0 for the manager-wide one; empty: all < 0
-  std::vector<ObjectId> free_;  // ids to hand out again, last freed first
+  std::vector<S> margin_;  // per id: own margin, < 0 for the manager-wide one; empty: all < 0
+  // Excluded pairs, kept only while there are some: per id below its length, the pairs it is
+  // in (ids beyond it are in none, so registration never touches it); the pairs' keys (pairKey)
+  // in open addressing at most half full, kNoPair empty; their number; the gate's view of them.
+  std::vector<std::uint32_t> excluded_count_;
+  std::vector<std::uint64_t> excluded_keys_;
+  std::size_t excluded_ = 0;
+  ExcludedSet excluded_set_;
+  std::vector<ObjectId> free_;        // ids to hand out again, last freed first
   std::vector<std::uint32_t> index_;  // open addressing: 0 empty, else id + 1 (key: obj_[id])
   std::size_t live_ = 0;
   std::uint32_t next_seq_ = 0;
@@ -172,11 +202,7 @@ class ObjectTable {
 
 /// The map's hash of a pointer (a 64-bit finalizer: pointers differ mostly in middle bits).
 inline std::size_t hashPointer(const void* p) {
-  std::uint64_t x = reinterpret_cast<std::uintptr_t>(p);
-  x ^= x >> 33;
-  x *= 0xff51afd7ed558ccdULL;
-  x ^= x >> 33;
-  return static_cast<std::size_t>(x);
+  return hashKey(reinterpret_cast<std::uintptr_t>(p));
 }
 
 template <typename S>

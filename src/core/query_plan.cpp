@@ -12,6 +12,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <new>
 #include <vector>
 
 #include "core/body_view.h"
@@ -21,11 +22,14 @@ namespace cube {
 namespace detail {
 
 template <typename S>
-PairGate<S> Broadphase<S>::gate(const Against* b) const {
+PairGate<S> Broadphase<S>::gate(const Against* b, Exclusions& room) const {
   PairGate<S> g;
   g.filters_a = table_.filters();
   g.groups_a = table_.groupFilters();
   g.predicate = predicate_ ? &predicate_ : nullptr;
+  room = Exclusions{{table_.exclusions(), nullptr, nullptr, kNone},
+                    {nullptr, nullptr, nullptr, kNone}};
+  ExcludedView& mine = room.mine;  // side b's ids seen in this table
   if (b == nullptr) {
     g.filters_b = g.filters_a;
     g.groups_b = g.groups_a;
@@ -33,28 +37,71 @@ PairGate<S> Broadphase<S>::gate(const Against* b) const {
   } else if (b->other != nullptr) {
     g.filters_b = b->other->table_.filters();
     g.groups_b = b->other->table_.groupFilters();
+    mine.b = b->here;  // otherSide() made it where mine.set is
+    room.theirs.set = b->other->table_.exclusions();
+    room.theirs.a = b->there;
   } else {
     g.filters_b = b->ids;
     g.query = b->bits;
+    if (mine.set != nullptr) {
+      if (b->obj != nullptr) {  // a registered query object brings its pairs
+        mine.query = table_.find(b->obj);
+        if (mine.query == kNone) mine.set = nullptr;
+      } else if (b->here != nullptr) {
+        mine.b = b->here;
+      } else {
+        mine.set = nullptr;  // a body of no table: no pair of it is excluded here
+      }
+    }
   }
+  if (mine.set != nullptr || room.theirs.set != nullptr) g.excluded_ids = &room;
   return g;
+}
+
+template <typename S>
+typename Broadphase<S>::Against Broadphase<S>::otherSide(const Broadphase& other,
+                                                         std::vector<ObjectId> (&ids)[2]) const {
+  Against b;
+  b.other = &other;
+  // Per id of `seen`, its object's id in `rules`; only objects in a pair `rules` excludes need
+  // one, the rest stay kNone.
+  const auto idsIn = [](const ObjectTable<S>& rules, const ObjectTable<S>& seen,
+                        std::vector<ObjectId>& out) -> const ObjectId* {
+    const ExcludedSet* set = rules.exclusions();
+    if (set == nullptr) return nullptr;
+    out.assign(seen.idBound(), kNone);
+    for (ObjectId r = 0; r < set->n; ++r) {
+      if (set->count[r] == 0) continue;
+      const ObjectId s = seen.find(rules.object(r));
+      if (s != kNone) out[s] = r;
+    }
+    return out.data();
+  };
+  b.here = idsIn(table_, other.table_, ids[0]);
+  b.there = idsIn(other.table_, table_, ids[1]);
+  return b;
+}
+
+template <typename S>
+[[gnu::always_inline]] inline const PairGate<S>* Broadphase<S>::gateIn(const Against* b,
+                                                                       GateRoom& room) const {
+  // Most queries have no rule to test: the gate is built only where one may be set.
+  const bool maybe = table_.pairRules() || predicate_ ||
+                     (b == nullptr && config_.canonical_pairs) ||
+                     (b != nullptr && (b->ids != nullptr || !b->bits.isDefault() ||
+                                       (b->other != nullptr && b->other->table_.pairRules())));
+  if (!maybe) return nullptr;
+  const PairGate<S> g = gate(b, room.exclusions);
+  return g.active() ? new (&room.gate) PairGate<S>(g) : nullptr;
 }
 
 // Inline into each entry, as are forViews and collideRun: a short object query spent a tenth of
 // its instructions passing the plan and the views between them.
 template <typename S>
-[[gnu::always_inline]] inline typename Broadphase<S>::Plan Broadphase<S>::plan(const Against* b,
-                                                                               int threads) const {
+[[gnu::always_inline]] inline typename Broadphase<S>::Plan Broadphase<S>::plan(
+    const Against* b, int threads, GateRoom& room) const {
   Plan p;
-  // Most queries have no rule to test: the gate is built only where one may be set.
-  const bool maybe =
-      table_.filters() != nullptr || predicate_ || (b == nullptr && config_.canonical_pairs) ||
-      (b != nullptr && (b->ids != nullptr || !b->bits.isDefault() ||
-                        (b->other != nullptr && b->other->table_.filters() != nullptr)));
-  if (maybe) {
-    const PairGate<S> g = gate(b);
-    if (g.active()) p.gate = g;
-  }
+  p.gate = gateIn(b, room);
   const bool body = b != nullptr && b->other == nullptr && b->obj == nullptr;
   // A body's pairs come in walk order whatever canonical_pairs says (its ids are its own).
   p.canonical = config_.canonical_pairs && !body;
@@ -86,7 +133,8 @@ template <typename S>
 [[gnu::always_inline]] inline bool Broadphase<S>::collideRun(const Against* b, int threads,
                                                              void* data, CollideFn<S> fn,
                                                              QueryStats* stats) const {
-  const Plan p = plan(b, threads);
+  GateRoom room;  // filled only if a rule is set
+  const Plan p = plan(b, threads, room);
   const PairGate<S>* g = p.walkGate();
   if (!p.canonical) {
     if (p.from_list)
@@ -216,8 +264,8 @@ bool Broadphase<S>::callInOrder(const std::vector<std::uint64_t>& found, const A
 template <typename S>
 bool Broadphase<S>::distanceRun(const Against* b, void* data, DistanceFn<S> fn, S& best,
                                 QueryStats* stats) const {
-  const PairGate<S> g = gate(b);
-  const PairGate<S>* gp = g.active() ? &g : nullptr;
+  GateRoom room;
+  const PairGate<S>* gp = gateIn(b, room);
   return forViews(b, [&](const View<S>& x, const View<S>& y, bool self) {
     return distancePairs(x, y, self, data, fn, best, stats, gp);
   });
@@ -258,10 +306,11 @@ bool Broadphase<S>::collide(const Probe& probe, void* data, CollideFn<S> fn,
 
 template <typename S>
 bool Broadphase<S>::collide(const View<S>& body, const Filter* bits, void* data, CollideFn<S> fn,
-                            QueryStats* stats) const {
+                            QueryStats* stats, const ObjectId* table_ids) const {
   Against b;
   b.view = &body;
   b.ids = bits;
+  b.here = table_ids;
   return collideRun(&b, 1, data, fn, stats);
 }
 
@@ -277,7 +326,8 @@ bool Broadphase<S>::collideSelfSplit(void* data, CollideFn<S> fn, int threads) c
 
 template <typename S>
 bool Broadphase<S>::collideSelfTasks(TaskSink<S>& sink, int threads) const {
-  const Plan p = plan(nullptr, threads);
+  GateRoom room;
+  const Plan p = plan(nullptr, threads, room);
   if (!p.split || p.canonical || (p.gate && p.gate->predicate != nullptr)) return false;
   collideSplit(p, nullptr, CollideFn<S>(typename CollideFn<S>::Plain(nullptr)), nullptr, &sink);
   return true;
@@ -286,8 +336,8 @@ bool Broadphase<S>::collideSelfTasks(TaskSink<S>& sink, int threads) const {
 template <typename S>
 bool Broadphase<S>::collide(const Broadphase& other, void* data, CollideFn<S> fn,
                             QueryStats* stats) const {
-  Against b;
-  b.other = &other;
+  std::vector<ObjectId> ids[2];
+  const Against b = otherSide(other, ids);
   return collideRun(&b, 1, data, fn, stats);
 }
 
@@ -317,8 +367,8 @@ bool Broadphase<S>::distanceSelf(void* data, DistanceFn<S> fn, S& best, QuerySta
 template <typename S>
 bool Broadphase<S>::distance(const Broadphase& other, void* data, DistanceFn<S> fn, S& best,
                              QueryStats* stats) const {
-  Against b;
-  b.other = &other;
+  std::vector<ObjectId> ids[2];
+  const Against b = otherSide(other, ids);
   return distanceRun(&b, data, fn, best, stats);
 }
 
@@ -401,18 +451,21 @@ bool Broadphase<S>::collideMoving(const ObjectId* ids, const Box<S>* boxes, std:
   }
   body.refit();
   Movers<S> movers{&id_of, &moving, data, fn};
-  // Movers with movers: this table's gate, its per-id columns read per body position.
-  PairGate<S> g = gate(nullptr);
+  // Movers with movers: this table's gate, its per-id columns read per body position, its
+  // other rules by id through id_of.
+  Exclusions room;
+  PairGate<S> g = gate(nullptr, room);
   g.filters_a = g.filters_b = bits.empty() ? nullptr : bits.data();
   g.groups_a = g.groups_b = nullptr;
   if (g.seq != nullptr) g.seq = seq.data();
+  room.mine.a = room.mine.b = id_of.data();
   const View<S> v = body.view();
   if (collideViews(v, v, CollideFn<S>(&Movers<S>::withMover), &movers, true, 0, nullptr,
                    g.active() ? &g : nullptr))
     return true;
   // Movers with the objects that stay: the body query, the world's side first.
   return collide(v, bits.empty() ? nullptr : bits.data(), &movers,
-                 CollideFn<S>(&Movers<S>::withStill), nullptr);
+                 CollideFn<S>(&Movers<S>::withStill), nullptr, id_of.data());
 }
 
 template class Broadphase<float>;

@@ -2,7 +2,7 @@
 
 // What a BodySet keeps (private to the library): per link the geometry, margin, filter bits,
 // local AABB (also per coordinate, for the pose-box kernel) and the cull's record source, the
-// allowed pairs, and the links' tree the checkers copy.
+// excluded pairs (BodySet::excludePair), and the links' tree the checkers copy.
 
 #include <cstdint>
 #include <memory>
@@ -24,7 +24,7 @@ struct BodySet<S>::Links {
   std::vector<detail::Filter> bits;
   std::vector<S> mid_of[3], half_of[3];        // the local AABB per coordinate: centre, half
   std::vector<detail::VolumeSource> source;    // the cull's records' geometry part
-  std::vector<std::uint8_t> allowed;           // size() x size(): 1 = never checked
+  std::vector<std::uint8_t> allowed;           // size() x size(): 1 = excluded, never checked
   std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
                                                // [after_at[i], after_at[i + 1]), ascending
   bool any_bits = false;                       // a link has filter bits other than the default

@@ -90,10 +90,10 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
 }
 
 template <typename S>
-void BodySet<S>::allowPair(std::size_t i, std::size_t j) {
+void BodySet<S>::excludePair(std::size_t i, std::size_t j) {
   const std::size_t n = size();
-  if (i >= n || j >= n) batchError("BodySet::allowPair", "unknown link index");
-  if (i == j) batchError("BodySet::allowPair", "a link is never checked against itself");
+  if (i >= n || j >= n) batchError("BodySet::excludePair", "unknown link index");
+  if (i == j) batchError("BodySet::excludePair", "a link is never checked against itself");
   links_->allowed[i * n + j] = links_->allowed[j * n + i] = 1;
   links_->listPairs();
 }
