@@ -79,40 +79,18 @@ S pointBoxDistance(const fcl::Vector3<S>& p, const Tight<S>& b) {
   return out.norm();
 }
 
-// A lower bound on the distance between two oriented boxes: the largest gap along the 15 axes
-// of the separating-axis test (three face normals of each, nine edge cross products, each
-// gap divided by its axis' length; edge axes only where positive), or the first gap found above
-// `stop` (the caller needs no more). |R| gets a small term so that rounding makes gaps smaller,
-// never larger; cross products of near-parallel edges (length below 1e-3) are left out. The face
-// axes come first: they separate most pairs that are apart, and cost no square root.
+// A lower bound on the distance between two oriented boxes: the separating-axis test of the
+// records (volume_detail::axisGap) on the objects' own boxes, in S.
 template <typename S>
 S boxGap(const Tight<S>& a, const Tight<S>& b, S stop) {
   const fcl::Matrix3<S> R = a.R.transpose() * b.R;  // b's axes in a's frame
   const fcl::Vector3<S> t = a.R.transpose() * (b.c - a.c);
-  const fcl::Matrix3<S> A = R.cwiseAbs().array() + S(16) * std::numeric_limits<S>::epsilon();
-  S gap = -std::numeric_limits<S>::infinity();
-  for (int i = 0; i < 3; ++i) gap = std::max(gap, std::abs(t[i]) - a.e[i] - b.e.dot(A.row(i)));
-  for (int j = 0; j < 3; ++j)
-    gap = std::max(gap, std::abs(t.dot(R.col(j))) - a.e.dot(A.col(j)) - b.e[j]);
-  if (gap > stop) return gap;
+  S r[3][3], u[3];
   for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-    for (int j = 0; j < 3; ++j) {
-      const S len2 = S(1) - R(i, j) * R(i, j);
-      if (!(len2 >= S(1e-6))) continue;  // length below 1e-3
-      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      // Axis: a's axis i cross b's axis j.
-      const S dist = std::abs(t[i2] * R(i1, j) - t[i1] * R(i2, j));
-      const S ra = a.e[i1] * A(i2, j) + a.e[i2] * A(i1, j);
-      const S rb = b.e[j1] * A(i, j2) + b.e[j2] * A(i, j1);
-      const S slack = dist - ra - rb;
-      // A gap of 0 or less bounds nothing the callers use: no square root for it.
-      if (slack <= S(0)) continue;
-      gap = std::max(gap, slack / std::sqrt(len2));
-      if (gap > stop) return gap;
-    }
+    u[i] = t[i];
+    for (int j = 0; j < 3; ++j) r[i][j] = R(i, j);
   }
-  return gap;
+  return volume_detail::axisGap<S, false>(r, u, a.e.data(), b.e.data(), stop);
 }
 
 // A ball inside the geometry (centre c in world coordinates, radius r), for the shapes that
