@@ -83,14 +83,15 @@ S pointBoxDistance(const fcl::Vector3<S>& p, const Tight<S>& b) {
 // records (volume_detail::axisGap) on the objects' own boxes, in S.
 template <typename S>
 S boxGap(const Tight<S>& a, const Tight<S>& b, S stop) {
-  const fcl::Matrix3<S> R = a.R.transpose() * b.R;  // b's axes in a's frame
-  const fcl::Vector3<S> t = a.R.transpose() * (b.c - a.c);
-  S r[3][3], u[3];
+  // b's axes (R) and centre (t) in a's frame, straight into axisGap's arrays.
+  const fcl::Vector3<S> d = b.c - a.c;
+  S R[3][3], t[3];
   for (int i = 0; i < 3; ++i) {
-    u[i] = t[i];
-    for (int j = 0; j < 3; ++j) r[i][j] = R(i, j);
+    t[i] = a.R(0, i) * d[0] + a.R(1, i) * d[1] + a.R(2, i) * d[2];
+    for (int j = 0; j < 3; ++j)
+      R[i][j] = a.R(0, i) * b.R(0, j) + a.R(1, i) * b.R(1, j) + a.R(2, i) * b.R(2, j);
   }
-  return volume_detail::axisGap<S, false>(r, u, a.e.data(), b.e.data(), stop);
+  return volume_detail::axisGap<S, false>(R, t, a.e.data(), b.e.data(), stop);
 }
 
 // A ball inside the geometry (centre c in world coordinates, radius r), for the shapes that

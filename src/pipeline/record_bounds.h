@@ -56,7 +56,7 @@ inline BoxFrame boxFrame(const VolumeSphere& sa, const VolumeShape& a, const Vol
 // edges below a length of 0.1 are left out and the others' slack loses 16 ulps of its terms
 // first; else (FCL's own transforms) edges below 1e-3 are left out.
 template <typename T, bool kRecords>
-T axisGap(const T (&R)[3][3], const T (&t)[3], const T* ea, const T* eb, T stop) {
+inline T axisGap(const T (&R)[3][3], const T (&t)[3], const T* ea, const T* eb, T stop) {
   constexpr T kUlps = T(16) * std::numeric_limits<T>::epsilon();
   T A[3][3];
   for (int i = 0; i < 3; ++i)
