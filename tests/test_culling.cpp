@@ -41,6 +41,7 @@
 #include "cube_collision/narrow_phase.h"
 #include "cube_collision/queries.h"
 #include "pipeline/cull.h"
+#include "pipeline/pair_judge.h"
 #include "support/plane_brute.h"
 
 namespace {
@@ -163,6 +164,82 @@ TYPED_TEST(Culling, NeverDropsACollidingPairOfAnyKind) {
   EXPECT_GT(culled * 10, apart_pairs * 3) << culled << " of " << apart_pairs;
   // The records lose only what float rounding and near-parallel edges cost.
   EXPECT_GE(volume_culled * 100, culled * 97) << volume_culled << " against " << culled;
+}
+
+// The pair judge, the one place queries ask about a pair before FCL, never answers against FCL,
+// on the records and on the objects, for each of its three questions: a collide's pair proved
+// apart does not collide and one proved touching does; a pair that cannot beat a best distance
+// has a larger FCL distance; a pair that cannot be within a margin is farther apart than it.
+// Every kind, random poses; and each question is settled for a good share of the pairs (else a
+// judge that never decides would pass).
+TYPED_TEST(Culling, PairJudgeNeverAnswersAgainstFcl) {
+  using S = TypeParam;
+  using cube::detail::Answer;
+  using cube::detail::Records;
+  using cube::detail::Verdict;
+  const auto kinds = allKinds<S>();
+  const fcl::CollisionRequest<S> collide_request;
+  const fcl::DistanceRequest<S> distance_request;
+  const cube::detail::PairJudge<S> collide_judge(collide_request);
+  const cube::detail::PairJudge<S> distance_judge(distance_request);
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), reach(0.0, 0.6);
+  std::size_t pairs = 0, apart = 0, proved = 0, not_beating = 0, not_within = 0;
+  std::size_t object_apart = 0, object_not_beating = 0, object_not_within = 0;
+  for (const auto& [na, ga] : kinds)
+    for (const auto& [nb, gb] : kinds) {
+      if (!fclCanMeasure(na, nb)) continue;
+      fcl::CollisionObject<S> a(ga), b(gb);
+      for (int rep = 0; rep < 30; ++rep) {
+        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
+        b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng)));
+        a.computeAABB();
+        b.computeAABB();
+        cube::detail::VolumeSphere sa, sb;
+        cube::detail::VolumeShape ha, hb;
+        cube::detail::buildVolume(a, sa, ha);
+        cube::detail::buildVolume(b, sb, hb);
+        const Records ra{&sa, &ha}, rb{&sb, &hb};
+        const bool hit = collides(a, b);
+        fcl::DistanceResult<S> res;
+        const S d = fcl::distance(&a, &b, distance_request, res);
+        const S best = S(reach(rng)), m = rep % 3 == 0 ? S(0) : S(reach(rng));
+        const std::string what = na + " vs " + nb + " rep " + std::to_string(rep);
+        ++pairs;
+        const Answer on_records = collide_judge.collide(ra, rb);
+        ASSERT_FALSE(on_records == Answer::kApart && hit) << what;
+        ASSERT_FALSE(on_records == Answer::kProved && !hit) << what;
+        const Answer on_objects = collide_judge.collide(a, b);
+        ASSERT_FALSE(on_objects == Answer::kApart && hit) << what << " (objects)";
+        ASSERT_FALSE(on_objects == Answer::kProved && !hit) << what << " (objects)";
+        apart += on_records == Answer::kApart;
+        proved += on_records == Answer::kProved;
+        object_apart += on_objects == Answer::kApart;
+        if (!distance_judge.mayBeat(ra, rb, best)) {
+          ASSERT_GT(d, best) << what;
+          ++not_beating;
+        }
+        if (!distance_judge.mayBeat(a, b, best)) {
+          ASSERT_GT(d, best) << what << " (objects)";
+          ++object_not_beating;
+        }
+        const Verdict within = collide_judge.withinMargin(ra, rb, m);
+        ASSERT_FALSE(within == Verdict::kApart && (hit || !(d > m))) << what << " margin " << m;
+        ASSERT_FALSE(within == Verdict::kTouching && !hit) << what << " margin " << m;
+        not_within += within == Verdict::kApart;
+        if (!distance_judge.mayBeWithin(a, b, m)) {
+          ASSERT_TRUE(!hit && d > m) << what << " margin " << m << " (objects)";
+          ++object_not_within;
+        }
+      }
+    }
+  EXPECT_GT(pairs, 1500u);
+  for (const std::size_t settled :
+       {apart, not_beating, not_within, object_apart, object_not_beating, object_not_within})
+    EXPECT_GT(settled * 10, pairs) << settled << " of " << pairs;
+  // Proofs need inscribed volumes on both sides (none for meshes and convexes) that overlap by
+  // more than the margin: rarer.
+  EXPECT_GT(proved * 100, pairs) << proved << " of " << pairs;
 }
 
 // Slides b along a line, place(t) putting it at t: false if the pair does not collide at t = 0

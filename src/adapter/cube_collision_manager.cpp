@@ -16,7 +16,7 @@
 #include "adapter/manager_walks.h"
 #include "adapter/query_guard.h"
 #include "core/broadphase.h"
-#include "pipeline/cull.h"
+#include "pipeline/pair_judge.h"
 #include "pipeline/pair_volumes.h"
 
 namespace cube {
@@ -64,8 +64,8 @@ Box<S> checkedQueryBox(const fcl::CollisionObject<S>* obj, const char* where) {
 using detail::QueryScope;
 using detail::refuseInsideQuery;
 
-// Config::cull_pairs: the user's callback behind the test of the tight volumes, read from the
-// object tables where they keep them (Config::tight_volumes), else built from the objects. The
+// Config::cull_pairs: the user's callback behind the pair judge (pair_judge.h), on the records of
+// the object tables where they keep them (Config::tight_volumes), else built from the objects. The
 // margin is sized for FCL's default GJK tolerance, the one the user's fcl::collide most likely
 // runs with.
 template <typename S>
@@ -73,17 +73,15 @@ struct CulledCallback {
   void* data;
   fcl::CollisionCallBack<S> fn;
   detail::PairVolumes<S> volumes{};
-  float rate = detail::volumeMarginRate(S(1e-6));
+  detail::PairJudge<S> judge{S(1e-6), false, true};
 
   static bool call(fcl::CollisionObject<S>* a, detail::ObjectId ia, fcl::CollisionObject<S>* b,
                    detail::ObjectId ib, void* self) {
     auto& c = *static_cast<CulledCallback*>(self);
-    const detail::VolumeSphere *sa, *sb;
-    const detail::VolumeShape *ha, *hb;
-    const bool apart =
-        c.volumes.of(a, ia, b, ib, sa, ha, sb, hb)
-            ? detail::verdictOf(*sa, *ha, *sb, *hb, c.rate, false) == detail::Verdict::kApart
-            : detail::surelyApart(*a, *b, S(1e-6));
+    detail::Records ra, rb;
+    const bool records = c.volumes.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape);
+    const bool apart = c.judge.collide(*a, records ? &ra : nullptr, *b, records ? &rb : nullptr) ==
+                       detail::Answer::kApart;
     return !apart && c.fn(a, b, c.data);
   }
   // The walk's callback: this wrapper, on the tables whose ids the walk gives (side b null:

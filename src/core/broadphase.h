@@ -446,10 +446,11 @@ template <typename S>
 template <class Region>
 void Broadphase<S>::search(Region& region, const Filter* bits) const {
   std::optional<PairGate<S>> gated;
+  Exclusions room;  // read by no region: a region asks only the bits
   if (bits != nullptr) {
     Against query;
     query.bits = *bits;
-    gated = gate(&query);
+    gated = gate(&query, room);
     // Objects without bits of their own all have the default: one answer for every object.
     if (!gated->hasBits()) {
       if (!filtersPass(Filter{}, *bits)) return;

@@ -18,7 +18,7 @@
 namespace cube {
 namespace detail {
 
-/// How a pair was answered: proved apart or touching by the tight volumes (cull.h), found in
+/// How a pair was answered: proved apart or touching by the pair judge (pair_judge.h), found in
 /// the cache, or by FCL.
 enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
 
@@ -57,14 +57,6 @@ inline Answer answerOf(Verdict v) {
       break;
   }
   return Answer::kComputed;
-}
-
-// The tight volumes' verdict from the two objects. Safe on several threads at once.
-template <typename S>
-Answer judge(const fcl::CollisionRequest<S>& request, const fcl::CollisionObject<S>* a,
-             const fcl::CollisionObject<S>* b) {
-  if (!plainRequest(request)) return Answer::kComputed;
-  return answerOf(verdict(*a, *b, S(request.gjk_tolerance), provable(request)));
 }
 
 // The one contact FCL's shape collision gives a touching pair when the request asks for no

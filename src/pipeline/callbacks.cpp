@@ -9,8 +9,8 @@
 #include <cmath>
 #include <limits>
 
-#include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
+#include "pipeline/pair_judge.h"
 #include "pipeline/plane_geometry.h"
 
 namespace cube {
@@ -23,20 +23,18 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
   // A pair proved apart adds nothing to the result, so the narrow phase is skipped. Not with
   // costs: an octree's cost sources come from cells its box does not bound. A pair proved
   // touching, for a request without contact geometry, gets the one contact FCL would add.
-  if (!d.request.enable_cost) {
-    switch (detail::verdict(*o1, *o2, S(d.request.gjk_tolerance), detail::provable(d.request))) {
-      case detail::Verdict::kApart:
-        return false;
-      case detail::Verdict::kTouching:
-        if (d.result.numContacts() < d.request.num_max_contacts)
-          d.result.addContact(fcl::Contact<S>(o1->collisionGeometry().get(),
-                                              o2->collisionGeometry().get(), fcl::Contact<S>::NONE,
-                                              fcl::Contact<S>::NONE));
-        if (d.result.numContacts() >= d.request.num_max_contacts) d.done = true;
-        return d.done;
-      case detail::Verdict::kUnknown:
-        break;
-    }
+  const detail::PairJudge<S> judge(S(d.request.gjk_tolerance), detail::provable(d.request),
+                                   !d.request.enable_cost);
+  switch (judge.collide(*o1, *o2)) {
+    case detail::Answer::kApart:
+      return false;
+    case detail::Answer::kProved:
+      if (d.result.numContacts() < d.request.num_max_contacts)
+        d.result.addContact(detail::provedContact(ObjectPair<S>(o1, o2)));
+      if (d.result.numContacts() >= d.request.num_max_contacts) d.done = true;
+      return d.done;
+    default:
+      break;
   }
   ++d.narrow_calls;
   detail::fclCollide(o1, o2, d.request, d.result);
@@ -52,11 +50,8 @@ bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S
                              S& dist) {
   auto& d = *static_cast<DistanceData<S>*>(data);
   if (!d.done) {
-    // A pair whose tight volumes are farther apart than the best distance so far (by more than
-    // the margin) would get a larger distance from FCL, which leaves the result as it is.
-    const detail::Separation<S> s =
-        detail::separation(*o1, *o2, S(d.request.distance_tolerance), d.result.min_distance);
-    if (!(s.lower_bound - s.margin > d.result.min_distance)) {
+    // A pair that cannot beat the best distance so far would leave the result as it is.
+    if (detail::PairJudge<S>(d.request).mayBeat(*o1, *o2, d.result.min_distance)) {
       ++d.narrow_calls;
       detail::fclDistance(o1, o2, d.request, d.result);
     }

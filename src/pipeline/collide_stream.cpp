@@ -1,19 +1,20 @@
-// The collide stream (collide_stream.h): answered at once on the calling thread while the query
-// is small, then in chunks on the threads; the cache looked up and stored on the calling thread.
+// The collide stream (collide_stream.h), its pairs pushed one by one: answered at once on the
+// calling thread while the query is small, then in chunks on the threads; the cache looked up and
+// stored on the calling thread. A split walk's tasks and the blocks' cull:
+// collide_stream_tasks.cpp.
 
 #include "pipeline/collide_stream.h"
 
 #include <algorithm>
-#include <array>
-#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
 
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
-#include "pipeline/cull.h"
+#include "pipeline/collide_stream_parts.h"
 #include "pipeline/fcl_narrow.h"
+#include "pipeline/pair_judge.h"
 #include "pipeline/parallel_for.h"
 
 namespace cube {
@@ -29,82 +30,23 @@ namespace {
 // Pairs culled on the object tables' records (about 20 ns a pair, on this thread) count only
 // what their FCL call weighs beyond 1, read from the records' kinds (workOf(flags)): threads
 // share FCL's calls only, so closed-form shape pairs stay on the calling thread.
-// A chunk's pairs are answered in blocks of kBlock (CollideStream::cullBlock), reading the first
-// kObjectLines cache lines of an object (its geometry pointer and pose: the first 160 of 224 bytes
-// for double) and kGeometryLines of a geometry (120 bytes of base, then the shape's fields).
-constexpr std::size_t kBlock = 16;
 // Pairs answered at once go in blocks too (answerSerialBlock) among this many objects or more,
 // whose records, objects and geometries (about 500 bytes an object) outgrow this machine's 1 MB
 // L2: among 1,000 thin boxes, all in cache, the blocks' bookkeeping made a self-collide 1.15x
 // slower.
 constexpr std::size_t kBlockMinObjects = 4096;
-constexpr std::size_t kObjectLines = 3;
-constexpr std::size_t kGeometryLines = 3;
 
-// The cache, then the tight volumes: kCached with the entry, or judge's verdict. On the calling
-// thread (a lookup compares and updates the objects' poses).
+// The cache, then the judge on the objects: kCached with the entry, or the judge's answer. On
+// the calling thread (a lookup compares and updates the objects' poses).
 template <typename S>
-Answer classify(CollideCache<S>* cache, const fcl::CollisionRequest<S>& request,
-                fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
+Answer classify(CollideCache<S>* cache, const PairJudge<S>& judge, fcl::CollisionObject<S>* a,
+                fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
   cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
   if (cached != nullptr) return Answer::kCached;
-  return judge(request, a, b);
+  return judge.collide(*a, *b);
 }
 
-// A pair's contacts: the run [first, first + n) of a cached answer's list or of a result (a
-// pair's own, or a task's for all its pairs; FCL gives no const view of a result's list).
-template <typename S>
-struct Contacts {
-  const std::vector<fcl::Contact<S>>* list;
-  const fcl::CollisionResult<S>* result;
-  std::size_t first, n;
-
-  std::size_t size() const { return n; }
-  const fcl::Contact<S>& operator[](std::size_t k) const {
-    return list ? (*list)[first + k] : result->getContact(first + k);
-  }
-};
-
-// 0, 1, ..., kBlock - 1: the index of a block answered in place.
-constexpr std::array<std::size_t, kBlock> kInPlace = [] {
-  std::array<std::size_t, kBlock> a{};
-  for (std::size_t k = 0; k < kBlock; ++k) a[k] = k;
-  return a;
-}();
-
 }  // namespace
-
-// A split walk's task, answered on its thread: its counts, and the pairs that gave contacts with
-// their contacts, in walk order, all in one result (FCL writes each pair's into it directly).
-template <typename S>
-struct CollideStream<S>::TaskAnswers {
-  struct Hit {
-    ObjectPair<S> pair;
-    std::size_t first, count;  // in result
-  };
-  NarrowPhaseStats stats;
-  std::vector<Hit> hits;
-  fcl::CollisionResult<S> result;
-};
-
-template <typename S>
-struct CollideStream<S>::Slot {
-  Answer kind = Answer::kApart;
-  bool judged = false;    // kind is the cull's already (pairs with volumes)
-  bool refined = false;   // and from its tight part, after the cache missed: stored like FCL's
-  bool deferred = false;  // the cull on va, vb runs in the block (a split walk's task)
-  CollideEntry<S>* cached = nullptr;
-  Volumes va, vb;
-  fcl::CollisionResult<S> fresh;
-};
-
-// A worker's block of a task: its pairs and their slots, kept from task to task (a slot's result
-// keeps its list's memory).
-template <typename S>
-struct CollideStream<S>::TaskScratch {
-  std::array<ObjectPair<S>, kBlock> block;
-  std::array<Slot, kBlock> slots;
-};
 
 // Whether a pair's answer goes to the cache: not one the cheaper part of the cull gave, which it
 // gives again next time for less than a lookup costs.
@@ -123,9 +65,7 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
       threads_(resolveThreads(options.threads)),
       chunk_work_(kFirstChunkWork),
       scratch_(cache_ != nullptr ? std::make_unique<Slot>() : nullptr),
-      rate_(volumeMarginRate(S(request.gjk_tolerance))),
-      plain_(plainRequest(request)),
-      prove_(provable(request)) {
+      judge_(request) {
   if (cache_ != nullptr) {
     ++cache_->stamp;
     cache_->collide.begin(*cache_, request);
@@ -145,7 +85,7 @@ template <typename S>
 bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
                             ObjectId ib) {
   if (done_) return true;
-  if (!plain_) return pushJudged(a, b, nullptr, nullptr, false);
+  if (!judge_.culls()) return pushJudged(a, b, nullptr, nullptr, false);
   Volumes va, vb;
   if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape))
     return pushJudged(a, b, nullptr, nullptr, false);
@@ -159,21 +99,13 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
                                   const Volumes* va, const Volumes* vb, bool kept) {
   if (done_) return true;
   ++stats_.candidate_pairs;
-  // With volumes the cull runs here, before the cache (its cheaper part costs less than a lookup).
-  const auto cull = [&] {
-    return answerOf(verdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
-  };
-  // With a cache: the cheaper part of the cull, the lookup, and the rest only for a pair the cache
+  // With volumes the judge runs here, before the cache (its cheaper part costs less than a
+  // lookup). With a cache: the cheaper part, the lookup, and the rest only for a pair the cache
   // does not hold (then kept with the cache's answers: it costs more than a lookup). A motion loop
   // of 1,000 clustered shapes took 1.19x the time with the whole cull before each lookup.
-  const auto loose = [&] {
-    return answerOf(
-        looseVerdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
-  };
-  const auto tight = [&] {
-    return answerOf(
-        tightVerdictOf(*va->sphere, *va->shape, *vb->sphere, *vb->shape, rate_, prove_));
-  };
+  const auto cull = [&] { return judge_.collide(*va, *vb); };
+  const auto loose = [&] { return judge_.collideLoose(*va, *vb); };
+  const auto tight = [&] { return judge_.collideTight(*va, *vb); };
   if (serial_) {
     if (kept && cache_ == nullptr && volumes_.objects() >= kBlockMinObjects) {
       // Answered in blocks (answerSerialBlock): the walk goes on for up to kBlock - 1 pairs
@@ -205,7 +137,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
     Answer kind;
     bool refined = false;
     if (va == nullptr) {
-      kind = classify(cache_, request_, a, b, cached);
+      kind = classify(cache_, judge_, a, b, cached);
     } else if (cache_ == nullptr) {
       kind = cull();
     } else {
@@ -396,9 +328,9 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
 template <typename S>
 void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
   if (s.kind == Answer::kCached)
-    mergeContacts(pair, Contacts<S>{&s.cached->answer, nullptr, 0, s.cached->answer.size()});
+    mergeContacts(pair, ContactRun<S>{&s.cached->answer, nullptr, 0, s.cached->answer.size()});
   else
-    mergeContacts(pair, Contacts<S>{nullptr, &s.fresh, 0, s.fresh.numContacts()});
+    mergeContacts(pair, ContactRun<S>{nullptr, &s.fresh, 0, s.fresh.numContacts()});
 }
 
 template <typename S>
@@ -424,48 +356,6 @@ void CollideStream<S>::mergeContacts(const ObjectPair<S>& pair, const C& contact
 template <typename S>
 void CollideStream<S>::markDone() {
   if (result_.isCollision() && result_.numContacts() >= request_.num_max_contacts) done_ = true;
-}
-
-// A block of pairs (pairs[index[k]], k < n): the cull, then the memory FCL reads first for the
-// pairs it leaves. Each step first asks for the memory it reads for the whole block (the records;
-// then the objects, then their geometries), so that the cache misses of a block overlap instead
-// of each pair waiting on its own: the first touch of an object and of its geometry was a third of
-// FCL's time in a large self-collide of shapes (10,000 objects, whose records and objects lie in
-// registration order, not in the walk's).
-template <typename S>
-void CollideStream<S>::cullBlock(const std::size_t* index, std::size_t n,
-                                 const ObjectPair<S>* pairs, Slot* slots) const {
-  const auto fetch = [](const void* p, std::size_t lines) {
-    for (std::size_t l = 0; l < lines; ++l)
-      __builtin_prefetch(static_cast<const char*>(p) + 64 * l);
-  };
-  for (std::size_t k = 0; k < n; ++k) {
-    const Slot& s = slots[index[k]];
-    if (!s.deferred) continue;
-    fetch(s.va.sphere, 1);
-    fetch(s.va.shape, 1);
-    fetch(s.vb.sphere, 1);
-    fetch(s.vb.shape, 1);
-  }
-  for (std::size_t k = 0; k < n; ++k) {
-    Slot& s = slots[index[k]];
-    const ObjectPair<S>& pair = pairs[index[k]];
-    if (s.deferred)
-      s.kind =
-          answerOf(verdictOf(*s.va.sphere, *s.va.shape, *s.vb.sphere, *s.vb.shape, rate_, prove_));
-    else if (!s.judged)
-      s.kind = judge(request_, pair.first, pair.second);
-    if (s.kind == Answer::kComputed) {
-      fetch(pair.first, kObjectLines);
-      fetch(pair.second, kObjectLines);
-    }
-  }
-  for (std::size_t k = 0; k < n; ++k)
-    if (slots[index[k]].kind == Answer::kComputed) {
-      const ObjectPair<S>& pair = pairs[index[k]];
-      fetch(pair.first->collisionGeometry().get(), kGeometryLines);
-      fetch(pair.second->collisionGeometry().get(), kGeometryLines);
-    }
 }
 
 template <typename S>
@@ -509,92 +399,6 @@ void CollideStream<S>::flush() {
   chunk_.clear();
   pending_.clear();
   pending_work_ = 0;
-}
-
-template <typename S>
-bool CollideStream<S>::takesTasks() const {
-  return plain_ && cache_ == nullptr && threads_ > 1 && request_.num_max_contacts > 1 &&
-         stats_.candidate_pairs == 0;
-}
-
-namespace {
-constexpr std::size_t kRunning = std::numeric_limits<std::size_t>::max();
-}  // namespace
-
-template <typename S>
-void CollideStream<S>::begin(std::size_t tasks, int workers) {
-  tasks_.clear();
-  tasks_.resize(tasks);
-  if (workers_.size() < std::size_t(workers)) workers_.resize(std::size_t(workers));
-  task_contacts_ = std::make_unique<std::atomic<std::size_t>[]>(tasks);
-  for (std::size_t i = 0; i < tasks; ++i) task_contacts_[i].store(kRunning);
-  task_found_.store(0);
-  const std::size_t max_contacts = request_.num_max_contacts;
-  task_budget_ = max_contacts - std::min(max_contacts, result_.numContacts());
-}
-
-template <typename S>
-void CollideStream<S>::take(int worker, std::size_t task, const typename TaskSink<S>::Pair* pairs,
-                            std::size_t n) {
-  // Full before this task? Only once the tasks run so far hold the budget at all (a sum over
-  // every task, one load), then over those before this one: the merge adds contacts in order
-  // until the budget, so those before it fill the result whatever the others hold.
-  const std::size_t budget = task_budget_;
-  if (task_found_.load(std::memory_order_relaxed) >= budget) {
-    std::size_t before = 0;
-    for (std::size_t j = 0; j < task; ++j) {
-      const std::size_t c = task_contacts_[j].load(std::memory_order_acquire);
-      if (c != kRunning && (before += c) >= budget) return;
-    }
-  }
-  TaskAnswers& out = tasks_[task];
-  out.stats.candidate_pairs += n;
-  std::array<ObjectPair<S>, kBlock>& block = workers_[std::size_t(worker)].block;
-  std::array<Slot, kBlock>& slots = workers_[std::size_t(worker)].slots;
-  fcl::CollisionRequest<S> request = request_;
-  for (std::size_t first = 0; first < n; first += kBlock) {
-    const std::size_t m = std::min(kBlock, n - first);
-    for (std::size_t k = 0; k < m; ++k) {
-      const typename TaskSink<S>::Pair& p = pairs[first + k];
-      block[k] = ObjectPair<S>(p.a, p.b);
-      Slot& s = slots[k];
-      s.kind = Answer::kComputed;
-      s.judged = false;
-      s.refined = false;
-      s.deferred = volumes_.ofTables(p.ia, p.ib, s.va.sphere, s.va.shape, s.vb.sphere, s.vb.shape);
-    }
-    cullBlock(kInPlace.data(), m, block.data(), slots.data());
-    for (std::size_t k = 0; k < m; ++k) {
-      const Slot& s = slots[k];
-      const ObjectPair<S>& pair = block[k];
-      count(out.stats, s.kind);
-      if (s.kind == Answer::kApart) continue;
-      // Into the task's result, with room for the pair's whole budget after what it holds, as
-      // a fresh result of its own would have: the same contacts, copied once less.
-      const std::size_t before = out.result.numContacts();
-      if (s.kind == Answer::kProved) {
-        out.result.addContact(provedContact(pair));
-      } else {
-        request.num_max_contacts =
-            before + std::min(request_.num_max_contacts, kRunning - 1 - before);
-        fclCollide(pair.first, pair.second, request, out.result);
-      }
-      const std::size_t added = out.result.numContacts() - before;
-      if (added > 0) out.hits.push_back({pair, before, added});
-    }
-  }
-  task_contacts_[task].store(out.result.numContacts(), std::memory_order_release);
-  task_found_.fetch_add(out.result.numContacts(), std::memory_order_relaxed);
-}
-
-template <typename S>
-bool CollideStream<S>::drain(std::size_t task) {
-  TaskAnswers& t = tasks_[task];
-  addStats(&stats_, t.stats);
-  for (const typename TaskAnswers::Hit& h : t.hits)
-    mergeContacts(h.pair, Contacts<S>{nullptr, &t.result, h.first, h.count});
-  t = TaskAnswers{};
-  return done_;
 }
 
 template <typename S>

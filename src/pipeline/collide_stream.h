@@ -18,6 +18,7 @@
 #include "core/task_sink.h"
 #include "cube_collision/narrow_phase.h"
 #include "pipeline/answers.h"
+#include "pipeline/pair_judge.h"
 #include "pipeline/pair_volumes.h"
 
 namespace cube {
@@ -77,11 +78,8 @@ class CollideStream final : public TaskSink<S> {
   struct Slot;
   struct TaskAnswers;
   struct TaskScratch;
-  // The records of a pair, for pushJudged (null: cull from the objects).
-  struct Volumes {
-    const VolumeSphere* sphere;
-    const VolumeShape* shape;
-  };
+  // The records of a pair, for pushJudged (null: the judge reads the objects).
+  using Volumes = Records;
   // kept: va and vb are records of the tables (valid for the whole query), which may wait in a
   // block of pairs answered together (answerSerialBlock).
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
@@ -133,11 +131,9 @@ class CollideStream final : public TaskSink<S> {
   std::size_t task_budget_ = 0;  // the contacts the result has room for as the walk begins
   fcl::CollisionResult<S> empty_;
   fcl::CollisionResult<S> result_;
-  // The cull on volumes: the tables, the memo of objects without an id, the margin's rate.
+  // The records: the tables, the memo of objects without an id; the judge of the request.
   PairVolumes<S> volumes_;
-  float rate_;
-  bool plain_;  // a request the cull may answer (not with costs or a cached GJK guess)
-  bool prove_;  // and whose touching pairs it may prove
+  PairJudge<S> judge_;
 };
 
 extern template class CollideStream<double>;

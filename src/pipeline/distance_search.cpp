@@ -3,13 +3,10 @@
 
 #include "pipeline/distance_search.h"
 
-#include <cfloat>
-#include <limits>
 #include <vector>
 
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
-#include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/parallel_for.h"
 
@@ -29,7 +26,7 @@ DistanceSearch<S>::DistanceSearch(const fcl::DistanceRequest<S>& request,
       stats_out_(options.stats),
       cache_(options.cache != nullptr ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)),
-      rate_(volumeMarginRate(S(request.distance_tolerance))) {
+      judge_(request) {
   if (cache_ != nullptr) {
     ++cache_->stamp;
     cache_->distance.begin(*cache_, request);
@@ -41,37 +38,28 @@ DistanceSearch<S>::~DistanceSearch() = default;
 
 template <typename S>
 bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist) {
-  ++stats_.candidate_pairs;
-  if (result_.min_distance > 0) {
-    // A pair whose tight volumes are farther apart than the best distance so far (by more than
-    // the margin) would get a larger distance from FCL, which leaves the result as it is.
-    const Separation<S> s =
-        separation(*a, *b, S(request_.distance_tolerance), result_.min_distance);
-    if (s.lower_bound - s.margin > result_.min_distance)
-      ++stats_.culled;
-    else
-      answer(a, b);
-  }
-  dist = result_.min_distance;
-  return dist <= 0;
+  return offer(a, nullptr, b, nullptr, dist);
 }
 
 template <typename S>
 bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
                              ObjectId ib, S& dist) {
-  const VolumeSphere *sa, *sb;
-  const VolumeShape *ha, *hb;
-  if (!volumes_.of(a, ia, b, ib, sa, ha, sb, hb)) return push(a, b, dist);
+  Records ra, rb;
+  if (!volumes_.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape))
+    return offer(a, nullptr, b, nullptr, dist);
+  return offer(a, &ra, b, &rb, dist);
+}
+
+template <typename S>
+bool DistanceSearch<S>::offer(fcl::CollisionObject<S>* a, const Records* ra,
+                              fcl::CollisionObject<S>* b, const Records* rb, S& dist) {
   ++stats_.candidate_pairs;
+  // A pair that cannot beat the best distance so far would leave the result as it is.
   if (result_.min_distance > 0) {
-    const double best = double(result_.min_distance);
-    const float enough =
-        best >= double(FLT_MAX) ? std::numeric_limits<float>::infinity() : float(best);
-    const VolumeGap g = separationOf(*sa, *ha, *sb, *hb, rate_, enough);
-    if (double(g.lower_bound) - double(g.margin) > best)
-      ++stats_.culled;
-    else
+    if (judge_.mayBeat(*a, ra, *b, rb, result_.min_distance))
       answer(a, b);
+    else
+      ++stats_.culled;
   }
   dist = result_.min_distance;
   return dist <= 0;

@@ -11,12 +11,14 @@
 
 #include "core/geometry.h"
 #include "cube_collision/narrow_phase.h"
+#include "pipeline/pair_judge.h"
 #include "pipeline/pair_volumes.h"
 
 namespace cube {
 namespace detail {
 
-/// The smallest fcl::distance over the pairs pushed, culled by tight-volume bounds. Without a
+/// The smallest fcl::distance over the pairs pushed, those that cannot beat the best so far left
+/// out by the pair judge. Without a
 /// cache, FCL's own way on the calling thread: one accumulating result, whatever the thread
 /// count (a branch and bound is sequential: batches gave the walk weaker bounds and cost more
 /// than they saved). With a cache, each pair not in it gets a fresh result, `threads` pairs at a
@@ -52,6 +54,9 @@ class DistanceSearch {
 
  private:
   struct Slot;
+  // The one path of both pushes: ra, rb the pair's records (null: the judge reads the objects).
+  bool offer(fcl::CollisionObject<S>* a, const Records* ra, fcl::CollisionObject<S>* b,
+             const Records* rb, S& dist);
   void flush();
   // After the bound let the pair through: FCL, or the batch.
   void answer(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);
@@ -66,7 +71,7 @@ class DistanceSearch {
   std::vector<Slot> slots_;
   fcl::DistanceResult<S> result_;
   PairVolumes<S> volumes_;
-  float rate_;
+  PairJudge<S> judge_;
 };
 
 extern template class DistanceSearch<double>;

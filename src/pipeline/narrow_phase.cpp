@@ -1,6 +1,6 @@
 // The narrow-phase pipeline's entry points (include/cube_collision/narrow_phase.h): pair lists
-// answered through the cache, the cull and FCL (collidePairs, collideMerged), a caller's function
-// over a pair list (forEachPair), the thread count. The streams fed by walks are in
+// answered through the cache, the pair judge and FCL (collidePairs, collideMerged), a caller's
+// function over a pair list (forEachPair), the thread count. The streams fed by walks are in
 // collide_stream.cpp and distance_search.cpp, the cache in cache.h and cache.cpp.
 
 #include "cube_collision/narrow_phase.h"
@@ -18,6 +18,7 @@
 #include "pipeline/cache.h"
 #include "pipeline/collide_stream.h"
 #include "pipeline/fcl_narrow.h"
+#include "pipeline/pair_judge.h"
 #include "pipeline/parallel_for.h"
 
 namespace cube {
@@ -76,9 +77,10 @@ std::vector<fcl::CollisionResult<S>> collidePairs(const std::vector<ObjectPair<S
     work += detail::workOf(pairs[i]);
   }
   const int threads = work >= kParallelMinWork ? regionTeam(resolveThreads(options.threads)) : 1;
+  const detail::PairJudge<S> judge(request);
   detail::parallelFor(rest.size(), threads, [&](std::size_t k) {
     const std::size_t i = rest[k];
-    kind[i] = detail::judge(request, pairs[i].first, pairs[i].second);
+    kind[i] = judge.collide(*pairs[i].first, *pairs[i].second);
     if (kind[i] == detail::Answer::kComputed)
       detail::fclCollide(pairs[i].first, pairs[i].second, request, results[i]);
   });

@@ -1,5 +1,6 @@
-// Contacts within a margin: the manager's candidate pairs (boxes grown by the margins), culled on
-// tight volumes widened by the margins, then fcl::collide and fcl::distance.
+// Contacts within a margin: the manager's candidate pairs (boxes grown by the margins), those
+// the pair judge finds farther apart than their margins left out, then fcl::collide and
+// fcl::distance.
 
 #include "cube_collision/margins.h"
 
@@ -8,8 +9,8 @@
 #include <functional>
 
 #include "cube_collision/queries.h"
-#include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
+#include "pipeline/pair_judge.h"
 
 namespace cube {
 
@@ -24,13 +25,12 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
   std::vector<MarginContact<S>> found(pairs.size());
   std::vector<std::uint8_t> verdict(pairs.size(), kFar);
   std::atomic<std::size_t> culled{0}, calls{0};
-  const S tolerance = request.distance_tolerance;
+  const detail::PairJudge<S> judge(request);
   forEachPair<S>(
       pairs,
       [&](std::size_t i, fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
         const S within = manager.margin(a) + manager.margin(b);
-        const auto sep = detail::separation(*a, *b, tolerance, within);
-        if (sep.lower_bound > within + sep.margin) {
+        if (!judge.mayBeWithin(*a, *b, within)) {
           culled.fetch_add(1, std::memory_order_relaxed);
           return;
         }

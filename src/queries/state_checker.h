@@ -24,6 +24,7 @@
 #include "core/kernels/pose_boxes.h"
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
+#include "pipeline/pair_judge.h"
 #include "queries/body_links.h"
 
 namespace cube {
@@ -64,8 +65,8 @@ class StateChecker {
         world_spheres_(world.table().spheres()),
         world_shapes_(world.table().shapes()),
         body_(links.view),
-        rate_(volumeMarginRate(request_.gjk_tolerance)),
-        distance_rate_(volumeMarginRate(distance_request_.distance_tolerance)) {
+        judge_(request_),
+        distance_judge_(distance_request_) {
     slots_.resize(links.size());
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
     self_gate_.excluded = links.allowed.data();  // the pairs BodySet::allowPair rules out
@@ -182,7 +183,7 @@ class StateChecker {
     // x - x is 0 for a finite x and NaN otherwise: summed over the links and tested once (every
     // entry of R and t reaches c or h; an infinite one times a zero extent is NaN).
     S finite = 0;
-    const S rate = S(rate_);
+    const S rate = S(judge_.rate());
     for (std::size_t l = 0; l < n; ++l) {
       Slot& slot = slots_[l];
       const S c[3] = {c_[0][l], c_[1][l], c_[2][l]};
@@ -259,7 +260,7 @@ class StateChecker {
   bool offer(const Candidate& c, const VolumeSphere& sa, const VolumeShape& ha,
              const VolumeSphere& sb, const VolumeShape& hb, S m) {
     if (first_pair_ && found() && !(c < best_)) return false;  // cannot come first
-    switch (cull(sa, ha, sb, hb, m)) {
+    switch (judge_.withinMargin(Records{&sa, &ha}, Records{&sb, &hb}, m)) {
       case Verdict::kApart:
         return false;
       case Verdict::kTouching:
@@ -334,18 +335,6 @@ class StateChecker {
     return slot;
   }
 
-  // What the records say about a pair within margin m (0: plain contact).
-  Verdict cull(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
-               const VolumeShape& hb, S m) const {
-    if (m == S(0)) return verdictOf(sa, ha, sb, hb, rate_, true);
-    // Within a margin: the bound must beat it, with room for rounding m to a float.
-    const float within = float(m);
-    const VolumeGap gap = separationOf(sa, ha, sb, hb, rate_, within);
-    if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return Verdict::kApart;
-    return verdictOf(sa, ha, sb, hb, rate_, true) == Verdict::kTouching ? Verdict::kTouching
-                                                                        : Verdict::kUnknown;
-  }
-
   // FCL's answer: contact, or (margin m > 0) a distance of at most m.
   bool narrow(const Object& a, const Object& b, S m) {
     fcl::CollisionResult<S> result;
@@ -372,11 +361,7 @@ class StateChecker {
   // true (stop) once best <= 0.
   bool lower(const Object& a, const VolumeSphere& sa, const VolumeShape& ha, const Object& b,
              const VolumeSphere& sb, const VolumeShape& hb, S& best) {
-    const float enough = best < S(std::numeric_limits<float>::max())
-                             ? float(best)
-                             : std::numeric_limits<float>::infinity();
-    const VolumeGap gap = separationOf(sa, ha, sb, hb, distance_rate_, enough);
-    if (gap.lower_bound - gap.margin > enough + 4.f * FLT_EPSILON * std::fabs(enough)) return false;
+    if (!distance_judge_.mayBeat(Records{&sa, &ha}, Records{&sb, &hb}, best)) return false;
     best = std::min(best, pairDistance(a, b));
     return best <= S(0);
   }
@@ -417,8 +402,8 @@ class StateChecker {
   PairGate<S> self_gate_;  // the links' self pairs: the body's excluded pairs
   const fcl::CollisionRequest<S> request_{};
   const fcl::DistanceRequest<S> distance_request_{};
-  const float rate_;
-  const float distance_rate_;
+  const PairJudge<S> judge_;           // a pair's contact, or within its margins
+  const PairJudge<S> distance_judge_;  // whether a pair can lower the clearance
   std::uint64_t state_ = 0;
   std::vector<Slot> slots_;
   std::vector<S> c_[3], h_[3];  // the state's posed local AABBs, per coordinate
