@@ -10,11 +10,11 @@
 #include <utility>
 #include <vector>
 
+#include "core/parallel_for.h"
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
-#include "pipeline/parallel_for.h"
 
 namespace cube {
 namespace detail {

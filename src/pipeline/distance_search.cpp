@@ -7,11 +7,11 @@
 #include <limits>
 #include <vector>
 
+#include "core/parallel_for.h"
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
-#include "pipeline/parallel_for.h"
 
 namespace cube {
 namespace detail {
