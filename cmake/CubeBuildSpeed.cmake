@@ -6,7 +6,9 @@
 # each translation unit that calls fcl::collide / fcl::distance on float objects, or uses a float
 # FCL broadphase manager, compiled every shape-pair and BVH-pair function, GJK and EPA anew
 # (2-3 minutes per file at -O3). cmake/fcl_float_instances.h declares those float
-# instantiations extern; the static library cube_fcl_float defines them, compiled once.
+# instantiations extern: fcl::collide and fcl::distance come from the library, whose narrow phase
+# compiles them anyway (src/pipeline/callbacks.cpp), the float managers and CollisionObject from
+# the static library cube_fcl_float, compiled once.
 #
 #   cube_speed_up_build(<target> [GTEST] [PCH_FROM <target>])
 #       links <target> with cube_fcl_float and puts cmake/fcl_float_instances.h in front of each of
@@ -15,8 +17,6 @@
 #       precompiled header instead (the targets must be compiled with the same flags).
 
 option(CUBE_COLLISION_PCH "Precompiled FCL/GoogleTest headers for the tests" ON)
-option(CUBE_COLLISION_SANITIZE_FCL_FLOAT
-  "With CUBE_COLLISION_SANITIZE=address, instrument the tests' prebuilt FCL float instantiations too (slow)" OFF)
 
 set(CUBE_FCL_FLOAT_HEADER ${PROJECT_SOURCE_DIR}/cmake/fcl_float_instances.h)
 file(GENERATE OUTPUT ${PROJECT_BINARY_DIR}/cube_fcl_float/fcl_float_instances.cpp
@@ -27,15 +27,12 @@ file(GENERATE OUTPUT ${PROJECT_BINARY_DIR}/cube_fcl_float/fcl_float_instances.cp
 add_library(cube_fcl_float STATIC ${PROJECT_BINARY_DIR}/cube_fcl_float/fcl_float_instances.cpp)
 target_link_libraries(cube_fcl_float PUBLIC fcl)
 target_compile_features(cube_fcl_float PUBLIC cxx_std_17)
-# -O1: this is FCL's code run by the tests' oracles, not the library's; -O3 took three times as
-# long to compile for little test time.
+# -O1: this is FCL's code run by the tests' oracles, not the library's.
 target_compile_options(cube_fcl_float PRIVATE ${CUBE_COLLISION_WARNINGS} -O1)
 if(CUBE_COLLISION_SANITIZE STREQUAL "address" AND NOT CUBE_COLLISION_SANITIZE_FCL_FLOAT)
-  # In the AddressSanitizer build, FCL's float narrow phase is left uninstrumented, like its double
-  # one in libfcl: instrumented, this file alone compiled for many minutes. Our code (the library,
-  # the tests, the scene generators) stays instrumented; the library's own float callbacks
-  # (src/pipeline/callbacks.cpp) still compile FCL's float code instrumented.
-  # No debug information either (the sanitizer build adds some): libfcl has none.
+  # In the AddressSanitizer build FCL's float code is left uninstrumented, like its double code in
+  # libfcl and its float narrow phase in src/pipeline/callbacks.cpp (CMakeLists.txt). No debug
+  # information either (the sanitizer build adds some): libfcl has none.
   target_compile_options(cube_fcl_float PRIVATE -fno-sanitize=all -g0)
 endif()
 

@@ -10,6 +10,8 @@
 
 set(CUBE_COLLISION_SANITIZE "" CACHE STRING "Sanitizers for every target: empty, address (address+undefined) or thread")
 set_property(CACHE CUBE_COLLISION_SANITIZE PROPERTY STRINGS "" address thread)
+option(CUBE_COLLISION_SANITIZE_FCL_FLOAT
+  "With CUBE_COLLISION_SANITIZE=address, instrument FCL's float narrow phase too (src/pipeline/callbacks.cpp, cube_fcl_float; slow)" OFF)
 option(CUBE_COLLISION_BUILD_FUZZER "Build the libFuzzer target (clang only; implies address+undefined)" OFF)
 
 set(_cube_san_flags "")

@@ -5,18 +5,17 @@
 // walked (all pairs, one object down a tree, cube pairs, or a walk cut into tasks for threads),
 // and the delivery (in walk order, or gathered and called in registration order).
 
-#include <omp.h>
-
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <new>
 #include <vector>
 
 #include "core/body_view.h"
 #include "core/broadphase.h"
+#include "core/parallel_for.h"
 
 namespace cube {
 namespace detail {
@@ -176,13 +175,11 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
                             sink != nullptr ? kSinkTasks : kSplitTasks);
     const std::size_t n = walk.tasks();
     std::vector<std::vector<std::uint64_t>> found(n);
-    std::exception_ptr error;
     if (sink != nullptr) sink->begin(n, threads);
     // A task's pairs to the sink, as objects, on the thread that walked it (each worker reuses
     // its list).
     std::vector<std::vector<typename TaskSink<S>::Pair>> handed(sink != nullptr ? threads : 0);
-    const auto hand = [&](std::size_t i) {
-      const int worker = omp_get_thread_num();
+    const auto hand = [&](int worker, std::size_t i) {
       auto& pairs = handed[std::size_t(worker)];
       pairs.clear();
       for (const std::uint64_t pair : found[i]) {
@@ -198,19 +195,15 @@ bool Broadphase<S>::collideSplit(const Plan& p, void* data, CollideFn<S> fn,
     const bool at_once = out != nullptr || sink != nullptr;
     for (std::size_t begin = 0, wave = std::size_t(threads); begin < n; begin += wave, wave *= 2) {
       const std::size_t end = at_once ? n : std::min(n, begin + wave);
-      // Dynamic: the tasks of a clustered scene differ by orders of magnitude.
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-      for (std::ptrdiff_t i = std::ptrdiff_t(begin); i < std::ptrdiff_t(end); ++i) {
-        try {
-          walk.collect(std::size_t(i), found[std::size_t(i)]);
-          if (sink != nullptr) hand(std::size_t(i));
-        } catch (...) {  // std::bad_alloc: no exception may leave an OpenMP region
-#pragma omp critical(cube_split_walk_error)
-          if (!error) error = std::current_exception();
-        }
-      }
-      regionClosed(threads);
-      if (error) std::rethrow_exception(error);
+      // Chunks of one task: the tasks of a clustered scene differ by orders of magnitude. Each
+      // thread's scratch is its worker number for the sink (0 to threads - 1).
+      std::atomic<int> workers{0};
+      parallelForWith(
+          end - begin, threads, 1, [&] { return workers.fetch_add(1, std::memory_order_relaxed); },
+          [&](int worker, std::size_t k) {
+            walk.collect(begin + k, found[begin + k]);
+            if (sink != nullptr) hand(worker, begin + k);
+          });
       for (std::size_t i = begin; i < end; ++i) {
         if (sink != nullptr) {
           if (sink->drain(i)) return true;

@@ -1,15 +1,18 @@
 // The team of a region (thread_policy.h): the threads asked for, less the cores other runnable
-// threads hold now.
+// threads hold now; and the threads asked for (resolveThreads, parallel_for.h).
 
 #include "core/thread_policy.h"
 
 #include <fcntl.h>
+#include <omp.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+
+#include "core/parallel_for.h"
 
 namespace cube {
 namespace detail {
@@ -61,6 +64,10 @@ int regionTeam(int requested) {
   if (nowNs() - g_last_close_ns.load(std::memory_order_relaxed) < kRecentRegionNs)
     others -= g_last_team.load(std::memory_order_relaxed) - 1;
   return std::clamp(requested - std::max(others, 0), 1, requested);
+}
+
+int resolveThreads(int threads) {
+  return threads > 0 ? threads : std::max(1, omp_get_max_threads());
 }
 
 void regionClosed(int team) {

@@ -215,3 +215,22 @@ template bool defaultDistanceCallback<float>(fcl::CollisionObject<float>*,
                                              fcl::CollisionObject<float>*, void*, float&);
 
 }  // namespace cube
+
+// FCL's float narrow phase (libfcl holds only the double one) is compiled here for the library;
+// kept as out-of-line definitions, it also serves the tests' FCL oracles, which declare them
+// extern (cmake/fcl_float_instances.h) instead of compiling FCL's float narrow phase again.
+template std::size_t fcl::collide(const fcl::CollisionObject<float>*,
+                                  const fcl::CollisionObject<float>*,
+                                  const fcl::CollisionRequest<float>&,
+                                  fcl::CollisionResult<float>&);
+template std::size_t fcl::collide(const fcl::CollisionGeometry<float>*,
+                                  const fcl::Transform3<float>&,
+                                  const fcl::CollisionGeometry<float>*,
+                                  const fcl::Transform3<float>&,
+                                  const fcl::CollisionRequest<float>&,
+                                  fcl::CollisionResult<float>&);
+template float fcl::distance(const fcl::CollisionObject<float>*, const fcl::CollisionObject<float>*,
+                             const fcl::DistanceRequest<float>&, fcl::DistanceResult<float>&);
+template float fcl::distance(const fcl::CollisionGeometry<float>*, const fcl::Transform3<float>&,
+                             const fcl::CollisionGeometry<float>*, const fcl::Transform3<float>&,
+                             const fcl::DistanceRequest<float>&, fcl::DistanceResult<float>&);

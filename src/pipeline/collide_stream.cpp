@@ -10,12 +10,12 @@
 #include <utility>
 #include <vector>
 
+#include "core/parallel_for.h"
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
 #include "pipeline/collide_stream_parts.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
-#include "pipeline/parallel_for.h"
 
 namespace cube {
 namespace detail {

@@ -5,10 +5,10 @@
 
 #include <vector>
 
+#include "core/parallel_for.h"
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
 #include "pipeline/fcl_narrow.h"
-#include "pipeline/parallel_for.h"
 
 namespace cube {
 namespace detail {

@@ -5,8 +5,6 @@
 
 #include "cube_collision/narrow_phase.h"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cstddef>
 #include <functional>
@@ -14,17 +12,17 @@
 #include <string>
 #include <vector>
 
+#include "core/parallel_for.h"
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
 #include "pipeline/collide_stream.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
-#include "pipeline/parallel_for.h"
 
 namespace cube {
 
 int hardwareThreads() {
-  return std::max(1, omp_get_max_threads());
+  return detail::resolveThreads(0);
 }
 
 namespace {

@@ -14,8 +14,8 @@
 #include <utility>
 
 #include "adapter/manager_access.h"
+#include "core/parallel_for.h"
 #include "cube_collision/narrow_phase.h"
-#include "pipeline/parallel_for.h"
 #include "queries/state_checker.h"
 
 namespace cube {

@@ -1,7 +1,8 @@
 #pragma once
 
-// The library's one parallel loop (OpenMP): the narrow-phase pipeline's chunks of pairs and the
-// batched state checks run through it. Exceptions are carried to the calling thread.
+// The library's one parallel loop (OpenMP): the core's split walk, the narrow-phase pipeline's
+// chunks of pairs and the batched state checks run through it, their teams sized by
+// thread_policy.h. Exceptions are carried to the calling thread.
 
 #include <algorithm>
 #include <cstddef>
@@ -10,15 +11,13 @@
 #include <vector>
 
 #include "core/thread_policy.h"
-#include "cube_collision/narrow_phase.h"
 
 namespace cube {
 namespace detail {
 
-/// A thread count from the user: > 0 as given, else hardwareThreads().
-inline int resolveThreads(int threads) {
-  return threads > 0 ? threads : hardwareThreads();
-}
+/// A thread count asked for: `threads` if > 0, else the hardware's (OpenMP's default team, at
+/// least 1; the public hardwareThreads()). Defined in thread_policy.cpp.
+int resolveThreads(int threads);
 
 /// Runs body(scratch, i) for every i in [0, n) on `threads` threads (the caller sized the team:
 /// thread_policy.h), each thread with its own
