@@ -24,6 +24,7 @@
 #include "cube_collision/spatial_queries.h"
 #include "pipeline/fcl_narrow.h"
 #include "queries/ray_tests.h"
+#include "queries/region_search.h"
 
 namespace cube {
 
@@ -34,7 +35,7 @@ using detail::Item;
 using detail::Segment;
 
 template <typename S>
-using Found = std::vector<std::pair<std::uint32_t, fcl::CollisionObject<S>*>>;
+using Found = detail::RegionFound<S>;
 
 // The capsule as a region: the segment and its reach prune boxes, FCL decides.
 template <typename S>
@@ -118,18 +119,7 @@ std::vector<fcl::CollisionObject<S>*> objectsInCapsule(const CubeCollisionManage
   const Segment seg = detail::makeSegment(a, b);
   Found<S> found;
   CapsuleRegion<S> r{seg, reach, capsule, found};
-  if (filter) {
-    const detail::Filter bits{filter->category, filter->mask};
-    detail::coreOf(manager).search(r, &bits);
-  } else {
-    detail::coreOf(manager).search(r);
-  }
-  std::sort(found.begin(), found.end(),
-            [](const auto& x, const auto& y) { return x.first < y.first; });
-  std::vector<fcl::CollisionObject<S>*> out;
-  out.reserve(found.size());
-  for (const auto& f : found) out.push_back(f.second);
-  return out;
+  return detail::searchInOrder(manager, r, found, filter);
 }
 
 #define CUBE_CAPSULE_INSTANTIATE(S)                                                      \

@@ -17,6 +17,7 @@
 #include "adapter/manager_access.h"
 #include "core/broadphase.h"
 #include "cube_collision/spatial_queries.h"
+#include "queries/region_search.h"
 
 namespace cube {
 
@@ -53,20 +54,9 @@ template <typename S, class Pred>
 std::vector<fcl::CollisionObject<S>*> region(const CubeCollisionManager<S>& manager,
                                              const Pred& pred,
                                              const std::optional<QueryFilter>& filter) {
-  std::vector<std::pair<std::uint32_t, fcl::CollisionObject<S>*>> found;
+  detail::RegionFound<S> found;
   Region<S, Pred> r{pred, found};
-  if (filter) {
-    const detail::Filter bits{filter->category, filter->mask};
-    detail::coreOf(manager).search(r, &bits);
-  } else {
-    detail::coreOf(manager).search(r);
-  }
-  std::sort(found.begin(), found.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<fcl::CollisionObject<S>*> out;
-  out.reserve(found.size());
-  for (const auto& f : found) out.push_back(f.second);
-  return out;
+  return detail::searchInOrder(manager, r, found, filter);
 }
 
 // The closed box overlap, in double.
