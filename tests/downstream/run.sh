@@ -62,7 +62,7 @@ case "$mode" in
       -DCUBE_COLLISION_SOURCE_DIR="$from"
     targets=$(cmake --build "$work/build" --target help)
     grep -qw "cube_collision" <<<"$targets" || { echo "no cube_collision target" >&2; exit 1; }
-    for t in cube_scenes cube_fcl_float demo cube_tests_api cube_tests_core cube_bench; do
+    for t in cube_scenes cube_fcl_float demo cube_tests_api cube_tests_core cube_tests_threads cube_bench; do
       if grep -qw "$t" <<<"$targets"; then
         echo "target $t is built although cube-collision is not the top-level project" >&2
         exit 1
