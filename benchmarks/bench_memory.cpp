@@ -58,11 +58,12 @@ void counted(void* p) {
 }
 
 void uncounted(void* p) {
-  if (p != nullptr)
-    g_live.fetch_sub(blockBytes(p), std::memory_order_relaxed);
+  if (p != nullptr) g_live.fetch_sub(blockBytes(p), std::memory_order_relaxed);
 }
 
-bool powerOfTwo(std::size_t a) { return a != 0 && (a & (a - 1)) == 0; }
+bool powerOfTwo(std::size_t a) {
+  return a != 0 && (a & (a - 1)) == 0;
+}
 
 }  // namespace
 
@@ -96,7 +97,9 @@ void* memalign(std::size_t align, std::size_t n) {
   counted(p);
   return p;
 }
-void* aligned_alloc(std::size_t align, std::size_t n) { return memalign(align, n); }
+void* aligned_alloc(std::size_t align, std::size_t n) {
+  return memalign(align, n);
+}
 int posix_memalign(void** out, std::size_t align, std::size_t n) {
   if (!powerOfTwo(align) || align % sizeof(void*) != 0) return EINVAL;
   void* p = memalign(align, n);
@@ -104,8 +107,12 @@ int posix_memalign(void** out, std::size_t align, std::size_t n) {
   *out = p;
   return 0;
 }
-void* valloc(std::size_t n) { return memalign(4096, n); }
-void* pvalloc(std::size_t n) { return memalign(4096, (n + 4095) & ~std::size_t(4095)); }
+void* valloc(std::size_t n) {
+  return memalign(4096, n);
+}
+void* pvalloc(std::size_t n) {
+  return memalign(4096, (n + 4095) & ~std::size_t(4095));
+}
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -149,16 +156,17 @@ Result measure(const char* name, const std::vector<Object*>& objs, Make&& make) 
   if (auto* cube = dynamic_cast<cube::CubeCollisionManager<S>*>(mgr.get())) {
     const auto& core = cube::detail::coreOf(*cube);
     const auto& tree = core.tree();
-    r.parts = {{"bytes()", double(cube->bytes()) / n},
-               {"table", double(core.table().bytes()) / n},
-               {"slots", double(tree.items().capacity() * sizeof(tree.items()[0])) / n},
-               {"cubes", double(tree.nodes().capacity() * sizeof(cube::detail::Node)) / n},
-               {"tree other", double(tree.bytes() - tree.items().capacity() *
-                                                        sizeof(tree.items()[0]) -
-                                     tree.nodes().capacity() * sizeof(cube::detail::Node)) /
-                                  n},
-               {"slots per object", double(tree.items().capacity()) / n},
-               {"cubes per object", double(tree.nodes().capacity()) / n}};
+    r.parts = {
+        {"bytes()", double(cube->bytes()) / n},
+        {"table", double(core.table().bytes()) / n},
+        {"pointer map", double(core.table().mapBytes()) / n},
+        {"slots", double(tree.items().capacity() * sizeof(tree.items()[0])) / n},
+        {"cubes", double(tree.nodes().capacity() * sizeof(cube::detail::Node)) / n},
+        {"tree other", double(tree.bytes() - tree.items().capacity() * sizeof(tree.items()[0]) -
+                              tree.nodes().capacity() * sizeof(cube::detail::Node)) /
+                           n},
+        {"slots per object", double(tree.items().capacity()) / n},
+        {"cubes per object", double(tree.nodes().capacity()) / n}};
   }
   Counter c;
   mgr->collide(&c, &Counter::fn);
@@ -186,9 +194,8 @@ int main(int argc, char** argv) {
     const auto scene = cube::scenes::makeScene<S>(o);
     const auto objs = scene.pointers();
     const std::size_t first = results.size();
-    results.push_back(measure("cube", objs, [] {
-      return std::make_unique<cube::CubeCollisionManager<S>>();
-    }));
+    results.push_back(
+        measure("cube", objs, [] { return std::make_unique<cube::CubeCollisionManager<S>>(); }));
     results.push_back(measure("DynamicAABBTree", objs, [] {
       return std::make_unique<fcl::DynamicAABBTreeCollisionManager<S>>();
     }));
