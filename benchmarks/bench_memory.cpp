@@ -1,6 +1,7 @@
 // Memory of a drop-in manager: the heap a manager holds per object after construction,
 // registerObjects and setup (the way a user replacing an FCL manager builds it), and the peak of
-// the heap during that build, for the cube manager and FCL's dynamic trees, on the uniform scene.
+// the heap during that build, for the cube manager and FCL's dynamic trees, on the uniform scene
+// (double; the cube manager and FCL's dynamic tree in float too).
 // For the cube manager also where its bytes go (its components' bytes()).
 //
 //   cube_memory [n ...] [--json out.json]        (default n: 10000 100000 1000000 2000000)
@@ -119,13 +120,10 @@ void* pvalloc(std::size_t n) {
 
 namespace {
 
-using S = double;
-using Object = fcl::CollisionObject<S>;
-using Manager = fcl::BroadPhaseCollisionManager<S>;
-
 struct Counter {
   std::size_t calls = 0;
-  static bool fn(Object*, Object*, void* data) {
+  template <typename S>
+  static bool fn(fcl::CollisionObject<S>*, fcl::CollisionObject<S>*, void* data) {
     ++static_cast<Counter*>(data)->calls;
     return false;
   }
@@ -140,15 +138,15 @@ struct Result {
   std::vector<std::pair<std::string, double>> parts;  // cube only: bytes per object by component
 };
 
-template <class Make>
-Result measure(const char* name, const std::vector<Object*>& objs, Make&& make) {
+template <typename S, class Make>
+Result measure(const char* name, const std::vector<fcl::CollisionObject<S>*>& objs, Make&& make) {
   Result r;
   r.manager = name;
   r.n = objs.size();
   const double n = double(objs.size());
   const long long before = g_live.load();
   g_peak.store(before);
-  std::unique_ptr<Manager> mgr = make();
+  std::unique_ptr<fcl::BroadPhaseCollisionManager<S>> mgr = make();
   mgr->registerObjects(objs);
   mgr->setup();
   r.after = double(g_live.load() - before) / n;
@@ -169,7 +167,7 @@ Result measure(const char* name, const std::vector<Object*>& objs, Make&& make) 
         {"cubes per object", double(tree.nodes().capacity()) / n}};
   }
   Counter c;
-  mgr->collide(&c, &Counter::fn);
+  mgr->collide(&c, &Counter::fn<S>);
   r.pairs = c.calls;
   return r;
 }
@@ -189,22 +187,37 @@ int main(int argc, char** argv) {
   std::vector<Result> results;
   bool agree = true;
   for (const std::size_t n : sizes) {
+    const std::size_t first = results.size();
     cube::scenes::SceneOptions o;
     o.n = n;
-    const auto scene = cube::scenes::makeScene<S>(o);
-    const auto objs = scene.pointers();
-    const std::size_t first = results.size();
-    results.push_back(
-        measure("cube", objs, [] { return std::make_unique<cube::CubeCollisionManager<S>>(); }));
-    results.push_back(measure("DynamicAABBTree", objs, [] {
-      return std::make_unique<fcl::DynamicAABBTreeCollisionManager<S>>();
-    }));
-    results.push_back(measure("DynamicAABBTree_Array", objs, [] {
-      return std::make_unique<fcl::DynamicAABBTreeCollisionManager_Array<S>>();
-    }));
+    {
+      const auto scene = cube::scenes::makeScene<double>(o);
+      const auto objs = scene.pointers();
+      using S = double;
+      results.push_back(measure<S>(
+          "cube", objs, [] { return std::make_unique<cube::CubeCollisionManager<S>>(); }));
+      results.push_back(measure<S>("DynamicAABBTree", objs, [] {
+        return std::make_unique<fcl::DynamicAABBTreeCollisionManager<S>>();
+      }));
+      results.push_back(measure<S>("DynamicAABBTree_Array", objs, [] {
+        return std::make_unique<fcl::DynamicAABBTreeCollisionManager_Array<S>>();
+      }));
+    }
+    {
+      // The same in float: what slots of float boxes (40 bytes) would make of a manager.
+      const auto scene = cube::scenes::makeScene<float>(o);
+      const auto objs = scene.pointers();
+      using S = float;
+      results.push_back(measure<S>(
+          "cube_float", objs, [] { return std::make_unique<cube::CubeCollisionManager<S>>(); }));
+      results.push_back(measure<S>("DynamicAABBTree_float", objs, [] {
+        return std::make_unique<fcl::DynamicAABBTreeCollisionManager<S>>();
+      }));
+    }
     for (std::size_t i = first; i < results.size(); ++i) {
       const Result& r = results[i];
-      const bool same = r.pairs == results[first + 1].pairs;
+      // Each against FCL's dynamic tree of its scalar type.
+      const bool same = r.pairs == results[i < first + 3 ? first + 1 : first + 4].pairs;
       agree = agree && same;
       std::printf("%-22s n=%-8zu after %7.1f B/object  build peak %7.1f B/object  pairs %zu%s\n",
                   r.manager.c_str(), r.n, r.after, r.peak, r.pairs,
@@ -219,7 +232,7 @@ int main(int argc, char** argv) {
       std::perror(json.c_str());
       return 2;
     }
-    std::fprintf(f, "{\"scene\": \"uniform\", \"scalar\": \"double\", \"results\": [\n");
+    std::fprintf(f, "{\"scene\": \"uniform\", \"results\": [\n");
     for (std::size_t i = 0; i < results.size(); ++i) {
       const Result& r = results[i];
       std::fprintf(f,

@@ -567,7 +567,9 @@ def bullet_text(path):
     return "\n".join(out) + "\n"
 
 
-MEMORY_MANAGERS = ["cube", "DynamicAABBTree", "DynamicAABBTree_Array"]
+MEMORY_MANAGERS = ["cube", "DynamicAABBTree", "DynamicAABBTree_Array", "cube_float",
+                   "DynamicAABBTree_float"]
+MEMORY_SHORT = dict(SHORT, cube_float="cube float", DynamicAABBTree_float="DynTree float")
 MEMORY_PARTS = [("slots", "slots (`Item`, exact box)"), ("cubes", "cubes (`Node`)"),
                 ("tree other", "parent links"), ("table", "object table"),
                 ("pointer map", "of which the pointer map")]
@@ -580,17 +582,18 @@ def memory_text(path):
         data = json.load(f)
     res = {(r["manager"], r["n"]): r for r in data["results"]}
     sizes = sorted({r["n"] for r in data["results"]})
-    agree = all(r["pairs"] == res.get(("DynamicAABBTree", r["n"]), r)["pairs"]
-                for r in data["results"])
+    agree = all(r["pairs"] == res.get(("DynamicAABBTree" + ("_float" if r["manager"].endswith(
+        "_float") else ""), r["n"]), r)["pairs"] for r in data["results"])
     out = ["### Memory of a drop-in manager (`cube_memory`)", "",
-           f"From `{os.path.basename(path)}`: {data['scene']} scene, `{data['scalar']}`, each "
+           f"From `{os.path.basename(path)}`: {data['scene']} scene, `double` (and in `float` "
+           "the columns so named), each "
            "manager built as a user replacing an FCL manager builds it (construction, "
            "`registerObjects`, `setup`). Bytes per object of every heap block the build leaves "
            "allocated (glibc's block sizes, as `mallinfo2` counts them), and of the heap's "
            "highest point during the build over its level before. " +
            ("Every manager's self-collide found the same pairs." if agree else
             "**The managers' self-collides found different pairs.**"), "",
-           "| n | " + " | ".join(f"{SHORT[m]} after / peak" for m in MEMORY_MANAGERS) +
+           "| n | " + " | ".join(f"{MEMORY_SHORT[m]} after / peak" for m in MEMORY_MANAGERS) +
            " | DynTree / cube after | DynTree / cube peak |",
            "|---:|" + "---:|" * (len(MEMORY_MANAGERS) + 2)]
     for n in sizes:
@@ -604,7 +607,8 @@ def memory_text(path):
         rp = "–" if not (c and d) else \
             f"{d['build_peak_per_object'] / c['build_peak_per_object']:.2f}x"
         out.append(f"| {n:,} | " + " | ".join(cells) + f" | {ra} | {rp} |")
-    out += ["", "Where the cube manager's bytes go (`bytes()` of its parts, bytes per object):", "",
+    out += ["", "Where the cube manager's bytes go (`double`; `bytes()` of its parts, bytes per "
+            "object):", "",
             "| n | " + " | ".join(label for _, label in MEMORY_PARTS) + " | `bytes()` |",
             "|---:|" + "---:|" * (len(MEMORY_PARTS) + 1)]
     for n in sizes:
