@@ -759,6 +759,44 @@ TYPED_TEST(Dynamic, PairListKeepsWalkOrderAndStops) {
   }
 }
 
+// A batch build holds each object once and no more room than its objects need: the slots are
+// exactly the objects, the pointer map is sized to its load limit, and a batch into a manager
+// that holds objects (live ones, dead slots) builds over both with the same answers.
+TYPED_TEST(Dynamic, BatchBuildsKeepNoSlack) {
+  using S = TypeParam;
+  const std::size_t n = 3000;
+  auto sc = scene<S>(2 * n, 171);
+  const auto all = sc.pointers();
+  const std::vector<Obj<S>*> first(all.begin(), all.begin() + n),
+      second(all.begin() + n, all.end());
+  CubeCollisionManager<S> cube;
+  cube.registerObjects(first);
+  cube.setup();
+  ASSERT_TRUE(valid(cube));
+  const auto& core = ::cube::detail::coreOf(cube);
+  EXPECT_EQ(core.tree().items().capacity(), n);
+  // 3/4 of the map's places at most are taken, and no more places than that asks for.
+  EXPECT_LE(core.table().mapBytes(), sizeof(std::uint32_t) * ((4 * (n + 1) + 2) / 3));
+  EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(first));
+  // Dead slots, then a batch as large as what is left: one build over the live slots and it.
+  std::vector<Obj<S>*> live;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 3 == 0)
+      cube.unregisterObject(first[i]);
+    else
+      live.push_back(first[i]);
+  }
+  ASSERT_TRUE(valid(cube));
+  const auto builds = core.tree().buildCount();
+  cube.registerObjects(second);
+  cube.setup();
+  ASSERT_TRUE(valid(cube));
+  EXPECT_GT(core.tree().buildCount(), builds);
+  live.insert(live.end(), second.begin(), second.end());
+  EXPECT_EQ(core.tree().items().capacity(), live.size());
+  EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(live));
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace cube

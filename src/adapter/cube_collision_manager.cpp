@@ -45,22 +45,19 @@ const Config& CubeCollisionManager<S>::config() const {
 template <typename S>
 void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_objs) {
   refuseInsideQuery(core_.get(), "registerObjects");
-  std::vector<Box<S>> boxes;
-  boxes.reserve(other_objs.size());
-  // Each AABB sits in a separate object, usually not in cache: ask for a few ahead.
-  constexpr std::size_t kAhead = 8;
+  // Checked first, so that a bad entry registers nothing; the boxes are read again as the core
+  // registers them rather than held in an array of their own (48 bytes an object at the
+  // build's peak).
   for (std::size_t i = 0; i < other_objs.size(); ++i) {
     if (other_objs[i] == nullptr)
       fail("registerObjects", "entry #" + std::to_string(i) + " is null; nothing registered");
-    if (i + kAhead < other_objs.size() && other_objs[i + kAhead] != nullptr)
-      __builtin_prefetch(&other_objs[i + kAhead]->getAABB());
-    boxes.push_back(boxOf(*other_objs[i]));
     // A registered object is left alone, whatever its AABB says now (as registerObject does).
-    if (!isValid(boxes.back()) && !core_->contains(other_objs[i]))
+    if (!isValid(boxOf(*other_objs[i])) && !core_->contains(other_objs[i]))
       fail("registerObjects",
            "entry #" + std::to_string(i) + " has a NaN AABB coordinate; nothing registered");
   }
-  core_->addMany(other_objs.data(), boxes.data(), other_objs.size());
+  core_->addMany(other_objs.data(), other_objs.size(),
+                 [&](std::size_t i, Box<S>& box) { box = boxOf(*other_objs[i]); });
 }
 
 template <typename S>

@@ -44,8 +44,8 @@ void Broadphase<S>::unplace(ObjectId id) {
 }
 
 template <typename S>
-void Broadphase<S>::rebuild(const std::vector<Item<S>>& extra) {
-  tree_.rebuild(ids(), extra);
+void Broadphase<S>::rebuild() {
+  tree_.rebuild(ids());
 }
 
 template <typename S>
@@ -70,32 +70,28 @@ void Broadphase<S>::add(Object* obj, const Box<S>& box) {
 
 template <typename S>
 void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_t n) {
-  // Entries registered already, or earlier in the batch, are skipped by the table. The new ones
-  // are sorted on the way: bounded ones for the build, unbounded ones (rare: no allocation
-  // unless there are some) for their list.
-  std::vector<Item<S>> bounded, loose;
-  bounded.reserve(n);
-  const std::size_t added = table_.addBatch(objs, n, [&](std::size_t i, ObjectId id) {
-    const Item<S> item{grown(boxes[i], id), objs[i], kNone, id};
-    if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded)
-      loose.push_back(item);
-    else
-      bounded.push_back(item);
-  });
-  if (added == 0) return;
+  addMany(objs, n, [boxes](std::size_t i, Box<S>& box) { box = boxes[i]; });
+}
+
+template <typename S>
+void Broadphase<S>::placeBatch(ItemArray<S>&& bounded, const std::vector<Item<S>>& loose) {
   pairs_.invalidate();
+  const std::size_t added = bounded.size() + loose.size();
   if (added < size() - added) {
     // A small batch into a large manager: insertions beat a build.
-    for (const std::vector<Item<S>>* items : {&bounded, &loose})
-      for (const Item<S>& it : *items) {
-        place(it.id, it.obj, it.box);
-        maintain();
-      }
+    for (const Item<S>& it : bounded) {
+      place(it.id, it.obj, it.box);
+      maintain();
+    }
+    for (const Item<S>& it : loose) {
+      place(it.id, it.obj, it.box);
+      maintain();
+    }
     return;
   }
   // One build over everything.
   for (const Item<S>& it : loose) unbounded_.add(it, table_);
-  rebuild(bounded);
+  tree_.rebuild(ids(), std::move(bounded));
 }
 
 template <typename S>

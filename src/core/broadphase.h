@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "core/cube_tree.h"
@@ -105,6 +106,10 @@ class Broadphase {
   /// Registers a batch; registered or repeated entries are skipped. A batch at least as large as
   /// what is registered is placed by one build.
   void addMany(Object* const* objs, const Box<S>* boxes, std::size_t n);
+  /// The same, the box of entry i read by read(i, box) when it is registered (once, in batch
+  /// order): the boxes are never held apart from the slots.
+  template <class Read>
+  void addMany(Object* const* objs, std::size_t n, Read&& read);
   /// Unregisters; false if not registered.
   bool remove(const Object* obj);
   /// update(): reads every object's box through read(obj, box), refits, rebuilds if due and
@@ -260,8 +265,11 @@ class Broadphase {
     const bool apart = table_.separable(config_.filter_groups);
     return IdArrays{table_.seqs(), table_.locations(), apart ? table_.groups() : nullptr};
   }
-  /// Builds the tree afresh over everything in it plus `extra`.
-  void rebuild(const std::vector<Item<S>>& extra = {});
+  /// Builds the tree afresh over everything in it.
+  void rebuild();
+  /// A batch's new items into the cubes (`bounded`, taken) and the unbounded list (`loose`):
+  /// one build, or insertions if the batch is small against what is registered.
+  void placeBatch(ItemArray<S>&& bounded, const std::vector<Item<S>>& loose);
   /// Whether the objects' filter groups should be kept apart and the cubes do not record them
   /// (bits changed since the last build): update() and setup() then rebuild.
   bool regroupDue() const {
@@ -440,6 +448,27 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
   }
   afterMotion(keep, was_valid);
   return bad;
+}
+
+template <typename S>
+template <class Read>
+void Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& read) {
+  // Entries registered already, or earlier in the batch, are skipped by the table. The new ones
+  // are sorted on the way: bounded ones into the array the build takes as its slots, unbounded
+  // ones (rare: no allocation unless there are some) for their list.
+  ItemArray<S> bounded;
+  std::vector<Item<S>> loose;
+  bounded.reserve(n);
+  Box<S> box;
+  const std::size_t added = table_.addBatch(objs, n, [&](std::size_t i, ObjectId id) {
+    read(i, box);
+    const Item<S> item{grown(box, id), objs[i], kNone, id};
+    if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded)
+      loose.push_back(item);
+    else
+      bounded.push_back(item);
+  });
+  if (added != 0) placeBatch(std::move(bounded), loose);
 }
 
 template <typename S>

@@ -39,12 +39,16 @@ class CubeTree {
                    group_.empty() ? nullptr : group_.data()};
   }
 
-  /// Builds the cubes from scratch over the live slots plus `extra` (items not yet in the tree,
-  /// whose ids have no slot yet). The same objects always give the same tree. With ids.group,
-  /// a cube holding several filter groups splits between groups first (at the boundary nearest
-  /// its median), and each cube records the group of its objects (View::groups), which the
-  /// walks use to drop pairs of cubes that cannot pair; without, no cube records one.
-  void rebuild(IdArrays ids, const std::vector<Item<S>>& extra = {});
+  /// Builds the cubes from scratch over the live slots. The same objects always give the same
+  /// tree. With ids.group, a cube holding several filter groups splits between groups first (at
+  /// the boundary nearest its median), and each cube records the group of its objects
+  /// (View::groups), which the walks use to drop pairs of cubes that cannot pair; without, no
+  /// cube records one. Its peak: the slots and 64 bytes an object of build records.
+  void rebuild(IdArrays ids);
+  /// The same over the live slots plus `extra` (items not yet in the tree, whose ids have no slot
+  /// yet), taken: an empty tree keeps `extra`'s array as its slots, so that the objects are
+  /// not held twice during a first build.
+  void rebuild(IdArrays ids, ItemArray<S>&& extra);
   /// Puts one item (finite box, id without a slot) into the leaf it enlarges least (with groups:
   /// a cube of its own group first), splitting the leaf if it overflows. The cubes' groups stay
   /// true: those that gain another group become mixed. Without ids.group they are forgotten.

@@ -43,15 +43,33 @@ std::uint32_t CubeTree<S>::addChildren(std::uint32_t cube, std::uint32_t begin,
 // Build
 
 template <typename S>
-void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
-  // The records point at the live items where they are (extra ones past the end); the items are
-  // laid out in leaf order once at the end.
+void CubeTree<S>::rebuild(IdArrays ids, ItemArray<S>&& extra) {
+  // The live items and `extra` in one array, in that order, without dead slots: a first build
+  // takes `extra`'s array as its own, so that the objects are held once.
+  if (live_ == 0) {
+    items_.swap(extra);
+  } else {
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < items_.size(); ++p)
+      if (items_[p].obj != nullptr) items_[n++] = items_[p];
+    items_.resize(n);
+    items_.reserve(n + extra.size());
+    items_.insert(items_.end(), extra.begin(), extra.end());
+  }
+  extra = {};
+  live_ = items_.size();  // before the build, as after it: no dead slots
+  dead_items_ = 0;
+  rebuild(ids);
+}
+
+template <typename S>
+void CubeTree<S>::rebuild(IdArrays ids) {
+  // The records point at the live items where they are; the items are laid out in leaf order
+  // once at the end.
   const std::uint32_t old_slots = static_cast<std::uint32_t>(items_.size());
-  std::uint32_t n = static_cast<std::uint32_t>(extra.size());
+  std::uint32_t n = 0;
   for (const Item<S>& it : items_) n += it.obj != nullptr;
-  const auto itemAt = [&](std::uint32_t i) -> const Item<S>& {
-    return i < old_slots ? items_[i] : extra[i - old_slots];
-  };
+  const auto itemAt = [&](std::uint32_t i) -> const Item<S>& { return items_[i]; };
   nodes_.clear();
   parent_.clear();
   group_.clear();
@@ -64,7 +82,7 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
     BuildRecord* rec = records.data();
     BuildRecord* scratch = rec + n;
     std::uint32_t r = 0;
-    for (std::uint32_t p = 0; p < old_slots + extra.size(); ++p) {
+    for (std::uint32_t p = 0; p < old_slots; ++p) {
       const Item<S>& it = itemAt(p);
       if (it.obj == nullptr) continue;
       roundOut(it.box, rec[r].lo, rec[r].hi);
@@ -129,15 +147,22 @@ void CubeTree<S>::rebuild(IdArrays ids, const std::vector<Item<S>>& extra) {
           return Step::open;
         },
         [](int, std::uint32_t depth) { return depth + 1; });
+    // The records go before the items are laid out: the build's peak is the items and the
+    // records, or the items twice and the order.
+    std::vector<std::uint32_t> order(n);
+    for (std::uint32_t p = 0; p < n; ++p) order[p] = rec[p].item;
+    std::vector<BuildRecord>().swap(records);
+    std::vector<Group>().swap(rg);
     ItemArray<S> sorted(n);
-    // A gather from all over the old array: fetch a few records ahead.
+    // A gather from all over the old array: fetch a few items ahead.
     constexpr std::uint32_t kAhead = 8;
     for (std::uint32_t p = 0; p < n; ++p) {
-      if (p + kAhead < n && rec[p + kAhead].item < old_slots)
-        __builtin_prefetch(&items_[rec[p + kAhead].item]);
-      sorted[p] = itemAt(rec[p].item);
+      if (p + kAhead < n) __builtin_prefetch(&items_[order[p + kAhead]]);
+      sorted[p] = itemAt(order[p]);
     }
     items_.swap(sorted);
+    sorted = {};
+    order = {};
     for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
       const Node& node = nodes_[i];
       if (node.isLeaf())

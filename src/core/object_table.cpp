@@ -15,8 +15,7 @@ namespace detail {
 template <typename S>
 ObjectId ObjectTable<S>::find(const Object* obj) const {
   if (index_.empty()) return kNone;
-  const std::size_t mask = index_.size() - 1;
-  for (std::size_t i = hashPointer(obj) & mask;; i = (i + 1) & mask) {
+  for (std::size_t i = homeOf(obj);; i = nextOf(i)) {
     const std::uint32_t e = index_[i];
     if (e == 0) return kNone;
     if (obj_[e - 1] == obj) return e - 1;
@@ -25,17 +24,15 @@ ObjectId ObjectTable<S>::find(const Object* obj) const {
 
 template <typename S>
 void ObjectTable<S>::put(ObjectId id) {
-  const std::size_t mask = index_.size() - 1;
-  std::size_t i = hashPointer(obj_[id]) & mask;
-  while (index_[i] != 0) i = (i + 1) & mask;
+  std::size_t i = homeOf(obj_[id]);
+  while (index_[i] != 0) i = nextOf(i);
   index_[i] = id + 1;
 }
 
 template <typename S>
 void ObjectTable<S>::grow(std::size_t objects) {
-  // Load factor up to 3/4: linear probing stays short, about 6 bytes per object.
-  std::size_t cap = 16;
-  while (cap * 3 < 4 * (objects + 1)) cap *= 2;
+  // Load factor up to 3/4: linear probing stays short, 5.3 bytes per object.
+  const std::size_t cap = std::max<std::size_t>(16, (4 * (objects + 1) + 2) / 3);
   if (cap <= index_.size()) return;
   index_.assign(cap, 0);
   for (ObjectId id = 0; id < obj_.size(); ++id)
@@ -93,7 +90,8 @@ ObjectId ObjectTable<S>::add(Object* obj) {
   assert(obj != nullptr && find(obj) == kNone);
   const ObjectId id = take(obj);
   if (live_ * 4 > index_.size() * 3)
-    grow(live_);  // puts every live id, this one included
+    grow(2 * live_);  // puts every live id, this one included; doubles, as one at a time
+                      // comes the next
   else
     put(id);
   return id;
@@ -122,11 +120,10 @@ template <typename S>
 void ObjectTable<S>::remove(ObjectId id) {
   assert(id < obj_.size() && obj_[id] != nullptr);
   // Backward-shift deletion keeps probe chains unbroken without tombstones.
-  const std::size_t mask = index_.size() - 1;
-  std::size_t hole = hashPointer(obj_[id]) & mask;
-  while (index_[hole] != id + 1) hole = (hole + 1) & mask;
-  for (std::size_t j = (hole + 1) & mask; index_[j] != 0; j = (j + 1) & mask) {
-    const std::size_t home = hashPointer(obj_[index_[j] - 1]) & mask;
+  std::size_t hole = homeOf(obj_[id]);
+  while (index_[hole] != id + 1) hole = nextOf(hole);
+  for (std::size_t j = nextOf(hole); index_[j] != 0; j = nextOf(j)) {
+    const std::size_t home = homeOf(obj_[index_[j] - 1]);
     // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
     const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
     if (!stays) {
@@ -464,6 +461,10 @@ bool ObjectTable<S>::validate(std::string* why) const {
   std::size_t entries = 0;
   for (std::uint32_t e : index_) entries += e != 0;
   if (entries != live_) return msg << "object table: map holds " << entries << " entries", fail();
+  if (!index_.empty() && (index_.size() < 16 || live_ * 4 > index_.size() * 3))
+    return msg << "object table: map of " << index_.size() << " places holds " << live_
+               << " ids, over its load limit",
+           fail();
   return validateExcluded(why);
 }
 
