@@ -525,9 +525,9 @@ def trimesh_text(path):
             continue
         if not runs:
             continue
-        m = re.match(r"^load average at start: (\S+)", line)
-        if m:
-            runs[-1]["load"] = m.group(1)
+        m = re.match(r"^load average at start: (\S+) \S+ \S+, (\d+) threads runnable", line)
+        if m:  # the 1-minute average, and the other threads runnable (the reader excluded)
+            runs[-1]["load"] = f"{m.group(1)} ({int(m.group(2)) - 1} other threads runnable)"
             continue
         m = re.match(r"^(\S[^:]*): (\d+) objects", line)
         if m:
