@@ -11,6 +11,10 @@
 # CUBE_COMPARE_CONFIRM=C (default: as many as CUBE_COMPARE_ROUNDS) gives every case that reads
 # more than 5% slower after the rounds (by the ratio of medians or the median paired ratio) C
 # more rounds, and judges it on all of them: see "Why a confirmation".
+# CUBE_COMPARE_OUT=FILE also writes the report (the table and the counts) to FILE, headed by the
+# two revisions, the settings, the date and the load average at the start and the end; keep it
+# as benchmarks/results/compare-NAME.md, named by what it compares. CUBE_COMPARE_TITLE sets its
+# title.
 #
 # Why pairs: this machine shares its cores, and the load from elsewhere drifts over seconds to
 # minutes. Running all of one binary and then all of the other puts a minute between the two
@@ -23,16 +27,15 @@
 #
 # Why layouts: where a hot loop falls against 16-, 32- and 64-byte boundaries changes how the
 # front end and the branch predictor see it, and any edit anywhere in the binary moves it. Such a
-# shift can cost a case more than 5% with not one instruction changed: 47bc500's own binary,
-# relinked with 16 or 48 bytes ahead of its code, self-collides 10,000 thin boxes in 1.20x the
-# time of its default link (medians of 7 interleaved rounds). One link per side then times its
-# layout's luck as much as its code. With K layouts, each side's sample holds rounds x K times,
+# shift can cost a case more than 5% with not one instruction changed (one binary relinked with a
+# few bytes ahead of its code). One link per side then times its layout's luck as much as its
+# code. With K layouts, each side's sample holds rounds x K times,
 # each round runs layout l of both sides back to back, and a paired ratio compares equal
 # paddings; the table adds each side's spread (slowest over fastest layout median).
 #
 # Why a confirmation: on this shared machine a case's two sides can drift apart for minutes, and
-# among 110 cases a few read more than 5% slower by chance in any run (a run of 47bc500 against
-# 47bc500 called one slower). A case that is really slower stays slower with more rounds; one
+# among a hundred cases a few read more than 5% slower by chance in any run (benchmarks/README.md
+# summarises runs of one binary against itself). A case that is really slower stays slower with more rounds; one
 # that read slow by chance moves back towards 1. The confirmation rounds run after the main
 # rounds, both sides still back to back, on the flagged cases only; the table marks them with
 # the number of rounds they got. Cases not flagged keep the main rounds' figures.
@@ -98,10 +101,24 @@ echo "layouts: $layouts"
 
 echo "confirmation rounds: $confirm"
 
-python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" "$layouts" "$confirm" <<'EOF'
-import json, re, statistics, subprocess, sys
-before, after, pattern, rounds, min_time, work, layouts, confirm = sys.argv[1:]
+python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" "$layouts" "$confirm" \
+  "${CUBE_COMPARE_OUT:-}" "${CUBE_COMPARE_TITLE:-compare.sh ${base} against ${head:-the work tree}}" \
+  "$base" "${head:-the work tree}" "${CUBE_COMPARE_REUSE:-0}" <<'EOF'
+import datetime, json, re, statistics, subprocess, sys
+(before, after, pattern, rounds, min_time, work, layouts, confirm, out_path, title, base_rev,
+ head_rev, reuse) = sys.argv[1:]
 rounds, layouts, confirm = int(rounds), int(layouts), int(confirm)
+
+def loadavg():
+    with open("/proc/loadavg") as f:
+        return " ".join(f.read().split()[:3])
+
+started, load_start = datetime.datetime.now(datetime.timezone.utc), loadavg()
+report = []  # the lines of the table and the counts, for CUBE_COMPARE_OUT
+
+def say(line=""):
+    print(line)
+    report.append(line)
 # bins[side][l]: the binary of layout l (0: CMake's own link).
 bins = {side: [path] + [f"{path}.L{l}" for l in range(1, layouts)]
         for side, path in (("before", before), ("after", after))}
@@ -165,9 +182,10 @@ def spread(per_layout):
 
 samples = rounds * layouts
 extra = " | spread before / after" if layouts > 1 else ""
-print(f"\n| case | before (us): median / min of {samples} (more where marked) | after: median / min "
-      f"| after / before: medians | paired (median) | minimums{extra} |")
-print("|---|---|---|---|---|---|" + ("---|" if layouts > 1 else ""))
+say()
+say(f"| case | before (us): median / min of {samples} (more where marked) | after: median / min "
+    f"| after / before: medians | paired (median) | minimums{extra} |")
+say("|---|---|---|---|---|---|" + ("---|" if layouts > 1 else ""))
 slower = {"median": 0, "paired": 0, "min": 0, "verdict": 0}
 worst = 0.0
 for n in names:
@@ -182,14 +200,28 @@ for n in names:
     more = (f" | {spread(times['before'][n]):.3f} / {spread(times['after'][n]):.3f}"
             if layouts > 1 else "")
     mark = f" ({len(b) // layouts} rounds)" if n in flagged else ""
-    print(f"| {n.replace('/manual_time', '')}{mark} | {statistics.median(b):.2f} / {min(b):.2f} | "
-          f"{statistics.median(a):.2f} / {min(a):.2f} | {med:.3f}{flag} | {paired:.3f} | "
-          f"{low:.3f}{more} |")
-print(f"\n{len(names)} cases; more than 5% slower by the ratio of medians: {slower['median']}, "
-      f"by the median paired ratio: {slower['paired']}, by the minimums: {slower['min']}; "
-      f"by the first two (the verdict): {slower['verdict']}")
-print(f"cases given confirmation rounds: {len(flagged)} (marked with their rounds in the table)")
-print(f"slowest case (the smaller of the ratio of medians and the median paired ratio): {worst:.3f}")
+    say(f"| {n.replace('/manual_time', '')}{mark} | {statistics.median(b):.2f} / {min(b):.2f} | "
+        f"{statistics.median(a):.2f} / {min(a):.2f} | {med:.3f}{flag} | {paired:.3f} | "
+        f"{low:.3f}{more} |")
+say()
+say(f"{len(names)} cases; more than 5% slower by the ratio of medians: {slower['median']}, "
+    f"by the median paired ratio: {slower['paired']}, by the minimums: {slower['min']}; "
+    f"by the first two (the verdict): {slower['verdict']}")
+say(f"cases given confirmation rounds: {len(flagged)} (marked with their rounds in the table)")
+say(f"slowest case (the smaller of the ratio of medians and the median paired ratio): {worst:.3f}")
 if missing:
-    print("cases in one binary only:", ", ".join(missing))
+    say("cases in one binary only: " + ", ".join(missing))
+if out_path:
+    settings = " ".join(f"CUBE_COMPARE_{k}={v}" for k, v in (
+        ("ROUNDS", rounds), ("MIN_TIME", min_time), ("LAYOUTS", layouts), ("CONFIRM", confirm),
+        ("REUSE", reuse), ("FILTER", "'" + pattern + "'")))
+    head = [f"# {title}", "",
+            f"- before: {base_rev}; after: {head_rev}",
+            "- timing: paired" + (f", {layouts} layouts" if layouts > 1 else ""),
+            f"- settings: {settings}",
+            f"- date: {started.isoformat(timespec='seconds')}; load average at start "
+            f"{load_start}, at end {loadavg()}", ""]
+    with open(out_path, "w") as f:
+        f.write("\n".join(head + report[1:]) + "\n")
+    print(f"report written to {out_path}")
 EOF

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Same-run comparison for issue #39: trimesh's collision calls on three managers.
+"""Same-run comparison: trimesh's collision calls on three managers.
 
   cube        cube_collision.CollisionManager() (the cube hierarchy and its narrow-phase pipeline)
   fcl         CollisionManager(backend="fcl"): FCL's DynamicAABBTreeCollisionManager as the
@@ -70,6 +70,17 @@ def start_load(processes, seconds):
             p.wait()
     atexit.register(stop)
     return stop
+
+
+def load_average():
+    """/proc/loadavg's 1-, 5- and 15-minute averages and its count of runnable threads (this
+    process included), before any busy process of --load starts."""
+    try:
+        with open("/proc/loadavg") as f:
+            fields = f.read().split()
+        return f"{fields[0]} {fields[1]} {fields[2]}, {fields[3].split('/')[0]} threads runnable"
+    except OSError:
+        return "unknown"
 
 
 def timed_pair(fa, fb, repeat):
@@ -171,10 +182,12 @@ def main(argv=None):
     ap.add_argument("--load", type=int, default=0, help="spinning processes beside the run")
     ap.add_argument("--load-seconds", type=float, default=1800)
     args = ap.parse_args(argv)
+    start = load_average()
     stop = start_load(args.load, args.load_seconds) if args.load > 0 else None
     out = [f"cube_collision {cc.__version__}, threads={args.threads} "
            f"(0: the hardware's, {os.cpu_count()} here), medians of {args.repeat}, "
-           f"{args.load} busy processes beside"]
+           f"{args.load} busy processes beside",
+           f"load average at start: {start}"]
     t0 = time.perf_counter()
     prim = run_scene("primitives+convex", scenes.primitives_and_convex(args.primitives),
                      args.repeat, args.threads, out)
@@ -187,6 +200,7 @@ def main(argv=None):
                    f"trimesh's way (target >= {need}x), {t_fcl / t_cube:.2f}x vs fcl in C++ "
                    f"(target >= 2x); min_distance_internal {t_dp / t_dc:.2f}x / "
                    f"{t_df / t_dc:.2f}x")
+    out.append(f"load average at end: {load_average()}")
     out.append(f"total {time.perf_counter() - t0:.1f} s")
     if stop is not None:
         stop()
