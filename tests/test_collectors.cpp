@@ -320,8 +320,8 @@ TEST(Collectors, AnyHitIsAnyOfAndFirstInOrderIsTheLeastHit) {
   EXPECT_TRUE(cube::detail::FirstInOrder<int>::kOrdered);
 }
 
-// WithinMargin gives the pairs added, in candidate order, whichever threads added them and in
-// whatever order.
+// WithinMargin gives the pairs added (or filled in place and kept), in candidate order, whichever
+// threads added them and in whatever order.
 TEST(Collectors, WithinMarginKeepsCandidateOrderFromAnyThread) {
   const std::size_t n = 5000;
   std::mt19937 rng(23);
@@ -332,7 +332,10 @@ TEST(Collectors, WithinMarginKeepsCandidateOrderFromAnyThread) {
   for (std::size_t t = 0; t < 4; ++t)
     threads.emplace_back([&, t] {
       for (std::size_t i = n - 1 - t; i < n; i -= 4)  // backwards, interleaved
-        if (near[i]) kept.add(i, i * 7);
+        if (near[i] && i % 2 == 0)
+          kept.add(i, i * 7);
+        else if (near[i])
+          kept.at(i) = i * 7, kept.keep(i);  // filled in place
     });
   for (std::thread& t : threads) t.join();
   std::vector<std::size_t> want;

@@ -57,9 +57,15 @@ class AllContacts {
  public:
   AllContacts(const fcl::CollisionRequest<S>& request, fcl::CollisionResult<S>& result,
               std::vector<ObjectPair<S>>* colliding = nullptr)
-      : request_(&request), result_(&result), colliding_(colliding) {
+      : request_(&request),
+        result_(&result),
+        colliding_(colliding),
+        max_(request.num_max_contacts),
+        // full() at this many contacts: at least one, never with costs.
+        full_at_(request.enable_cost ? std::numeric_limits<std::size_t>::max()
+                                     : std::max<std::size_t>(max_, 1)),
+        full_(size() >= full_at_) {
     if (colliding_ != nullptr) colliding_->clear();
-    update();
   }
 
   /// True once the result holds the budget's contacts, for a request without costs (with costs
@@ -68,10 +74,7 @@ class AllContacts {
   /// The contacts held.
   std::size_t size() const { return result_->numContacts(); }
   /// The contacts the budget has room for.
-  std::size_t room() const {
-    const std::size_t max = request_->num_max_contacts;
-    return max - std::min(max, size());
-  }
+  std::size_t room() const { return max_ - std::min(max_, size()); }
   /// The pair that gave the first contact (nullptrs while none).
   const ObjectPair<S>& firstHit() const { return first_hit_; }
 
@@ -85,7 +88,7 @@ class AllContacts {
   /// (provedContact), if the result has room.
   void addProved(const ObjectPair<S>& pair) {
     const std::size_t before = size();
-    if (before < request_->num_max_contacts) result_->addContact(provedContact(pair));
+    if (before < max_) result_->addContact(provedContact(pair));
     grew(pair, before);
   }
   /// A pair's contacts answered apart from the result (a fresh result of the pair's, a cached
@@ -106,23 +109,22 @@ class AllContacts {
   }
 
  private:
-  void update() {
-    full_ = !request_->enable_cost && result_->isCollision() &&
-            result_->numContacts() >= request_->num_max_contacts;
-  }
   void grew(const ObjectPair<S>& pair, std::size_t before) {
-    if (size() > before) {
+    const std::size_t after = size();
+    if (after > before) {
       if (before == 0) first_hit_ = pair;
       if (colliding_ != nullptr) colliding_->push_back(pair);
     }
-    update();
+    full_ = after >= full_at_;
   }
 
   const fcl::CollisionRequest<S>* request_;
   fcl::CollisionResult<S>* result_;
   std::vector<ObjectPair<S>>* colliding_;
+  std::size_t max_;      // request.num_max_contacts
+  std::size_t full_at_;  // the contacts that make it full
+  bool full_;
   ObjectPair<S> first_hit_{nullptr, nullptr};
-  bool full_ = false;
 };
 
 /// Each pair's own contacts, in the order the pairs were answered, in one list: a pair's are
@@ -269,12 +271,16 @@ class Closest {
 template <class Contact>
 class WithinMargin {
  public:
-  /// Room for n candidate pairs (indices 0..n-1).
+  /// Room for n candidate pairs (indices 0..n-1), each a default Contact.
   explicit WithinMargin(std::size_t n) : found_(n), near_(n, 0) {}
-  /// Candidate i is within its margins, as c says. Any thread; each i at most once.
+  /// Candidate i's place, to fill in place by the one thread that answers it.
+  Contact& at(std::size_t i) { return found_[i]; }
+  /// Candidate i is within its margins, as its place says. Any thread; each i at most once.
+  void keep(std::size_t i) { near_[i] = 1; }
+  /// at(i) = c, then keep(i).
   void add(std::size_t i, const Contact& c) {
     found_[i] = c;
-    near_[i] = 1;
+    keep(i);
   }
   /// The pairs within their margins, in candidate order.
   std::vector<Contact> take() const {

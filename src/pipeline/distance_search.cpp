@@ -62,8 +62,8 @@ bool DistanceSearch<S>::offer(fcl::CollisionObject<S>* a, const Records* ra,
     else
       ++stats_.culled;
   }
-  dist = closest_.bound();
-  return closest_.done();
+  dist = closest_.bound();  // read once: dist may alias it
+  return dist <= 0;
 }
 
 template <typename S>

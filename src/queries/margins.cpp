@@ -32,7 +32,7 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
           culled.fetch_add(1, std::memory_order_relaxed);
           return;
         }
-        MarginContact<S> c;
+        MarginContact<S>& c = near.at(i);
         c.a = a;
         c.b = b;
         fcl::CollisionRequest<S> creq;
@@ -41,7 +41,7 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
         calls.fetch_add(1, std::memory_order_relaxed);
         if (detail::fclCollide(a, b, creq, cres) > 0) {
           c.colliding = true;
-          near.add(i, c);
+          near.keep(i);
           return;
         }
         fcl::DistanceResult<S> dres;
@@ -49,7 +49,7 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
         c.distance = detail::fclDistance(a, b, request, dres);
         c.nearest_points[0] = dres.nearest_points[0];
         c.nearest_points[1] = dres.nearest_points[1];
-        if (c.distance <= within) near.add(i, c);
+        if (c.distance <= within) near.keep(i);
       },
       threads);
   std::vector<MarginContact<S>> out = near.take();
