@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pipeline/collectors.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
 #include "pipeline/plane_geometry.h"
@@ -20,6 +21,9 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
                               void* data) {
   auto& d = *static_cast<CollisionData<S>*>(data);
   if (d.done) return true;
+  // The caller's result, kept as FCL's calls in turn keep it (AllContacts: full at the budget,
+  // never with costs).
+  detail::AllContacts<S> all(d.request, d.result);
   // A pair proved apart adds nothing to the result, so the narrow phase is skipped. Not with
   // costs: an octree's cost sources come from cells its box does not bound. A pair proved
   // touching, for a request without contact geometry, gets the one contact FCL would add.
@@ -29,19 +33,14 @@ bool defaultCollisionCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<
     case detail::Answer::kApart:
       return false;
     case detail::Answer::kProved:
-      if (d.result.numContacts() < d.request.num_max_contacts)
-        d.result.addContact(detail::provedContact(ObjectPair<S>(o1, o2)));
-      if (d.result.numContacts() >= d.request.num_max_contacts) d.done = true;
-      return d.done;
+      all.addProved(ObjectPair<S>(o1, o2));
+      break;
     default:
+      ++d.narrow_calls;
+      all.collide(ObjectPair<S>(o1, o2));
       break;
   }
-  ++d.narrow_calls;
-  detail::fclCollide(o1, o2, d.request, d.result);
-  // With costs requested every pair matters, so only a contact budget without costs stops.
-  if (!d.request.enable_cost && d.result.isCollision() &&
-      d.result.numContacts() >= d.request.num_max_contacts)
-    d.done = true;
+  d.done = all.full();
   return d.done;
 }
 
@@ -49,15 +48,16 @@ template <typename S>
 bool defaultDistanceCallback(fcl::CollisionObject<S>* o1, fcl::CollisionObject<S>* o2, void* data,
                              S& dist) {
   auto& d = *static_cast<DistanceData<S>*>(data);
+  detail::Closest<S> closest(d.result);
   if (!d.done) {
     // A pair that cannot beat the best distance so far would leave the result as it is.
-    if (detail::PairJudge<S>(d.request).mayBeat(*o1, *o2, d.result.min_distance)) {
+    if (detail::PairJudge<S>(d.request).mayBeat(*o1, *o2, closest.bound())) {
       ++d.narrow_calls;
-      detail::fclDistance(o1, o2, d.request, d.result);
+      closest.collide(o1, o2, d.request);
     }
   }
-  dist = d.result.min_distance;
-  return d.done || dist <= 0;
+  dist = closest.bound();
+  return d.done || closest.done();
 }
 
 namespace detail {

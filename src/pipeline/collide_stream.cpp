@@ -60,17 +60,16 @@ CollideStream<S>::CollideStream(const fcl::CollisionRequest<S>& request,
                                 const NarrowPhaseOptions<S>& options)
     : request_(request),
       stats_out_(options.stats),
-      colliding_(options.colliding),
       cache_(options.cache != nullptr && plainRequest(request) ? &options.cache->impl() : nullptr),
       threads_(resolveThreads(options.threads)),
       chunk_work_(kFirstChunkWork),
       scratch_(cache_ != nullptr ? std::make_unique<Slot>() : nullptr),
+      all_(request, result_, options.colliding),
       judge_(request) {
   if (cache_ != nullptr) {
     ++cache_->stamp;
     cache_->collide.begin(*cache_, request);
   }
-  if (colliding_ != nullptr) colliding_->clear();
 }
 
 template <typename S>
@@ -84,7 +83,7 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>*
 template <typename S>
 bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
                             ObjectId ib) {
-  if (done_) return true;
+  if (all_.full()) return true;
   if (!judge_.culls()) return pushJudged(a, b, nullptr, nullptr, false);
   Volumes va, vb;
   if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape))
@@ -97,7 +96,7 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
 template <typename S>
 bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
                                   const Volumes* va, const Volumes* vb, bool kept) {
-  if (done_) return true;
+  if (all_.full()) return true;
   ++stats_.candidate_pairs;
   // With volumes the judge runs here, before the cache (its cheaper part costs less than a
   // lookup). With a cache: the cheaper part, the lookup, and the rest only for a pair the cache
@@ -120,12 +119,12 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
       s.va = *va;
       s.vb = *vb;
       if (++serial_n_ == kBlock) answerSerialBlock();
-      return done_;
+      return all_.full();
     }
     // What waits in the block goes first.
     if (serial_n_ != 0) {
       answerSerialBlock();
-      if (done_) {
+      if (all_.full()) {
         --stats_.candidate_pairs;
         return true;
       }
@@ -171,7 +170,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
     // A request that may stop at its first contact stays on this thread: a chunk would call FCL
     // for pairs after the stop. Others go to the threads once the query proves large.
     if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork) leaveSerial();
-    return done_;
+    return all_.full();
   }
   // In chunks: the cache is looked up here (and the cull on volumes runs here: a pair it proves
   // apart takes no place in the chunk), the rest of the cull and FCL run in the chunk, on the
@@ -190,7 +189,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   // Proved apart by the volumes: nothing to merge, nothing more to store, so no place in a chunk.
   if (judged == Answer::kApart) {
     count(stats_, judged);
-    return done_;
+    return all_.full();
   }
   const std::size_t i = chunk_.size();
   chunk_.emplace_back(a, b);
@@ -213,7 +212,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   // A cached answer is merged at once while nothing waits before it, so that a full result
   // stops the walk where it would on one thread.
   if (pending_.empty() || pending_work_ >= chunk_work_) flush();
-  return done_;
+  return all_.full();
 }
 
 // The pairs with records pushed on the calling thread without a cache, answered kBlock at a time
@@ -229,7 +228,7 @@ void CollideStream<S>::answerSerialBlock() {
   TaskScratch& b = *serial_block_;
   cullBlock(kInPlace.data(), n, b.block.data(), b.slots.data());
   for (std::size_t k = 0; k < n; ++k) {
-    if (done_) {
+    if (all_.full()) {
       stats_.candidate_pairs -= n - k;  // the walk would have stopped before these
       return;
     }
@@ -257,14 +256,14 @@ ObjectPair<S> CollideStream<S>::lastHit(NarrowPhaseCache<S>& cache) {
 
 template <typename S>
 bool CollideStream<S>::pushAlone(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b) {
-  if (done_) return true;
+  if (all_.full()) return true;
   const bool was_serial = serial_;
   answerSerialBlock();
   flush();
   serial_ = true;
   push(a, b);
   serial_ = was_serial;
-  return done_;
+  return all_.full();
 }
 
 template <typename S>
@@ -284,20 +283,11 @@ void CollideStream<S>::answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObjec
                                  Answer kind) {
   count(stats_, kind);
   if (kind == Answer::kApart) return;
-  if (kind == Answer::kProved) {
-    // What FCL's shape collision adds: one contact if the result has room.
-    if (result_.numContacts() < request_.num_max_contacts) {
-      result_.addContact(provedContact(ObjectPair<S>(a, b)));
-      if (colliding_ != nullptr) colliding_->emplace_back(a, b);
-    }
-    markDone();
-    return;
-  }
   // FCL's own way, one accumulating result: FCL decides which contacts fit.
-  const std::size_t before = result_.numContacts();
-  fclCollide(a, b, request_, result_);
-  noteColliding(ObjectPair<S>(a, b), before);
-  markDone();
+  if (kind == Answer::kProved)
+    all_.addProved(ObjectPair<S>(a, b));
+  else
+    all_.collide(ObjectPair<S>(a, b));
 }
 
 template <typename S>
@@ -327,42 +317,19 @@ void CollideStream<S>::answerNow(const ObjectPair<S>& pair, Slot& s) {
 
 template <typename S>
 void CollideStream<S>::merge(const ObjectPair<S>& pair, const Slot& s) {
-  if (s.kind == Answer::kCached)
-    mergeContacts(pair, ContactRun<S>{&s.cached->answer, nullptr, 0, s.cached->answer.size()});
-  else
-    mergeContacts(pair, ContactRun<S>{nullptr, &s.fresh, 0, s.fresh.numContacts()});
-}
-
-template <typename S>
-template <class C>
-void CollideStream<S>::mergeContacts(const ObjectPair<S>& pair, const C& contacts) {
-  if (done_ || contacts.size() == 0) return;
-  const std::size_t max_contacts = request_.num_max_contacts;
-  const std::size_t room = max_contacts - std::min(max_contacts, result_.numContacts());
-  if (cache_ != nullptr && result_.numContacts() == 0) cache_->last_hit = pair;
-  const std::size_t before = result_.numContacts();
-  if (contacts.size() > room) {
-    // The budget runs out inside this pair. FCL's shape pairs then keep their deepest contacts,
-    // not their first: its own call on the accumulating result decides, as on one thread.
-    ++stats_.narrow_calls;
-    fclCollide(pair.first, pair.second, request_, result_);
-  } else {
-    for (std::size_t k = 0; k < contacts.size(); ++k) result_.addContact(contacts[k]);
-  }
-  noteColliding(pair, before);
-  markDone();
-}
-
-template <typename S>
-void CollideStream<S>::markDone() {
-  if (result_.isCollision() && result_.numContacts() >= request_.num_max_contacts) done_ = true;
+  // Where the budget runs out inside the pair, the collector calls FCL on the merged result.
+  const bool called =
+      s.kind == Answer::kCached
+          ? all_.add(pair, ContactRun<S>{&s.cached->answer, nullptr, 0, s.cached->answer.size()})
+          : all_.add(pair, ContactRun<S>{nullptr, &s.fresh, 0, s.fresh.numContacts()});
+  if (called) ++stats_.narrow_calls;
 }
 
 template <typename S>
 void CollideStream<S>::flush() {
   const std::size_t n = chunk_.size();
   if (n == 0) return;
-  if (!done_) {
+  if (!all_.full()) {
     // Threads only for work that pays for waking them (thread_policy.h).
     const int threads = pending_work_ >= kParallelMinWork ? threads_ : 1;
     // Blocks of pending pairs, whose memory is fetched together (cullBlock), but at least 8
@@ -405,7 +372,10 @@ template <typename S>
 fcl::CollisionResult<S> CollideStream<S>::finish() {
   answerSerialBlock();
   flush();
-  if (cache_ != nullptr) cache_->collide.end(*cache_);
+  if (cache_ != nullptr) {
+    cache_->collide.end(*cache_);
+    if (all_.firstHit().first != nullptr) cache_->last_hit = all_.firstHit();
+  }
   addStats(stats_out_, stats_);
   return std::move(result_);
 }

@@ -18,6 +18,7 @@
 #include "core/task_sink.h"
 #include "cube_collision/narrow_phase.h"
 #include "pipeline/answers.h"
+#include "pipeline/collectors.h"
 #include "pipeline/pair_judge.h"
 #include "pipeline/pair_volumes.h"
 
@@ -25,7 +26,8 @@ namespace cube {
 namespace detail {
 
 /// Accumulates fcl::collide answers exactly as one result passed to fcl::collide for each pair
-/// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial).
+/// in turn would (not for requests with costs or a cached GJK guess: callers keep those serial),
+/// in its collector (AllContacts, collectors.h).
 /// Pairs are answered at once on the calling thread at first (and always for a request of one
 /// contact, and on one thread); once the query proves large, they are gathered into chunks (the
 /// cache looked up on the calling thread) whose cull and FCL calls run on the threads when there
@@ -94,23 +96,15 @@ class CollideStream final : public TaskSink<S> {
   void leaveSerial();
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
+  // A slot's contacts (its fresh result or its cached answer) to the collector.
   void merge(const ObjectPair<S>& pair, const Slot& slot);
-  template <class Contacts>
-  void mergeContacts(const ObjectPair<S>& pair, const Contacts& contacts);
-  void markDone();
   void flush();
-  // options.colliding: the pair if the result grew past `before` contacts.
-  void noteColliding(const ObjectPair<S>& pair, std::size_t before) {
-    if (colliding_ != nullptr && result_.numContacts() > before) colliding_->push_back(pair);
-  }
 
   const fcl::CollisionRequest<S>& request_;
   NarrowPhaseStats stats_;
   NarrowPhaseStats* stats_out_;
-  std::vector<ObjectPair<S>>* colliding_;  // NarrowPhaseOptions::colliding
   typename NarrowPhaseCache<S>::Impl* cache_;
   int threads_;
-  bool done_ = false;
   bool serial_ = true;           // answer each pair as it comes
   std::size_t serial_work_ = 0;  // work answered at once (collide_stream.cpp, kSerialWork)
   std::size_t chunk_work_ = 0;   // flush once the pending work reaches this
@@ -125,12 +119,14 @@ class CollideStream final : public TaskSink<S> {
   std::vector<TaskAnswers> tasks_;    // a split walk's tasks, each answered on its thread
   std::vector<TaskScratch> workers_;  // per worker of the walk: a block's pairs and slots
   // Per task, its contacts once it has run (kRunning before), and their sum over the tasks run:
-  // what take() reads to skip a task the result is full before.
+  // what take() reads to skip a task the collector is full before.
   std::unique_ptr<std::atomic<std::size_t>[]> task_contacts_;
   std::atomic<std::size_t> task_found_{0};
-  std::size_t task_budget_ = 0;  // the contacts the result has room for as the walk begins
+  std::size_t task_budget_ = 0;  // the contacts the collector has room for as the walk begins
   fcl::CollisionResult<S> empty_;
+  // The answer, kept by its collector (every pair's contacts in walk order, up to the budget).
   fcl::CollisionResult<S> result_;
+  AllContacts<S> all_;
   // The records: the tables, the memo of objects without an id; the judge of the request.
   PairVolumes<S> volumes_;
   PairJudge<S> judge_;

@@ -1,8 +1,7 @@
 #pragma once
 
 // What the collide stream's two files (collide_stream.cpp: pairs pushed; collide_stream_tasks.cpp:
-// blocks and a split walk's tasks) share: the blocks' size, a pair's run of contacts, and the
-// stream's slots and scratch.
+// blocks and a split walk's tasks) share: the blocks' size, and the stream's slots and scratch.
 
 #include <fcl/narrowphase/collision_result.h>
 
@@ -23,20 +22,6 @@ inline constexpr std::size_t kBlock = 16;
 inline constexpr std::size_t kObjectLines = 3;
 inline constexpr std::size_t kGeometryLines = 3;
 
-// A pair's contacts: the run [first, first + n) of a cached answer's list or of a result (a
-// pair's own, or a task's for all its pairs; FCL gives no const view of a result's list).
-template <typename S>
-struct ContactRun {
-  const std::vector<fcl::Contact<S>>* list;
-  const fcl::CollisionResult<S>* result;
-  std::size_t first, n;
-
-  std::size_t size() const { return n; }
-  const fcl::Contact<S>& operator[](std::size_t k) const {
-    return list ? (*list)[first + k] : result->getContact(first + k);
-  }
-};
-
 // 0, 1, ..., kBlock - 1: the index of a block answered in place.
 inline constexpr std::array<std::size_t, kBlock> kInPlace = [] {
   std::array<std::size_t, kBlock> a{};
@@ -44,17 +29,13 @@ inline constexpr std::array<std::size_t, kBlock> kInPlace = [] {
   return a;
 }();
 
-// A split walk's task, answered on its thread: its counts, and the pairs that gave contacts with
-// their contacts, in walk order, all in one result (FCL writes each pair's into it directly).
+// A split walk's task, answered on its thread: its counts, and each pair's contacts in walk
+// order (PairContacts: FCL writes each pair's into one list directly), for the stream's
+// collector.
 template <typename S>
 struct CollideStream<S>::TaskAnswers {
-  struct Hit {
-    ObjectPair<S> pair;
-    std::size_t first, count;  // in result
-  };
   NarrowPhaseStats stats;
-  std::vector<Hit> hits;
-  fcl::CollisionResult<S> result;
+  PairContacts<S> contacts;
 };
 
 template <typename S>

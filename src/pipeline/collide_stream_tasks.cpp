@@ -75,8 +75,7 @@ void CollideStream<S>::begin(std::size_t tasks, int workers) {
   task_contacts_ = std::make_unique<std::atomic<std::size_t>[]>(tasks);
   for (std::size_t i = 0; i < tasks; ++i) task_contacts_[i].store(kRunning);
   task_found_.store(0);
-  const std::size_t max_contacts = request_.num_max_contacts;
-  task_budget_ = max_contacts - std::min(max_contacts, result_.numContacts());
+  task_budget_ = all_.room();
 }
 
 template <typename S>
@@ -95,9 +94,9 @@ void CollideStream<S>::take(int worker, std::size_t task, const typename TaskSin
   }
   TaskAnswers& out = tasks_[task];
   out.stats.candidate_pairs += n;
+  out.contacts.begin(request_);
   std::array<ObjectPair<S>, kBlock>& block = workers_[std::size_t(worker)].block;
   std::array<Slot, kBlock>& slots = workers_[std::size_t(worker)].slots;
-  fcl::CollisionRequest<S> request = request_;
   for (std::size_t first = 0; first < n; first += kBlock) {
     const std::size_t m = std::min(kBlock, n - first);
     for (std::size_t k = 0; k < m; ++k) {
@@ -114,33 +113,25 @@ void CollideStream<S>::take(int worker, std::size_t task, const typename TaskSin
       const Slot& s = slots[k];
       const ObjectPair<S>& pair = block[k];
       count(out.stats, s.kind);
-      if (s.kind == Answer::kApart) continue;
-      // Into the task's result, with room for the pair's whole budget after what it holds, as
-      // a fresh result of its own would have: the same contacts, copied once less.
-      const std::size_t before = out.result.numContacts();
-      if (s.kind == Answer::kProved) {
-        out.result.addContact(provedContact(pair));
-      } else {
-        request.num_max_contacts =
-            before + std::min(request_.num_max_contacts, kRunning - 1 - before);
-        fclCollide(pair.first, pair.second, request, out.result);
-      }
-      const std::size_t added = out.result.numContacts() - before;
-      if (added > 0) out.hits.push_back({pair, before, added});
+      // Into the task's list, each pair with its whole budget, as a fresh result of its own
+      // would have: the same contacts, copied once less.
+      if (s.kind == Answer::kProved)
+        out.contacts.addProved(pair);
+      else if (s.kind == Answer::kComputed)
+        out.contacts.collide(pair);
     }
   }
-  task_contacts_[task].store(out.result.numContacts(), std::memory_order_release);
-  task_found_.fetch_add(out.result.numContacts(), std::memory_order_relaxed);
+  task_contacts_[task].store(out.contacts.size(), std::memory_order_release);
+  task_found_.fetch_add(out.contacts.size(), std::memory_order_relaxed);
 }
 
 template <typename S>
 bool CollideStream<S>::drain(std::size_t task) {
   TaskAnswers& t = tasks_[task];
   addStats(&stats_, t.stats);
-  for (const typename TaskAnswers::Hit& h : t.hits)
-    mergeContacts(h.pair, ContactRun<S>{nullptr, &t.result, h.first, h.count});
+  stats_.narrow_calls += t.contacts.drainInto(all_);
   t = TaskAnswers{};
-  return done_;
+  return all_.full();
 }
 
 #define CUBE_COLLIDE_STREAM_TASKS(S)                                                               \

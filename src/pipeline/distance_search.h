@@ -11,21 +11,22 @@
 
 #include "core/geometry.h"
 #include "cube_collision/narrow_phase.h"
+#include "pipeline/collectors.h"
 #include "pipeline/pair_judge.h"
 #include "pipeline/pair_volumes.h"
 
 namespace cube {
 namespace detail {
 
-/// The smallest fcl::distance over the pairs pushed, those that cannot beat the best so far left
-/// out by the pair judge. Without a
-/// cache, FCL's own way on the calling thread: one accumulating result, whatever the thread
-/// count (a branch and bound is sequential: batches gave the walk weaker bounds and cost more
-/// than they saved). With a cache, each pair not in it gets a fresh result, `threads` pairs at a
-/// time (a pair is held back until a batch of that many is complete, or finish(); the bound
-/// returned to the walk is the one before the batch), on the threads only when the batch holds
-/// meshes or octrees enough to pay for a parallel region. The minimum is the same for every
-/// thread count; its nearest points are those of the first pair, in walk order, that reached it.
+/// The smallest fcl::distance over the pairs pushed, those that cannot beat the best so far
+/// (its collector's bound, Closest in collectors.h) left out by the pair judge. Without a cache,
+/// FCL's own way on the calling thread: one accumulating result, whatever the thread count (a
+/// branch and bound is sequential: batches gave the walk weaker bounds and cost more than they
+/// saved). With a cache, each pair not in it gets a fresh result, `threads` pairs at a time (a pair
+/// is held back until a batch of that many is complete, or finish(); the bound returned to the walk
+/// is the one before the batch), on the threads only when the batch holds meshes or octrees enough
+/// to pay for a parallel region. The minimum is the same for every thread count; its nearest points
+/// are those of the first pair, in walk order, that reached it.
 template <typename S>
 class DistanceSearch {
  public:
@@ -70,6 +71,7 @@ class DistanceSearch {
   std::vector<ObjectPair<S>> batch_;
   std::vector<Slot> slots_;
   fcl::DistanceResult<S> result_;
+  Closest<S> closest_;  // keeps result_
   PairVolumes<S> volumes_;
   PairJudge<S> judge_;
 };

@@ -15,6 +15,7 @@
 #include "core/parallel_for.h"
 #include "pipeline/answers.h"
 #include "pipeline/cache.h"
+#include "pipeline/collectors.h"
 #include "pipeline/collide_stream.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
@@ -103,18 +104,13 @@ fcl::CollisionResult<S> collideMerged(const std::vector<ObjectPair<S>>& pairs,
   if (!plainRequest(request)) {
     // Costs and the GJK guess travel from pair to pair through the one result: in turn.
     fcl::CollisionResult<S> result;
+    detail::AllContacts<S> all(request, result, options.colliding);
     NarrowPhaseStats stats;
     stats.candidate_pairs = pairs.size();
-    if (options.colliding != nullptr) options.colliding->clear();
-    for (const auto& [a, b] : pairs) {
+    for (const ObjectPair<S>& pair : pairs) {
       ++stats.narrow_calls;
-      const std::size_t before = result.numContacts();
-      detail::fclCollide(a, b, request, result);
-      if (options.colliding != nullptr && result.numContacts() > before)
-        options.colliding->emplace_back(a, b);
-      if (!request.enable_cost && result.isCollision() &&
-          result.numContacts() >= request.num_max_contacts)
-        break;
+      all.collide(pair);
+      if (all.full()) break;
     }
     addStats(options.stats, stats);
     return result;

@@ -5,10 +5,10 @@
 #include "cube_collision/margins.h"
 
 #include <atomic>
-#include <cstdint>
 #include <functional>
 
 #include "cube_collision/queries.h"
+#include "pipeline/collectors.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
 
@@ -21,9 +21,7 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
                                             const std::vector<ObjectPair<S>>& pairs,
                                             const fcl::DistanceRequest<S>& request, int threads,
                                             NarrowPhaseStats* stats) {
-  enum : std::uint8_t { kFar, kNear };
-  std::vector<MarginContact<S>> found(pairs.size());
-  std::vector<std::uint8_t> verdict(pairs.size(), kFar);
+  detail::WithinMargin<MarginContact<S>> near(pairs.size());
   std::atomic<std::size_t> culled{0}, calls{0};
   const detail::PairJudge<S> judge(request);
   forEachPair<S>(
@@ -34,7 +32,7 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
           culled.fetch_add(1, std::memory_order_relaxed);
           return;
         }
-        MarginContact<S>& c = found[i];
+        MarginContact<S>& c = near.at(i);
         c.a = a;
         c.b = b;
         fcl::CollisionRequest<S> creq;
@@ -43,7 +41,7 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
         calls.fetch_add(1, std::memory_order_relaxed);
         if (detail::fclCollide(a, b, creq, cres) > 0) {
           c.colliding = true;
-          verdict[i] = kNear;
+          near.keep(i);
           return;
         }
         fcl::DistanceResult<S> dres;
@@ -51,12 +49,10 @@ std::vector<MarginContact<S>> withinMargins(const CubeCollisionManager<S>& manag
         c.distance = detail::fclDistance(a, b, request, dres);
         c.nearest_points[0] = dres.nearest_points[0];
         c.nearest_points[1] = dres.nearest_points[1];
-        if (c.distance <= within) verdict[i] = kNear;
+        if (c.distance <= within) near.keep(i);
       },
       threads);
-  std::vector<MarginContact<S>> out;
-  for (std::size_t i = 0; i < pairs.size(); ++i)
-    if (verdict[i] == kNear) out.push_back(found[i]);
+  std::vector<MarginContact<S>> out = near.take();
   if (stats != nullptr) {
     stats->candidate_pairs += pairs.size();
     stats->culled += culled.load();

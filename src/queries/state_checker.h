@@ -22,6 +22,7 @@
 #include "core/body_view.h"
 #include "core/broadphase.h"
 #include "core/kernels/pose_boxes.h"
+#include "pipeline/collectors.h"
 #include "pipeline/cull.h"
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
@@ -97,32 +98,15 @@ class StateChecker {
   int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
             StateResult<S>* out) {
     if (!place(poses)) return kBadPose;
-    first_pair_ = first_pair;
-    best_ = Candidate{kNone, kNone, kNone, false};
-    // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
-    // the first group of links that touches (as a link-by-link check does), and a free one
-    // walks little more than the whole tree at once would.
-    for (std::size_t k = 0; k < body_.leafCount() && world_.size() != 0 && !found(); ++k) {
-      pending_.clear();
-      world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
-                     CollideFn<S>(&StateChecker::onWorld), nullptr);
-      if (found() && !first_pair) return true;
-      if (decidePending()) return true;
-    }
-    if (self) {
-      pending_.clear();
-      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks), this, true, 0,
-                   nullptr, &self_gate_);
-      if (found() && !first_pair) return true;
-      decidePending();
-    }
-    if (found()) {
+    // What the check keeps: the first pair in Candidate's order, or any pair.
+    if (first_pair ? search<FirstInOrder<Candidate>>(self) : search<AnyHit<Candidate>>(self)) {
       if (out != nullptr && first_pair) {
-        out->link = best_.link;
-        if (best_.is_link)
-          out->other_link = best_.other;
+        const Candidate& best = first_.hit();
+        out->link = best.link;
+        if (best.is_link)
+          out->other_link = best.other;
         else
-          out->object = world_.table().object(best_.other);
+          out->object = world_.table().object(best.other);
       }
       return true;
     }
@@ -154,11 +138,44 @@ class StateChecker {
       return key < c.key;
     }
   };
-  bool found() const { return best_.link != kNone; }
   struct WorldNear {
     StateChecker* checker;
     std::uint32_t link;
+    Closest<S>* closest;
   };
+
+  // The collector of a search: C names it by type, so the walks' callbacks find it statically.
+  template <class C>
+  C& hits() {
+    if constexpr (C::kOrdered)
+      return first_;
+    else
+      return any_;
+  }
+
+  // The walks of the placed state into collector C; whether it holds a hit.
+  template <class C>
+  bool search(bool self) {
+    C& hits = this->hits<C>();
+    hits.reset();
+    // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
+    // the first group of links that touches (as a link-by-link check does), and a free one
+    // walks little more than the whole tree at once would.
+    for (std::size_t k = 0; k < body_.leafCount() && world_.size() != 0 && !hits.found(); ++k) {
+      pending_.clear();
+      world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
+                     CollideFn<S>(&StateChecker::onWorld<C>), nullptr);
+      if (hits.complete() || decidePending(hits)) return true;
+    }
+    if (self) {
+      pending_.clear();
+      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this, true,
+                   0, nullptr, &self_gate_);
+      if (hits.complete()) return true;
+      decidePending(hits);
+    }
+    return hits.found();
+  }
 
   typename Broadphase<S>::Probe probe(std::size_t l) {
     return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), links_.margin[l],
@@ -255,17 +272,17 @@ class StateChecker {
     return *objectAt(l);
   }
 
-  // A pair offered by a walk: settled on the records if they can (a contact recorded, true to
-  // stop the walk when any contact will do), else kept for FCL.
-  bool offer(const Candidate& c, const VolumeSphere& sa, const VolumeShape& ha,
+  // A pair offered by a walk: settled on the records if they can (a hit handed to the
+  // collector, which says whether the walk may stop), else kept for FCL.
+  template <class C>
+  bool offer(C& hits, const Candidate& c, const VolumeSphere& sa, const VolumeShape& ha,
              const VolumeSphere& sb, const VolumeShape& hb, S m) {
-    if (first_pair_ && found() && !(c < best_)) return false;  // cannot come first
+    if (!hits.mayBeat(c)) return hits.complete();
     switch (judge_.withinMargin(Records{&sa, &ha}, Records{&sb, &hb}, m)) {
       case Verdict::kApart:
         return false;
       case Verdict::kTouching:
-        best_ = c;
-        return !first_pair_;
+        return hits.add(c);
       case Verdict::kUnknown:
         pending_.push_back(c);
         return false;
@@ -273,44 +290,48 @@ class StateChecker {
     return false;
   }
 
+  template <class C>
   static bool onWorld(Object* w, ObjectId iw, Object*, ObjectId link, void* data) {
     StateChecker& c = *static_cast<StateChecker*>(data);
+    C& hits = c.hits<C>();
     const Candidate cand{link, c.world_.table().seq(iw), iw, false};
-    if (c.first_pair_ && c.found() && !(cand < c.best_)) return false;  // cannot come first
+    if (!hits.mayBeat(cand)) return hits.complete();  // cannot change the answer
     const VolumeSphere* s;
     const VolumeShape* h;
     c.worldRecords(*w, iw, s, h);
     const Slot& slot = c.linkRecords(link);
-    return c.offer(cand, slot.sphere, slot.shape, *s, *h,
+    return c.offer(hits, cand, slot.sphere, slot.shape, *s, *h,
                    c.links_.margin[link] + c.world_.marginOf(iw));
   }
 
+  template <class C>
   static bool onLinks(Object*, ObjectId x, Object*, ObjectId y, void* data) {
     StateChecker& c = *static_cast<StateChecker*>(data);
     const std::uint32_t i = std::min(x, y), j = std::max(x, y);
     const Slot& a = c.linkRecords(i);
     const Slot& b = c.linkRecords(j);
-    return c.offer(Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
+    return c.offer(c.hits<C>(), Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
                    c.links_.margin[i] + c.links_.margin[j]);
   }
 
-  // FCL on the pairs kept, in walk order (the first pair: in the order of Candidate, up to the
-  // best proved on the records). True once a contact is known.
-  bool decidePending() {
-    if (first_pair_) std::sort(pending_.begin(), pending_.end());
+  // FCL on the pairs kept, in walk order (a collector that keeps the first in Candidate's
+  // order: in that order, up to the best proved on the records). True once the collector's
+  // answer is complete.
+  template <class C>
+  bool decidePending(C& hits) {
+    if (C::kOrdered) std::sort(pending_.begin(), pending_.end());
     for (const Candidate& c : pending_) {
-      if (found() && !(c < best_)) break;  // sorted (first pair), or found (any)
+      if (!hits.mayBeat(c)) break;  // sorted (first pair), or found (any)
       const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
                             : links_.margin[c.link] + world_.marginOf(c.other);
       const Object& b =
           c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
       if (narrow(object(c.link), b, m)) {
-        best_ = c;
-        if (!first_pair_) return true;
+        hits.add(c);
         break;
       }
     }
-    return found() && !first_pair_;
+    return hits.complete();
   }
 
   // The world object's records: the table's, or built here (a world that keeps none).
@@ -354,30 +375,37 @@ class StateChecker {
     const VolumeShape* h;
     c.worldRecords(*w, iw, s, h);
     const Slot& slot = c.linkRecords(near.link);
-    return c.lower(c.object(near.link), slot.sphere, slot.shape, *w, *s, *h, best);
+    const bool stop =
+        c.lower(*near.closest, c.object(near.link), slot.sphere, slot.shape, *w, *s, *h);
+    best = near.closest->bound();
+    return stop;
   }
 
-  // Lowers best to the distance of a and b unless their records prove it is not below best;
-  // true (stop) once best <= 0.
-  bool lower(const Object& a, const VolumeSphere& sa, const VolumeShape& ha, const Object& b,
-             const VolumeSphere& sb, const VolumeShape& hb, S& best) {
-    if (!distance_judge_.mayBeat(Records{&sa, &ha}, Records{&sb, &hb}, best)) return false;
-    best = std::min(best, pairDistance(a, b));
-    return best <= S(0);
+  // Hands the distance of a and b to `closest` unless their records prove it is not below its
+  // bound; true (stop) once the bound is 0 or less.
+  bool lower(Closest<S>& closest, const Object& a, const VolumeSphere& sa, const VolumeShape& ha,
+             const Object& b, const VolumeSphere& sb, const VolumeShape& hb) {
+    if (!distance_judge_.mayBeat(Records{&sa, &ha}, Records{&sb, &hb}, closest.bound()))
+      return false;
+    closest.add(pairDistance(a, b));
+    return closest.done();
   }
 
   S clearanceOf(bool self) {
-    S best = std::numeric_limits<S>::max();
+    fcl::DistanceResult<S> result;  // the distance alone: no nearest points are kept
+    Closest<S> closest(result);
     const std::size_t n = links_.size();
-    for (std::size_t l = 0; l < n && best > S(0); ++l) {
+    for (std::size_t l = 0; l < n && !closest.done(); ++l) {
       if (world_.size() == 0) break;
       typename Broadphase<S>::Probe p = probe(l);
       p.margin = S(0);
-      WorldNear near{this, std::uint32_t(l)};
-      world_.distance(p, &near, DistanceFn<S>(&StateChecker::onWorldNear), best, nullptr);
+      WorldNear near{this, std::uint32_t(l), &closest};
+      S bound = closest.bound();  // the walk's, lowered by onWorldNear
+      world_.distance(p, &near, DistanceFn<S>(&StateChecker::onWorldNear), bound, nullptr);
     }
-    for (std::size_t i = 0; self && i < n && best > S(0); ++i)
-      for (std::uint32_t k = links_.after_at[i]; k < links_.after_at[i + 1] && best > S(0); ++k) {
+    for (std::size_t i = 0; self && i < n && !closest.done(); ++i)
+      for (std::uint32_t k = links_.after_at[i]; k < links_.after_at[i + 1] && !closest.done();
+           ++k) {
         const std::uint32_t j = links_.after[k];
         const Box<S> bi = rateBox(i), bj = rateBox(j);
         S gap2 = 0;
@@ -385,12 +413,12 @@ class StateChecker {
           const S g = std::max({bi.lo[a] - bj.hi[a], bj.lo[a] - bi.hi[a], S(0)});
           gap2 += g * g;
         }
-        if (std::sqrt(gap2) >= best) continue;
+        if (std::sqrt(gap2) >= closest.bound()) continue;
         const Slot& x = linkRecords(std::uint32_t(i));
         const Slot& y = linkRecords(j);
-        lower(object(std::uint32_t(i)), x.sphere, x.shape, object(j), y.sphere, y.shape, best);
+        lower(closest, object(std::uint32_t(i)), x.sphere, x.shape, object(j), y.sphere, y.shape);
       }
-    return best;
+    return closest.bound();
   }
 
   const QueryScope scope_;  // a pair predicate that mutates the world is refused
@@ -414,11 +442,11 @@ class StateChecker {
   std::unique_ptr<ObjectStorage[]> objects_;  // LinkObjects, constructed on first use
   VolumeSphere built_sphere_{};
   VolumeShape built_shape_{};
-  bool first_pair_ = false;
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
   std::size_t bad_link_ = 0;
-  Candidate best_{kNone, kNone, kNone, false};  // the contact found (link kNone: none)
-  std::vector<Candidate> pending_;              // pairs for FCL; its room kept between states
+  AnyHit<Candidate> any_;           // a check for any contact
+  FirstInOrder<Candidate> first_;   // a check for the first pair in Candidate's order
+  std::vector<Candidate> pending_;  // pairs for FCL; its room kept between states
 };
 
 }  // namespace detail
