@@ -17,10 +17,9 @@
 namespace cube {
 namespace detail {
 
-/// Objects per leaf of a body's tree. A 30-link robot (instructions per state, callgrind,
-/// uniform / clustered 10,000, free / colliding states, one walk per leaf): 8 a leaf 19.1k / 9.2k
-/// free, 22.7k / 33.7k colliding (a leaf of 8 links spans a long box that meets many of the
-/// world's leaves); 4 a leaf 17.7k / 9.8k, 16.8k / 21.5k; 2 and 1 cost free states up to 2x.
+/// Objects per leaf of a body's tree, chosen by instruction counts of a 30-link robot's states:
+/// larger leaves span long boxes that meet many of the world's leaves (colliding states cost
+/// more), smaller ones make free states walk more.
 inline constexpr std::uint32_t kBodyLeaf = 4;
 
 template <typename S>

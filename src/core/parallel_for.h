@@ -73,9 +73,8 @@ void parallelForWith(std::size_t n, int threads, std::size_t grain_max, const Ma
     if (e) std::rethrow_exception(e);
 }
 
-/// parallelForWith without scratch: body(i). Chunks of at most 32 items: a chunk of 2 cost about
-/// as much to hand out as culling its pairs (clustered 10,000-object self-collide: 1.17x on two
-/// threads).
+/// parallelForWith without scratch: body(i). Chunks of at most 32 items: smaller chunks cost
+/// about as much to hand out as the work they hold.
 template <class Body>
 void parallelFor(std::size_t n, int threads, const Body& body) {
   struct None {};

@@ -23,11 +23,11 @@ namespace detail {
 enum class Answer : std::uint8_t { kApart, kProved, kCached, kComputed };
 
 // Work, the unit of thread_policy.h's thresholds, is counted in candidate pairs of shapes: the
-// cull (about 0.1 us) and, for one pair in three or so, FCL's call (0.2-2 us): 0.25-0.5 us a pair
-// here. A pair with a mesh or an octree counts kHeavyPairWork (its FCL call takes 10-100 us).
+// cull and, for some of them, FCL's call. A pair with a mesh or an octree counts kHeavyPairWork
+// (its FCL call walks two hierarchies: orders of magnitude dearer than a shape pair's).
 constexpr std::size_t kHeavyPairWork = 64;
 // A pair of shapes that FCL 0.7 answers with libccd's GJK rather than in closed form (see
-// workOf): 1-3 us a call, against 0.1-0.3 for a closed form.
+// workOf): several times a closed form's call.
 constexpr std::size_t kGjkPairWork = 6;
 
 inline void addStats(NarrowPhaseStats* out, const NarrowPhaseStats& s) {
