@@ -127,8 +127,9 @@ class CollisionManager:
                             return_data: bool = False, max_contacts: int = 100000, *,
                             mesh: Optional[GeometryLike] = None) -> Union[
                                 bool, Tuple[bool, Set[str]], Tuple[bool, Contacts],
-                                Tuple[bool, Set[str], Contacts]]:
-        """is_collision[, set of names][, contacts]."""
+                                Tuple[bool, Set[str], Contacts], npt.NDArray[np.bool_]]:
+        """is_collision[, set of names][, contacts]; with an (n, 4, 4) transform, a numpy bool
+        array of n (one answer per pose)."""
     def in_collision_other(self, other_manager: "CollisionManager", return_names: bool = False,
                            return_data: bool = False, max_contacts: int = 100000) -> Union[
                                bool, Tuple[bool, Set[Tuple[str, str]]], Tuple[bool, Contacts],

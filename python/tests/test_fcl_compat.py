@@ -12,6 +12,7 @@ import cube_collision as cc
 import cube_collision.fcl as fcl
 from conftest import mixed_scene
 import scenes
+from trimesh_collision import CollisionManager, Mesh
 
 
 # ---------------------------------------------------------------------------------------------
@@ -473,145 +474,7 @@ def test_user_callback_may_stop_the_walk(scene40):
 
 
 # ---------------------------------------------------------------------------------------------
-# trimesh's CollisionManager, re-created call for call over the module
-
-
-class Mesh:
-    """The parts of a trimesh.Trimesh that trimesh's collision module reads."""
-
-    def __init__(self, vertices, faces, is_convex):
-        self.vertices = np.asarray(vertices, dtype=np.float64)
-        self.faces = np.asarray(faces, dtype=np.int64)
-        self.is_convex = is_convex
-
-
-def mesh_to_BVH(mesh):
-    bvh = fcl.BVHModel()
-    bvh.beginModel(num_tris_=len(mesh.faces), num_vertices_=len(mesh.vertices))
-    bvh.addSubModel(verts=mesh.vertices, triangles=mesh.faces)
-    bvh.endModel()
-    return bvh
-
-
-def mesh_to_convex(mesh):
-    fs = np.concatenate((3 * np.ones((len(mesh.faces), 1), dtype=np.int64), mesh.faces), axis=1)
-    return fcl.Convex(mesh.vertices, len(fs), fs.flatten())
-
-
-class TrimeshStyleManager:
-    """trimesh.collision.CollisionManager's calls to python-fcl (names and data included)."""
-
-    def __init__(self):
-        self._objs = {}
-        self._names = collections.defaultdict(lambda: None)
-        self._manager = fcl.DynamicAABBTreeCollisionManager()
-        self._manager.setup()
-
-    def add_object(self, name, mesh, transform=None):
-        if transform is None:
-            transform = np.eye(4)
-        transform = np.asanyarray(transform, dtype=np.float32)
-        geom = mesh_to_convex(mesh) if mesh.is_convex else mesh_to_BVH(mesh)
-        t = fcl.Transform(transform[:3, :3], transform[:3, 3])
-        o = fcl.CollisionObject(geom, t)
-        if name in self._objs:
-            self._manager.unregisterObject(self._objs[name])
-        self._objs[name] = {"obj": o, "geom": geom}
-        self._names[id(geom)] = name
-        self._manager.registerObject(o)
-        self._manager.update()
-        return o
-
-    def remove_object(self, name):
-        self._manager.unregisterObject(self._objs[name]["obj"])
-        self._manager.update(self._objs[name]["obj"])
-        self._names.pop(id(self._objs.pop(name)["geom"]))
-
-    def set_transform(self, name, transform):
-        o = self._objs[name]["obj"]
-        o.setRotation(transform[:3, :3])
-        o.setTranslation(transform[:3, 3])
-        self._manager.update(o)
-
-    def _request(self, return_names, return_data):
-        if return_names or return_data:
-            return fcl.CollisionData(request=fcl.CollisionRequest(num_max_contacts=100000,
-                                                                  enable_contact=True))
-        return fcl.CollisionData()
-
-    def _extract_name(self, geom):
-        return self._names[id(geom)]
-
-    def in_collision_single(self, mesh, transform=None, return_names=False, return_data=False):
-        if transform is None:
-            transform = np.eye(4)
-        geom = mesh_to_convex(mesh) if mesh.is_convex else mesh_to_BVH(mesh)
-        o = fcl.CollisionObject(geom, fcl.Transform(transform[:3, :3], transform[:3, 3]))
-        cdata = self._request(return_names, return_data)
-        self._manager.collide(o, cdata, fcl.defaultCollisionCallback)
-        names, data = set(), []
-        for contact in cdata.result.contacts:
-            cg = contact.o1
-            if cg == geom:
-                cg = contact.o2
-            name = self._extract_name(cg)
-            names.add(name)
-            data.append((name, contact.pos, contact.normal, contact.penetration_depth))
-        return cdata.result.is_collision, names, data
-
-    def in_collision_internal(self, return_names=False, return_data=False):
-        cdata = self._request(return_names, return_data)
-        self._manager.collide(cdata, fcl.defaultCollisionCallback)
-        names, data = set(), []
-        for contact in cdata.result.contacts:
-            pair = (self._extract_name(contact.o1), self._extract_name(contact.o2))
-            names.add(tuple(sorted(pair)))
-            data.append((pair, contact.b1, contact.b2, contact.penetration_depth))
-        return cdata.result.is_collision, names, data
-
-    def in_collision_other(self, other_manager, return_names=False, return_data=False):
-        cdata = self._request(return_names, return_data)
-        self._manager.collide(other_manager._manager, cdata, fcl.defaultCollisionCallback)
-        names = set()
-        for contact in cdata.result.contacts:
-            pair = (self._extract_name(contact.o1), other_manager._extract_name(contact.o2))
-            if pair[0] is None:
-                pair = (self._extract_name(contact.o2), other_manager._extract_name(contact.o1))
-            names.add(pair)
-        return cdata.result.is_collision, names
-
-    def _distance_result(self, ddata, geom=None):
-        r = ddata.result
-        if geom is None:
-            return r.min_distance, (self._extract_name(r.o1), self._extract_name(r.o2)), r
-        cg = r.o1 if r.o1 != geom else r.o2
-        return r.min_distance, self._extract_name(cg), r
-
-    def min_distance_single(self, mesh, transform=None):
-        if transform is None:
-            transform = np.eye(4)
-        geom = mesh_to_convex(mesh) if mesh.is_convex else mesh_to_BVH(mesh)
-        o = fcl.CollisionObject(geom, fcl.Transform(transform[:3, :3], transform[:3, 3]))
-        ddata = fcl.DistanceData(fcl.DistanceRequest(enable_nearest_points=True,
-                                                     enable_signed_distance=True))
-        self._manager.distance(o, ddata, fcl.defaultDistanceCallback)
-        return self._distance_result(ddata, geom)
-
-    def min_distance_internal(self):
-        ddata = fcl.DistanceData(fcl.DistanceRequest(enable_nearest_points=True),
-                                 fcl.DistanceResult())
-        self._manager.distance(ddata, fcl.defaultDistanceCallback)
-        return self._distance_result(ddata)
-
-    def min_distance_other(self, other_manager):
-        ddata = fcl.DistanceData(fcl.DistanceRequest(enable_nearest_points=True),
-                                 fcl.DistanceResult())
-        self._manager.distance(other_manager._manager, ddata, fcl.defaultDistanceCallback)
-        r = ddata.result
-        pair = (self._extract_name(r.o1), other_manager._extract_name(r.o2))
-        if pair[0] is None:
-            pair = (self._extract_name(r.o2), other_manager._extract_name(r.o1))
-        return r.min_distance, pair, r
+# trimesh's CollisionManager, re-created call for call over the module (trimesh_collision.py)
 
 
 def mesh_scene(n, seed, side):
@@ -636,7 +499,7 @@ def mesh_scene(n, seed, side):
 def both_managers(scene):
     """The trimesh-style manager over the module, and the package's own manager (the oracle:
     same meshes, as trimesh makes them, with cube_collision's trimesh calls)."""
-    mine, ref = TrimeshStyleManager(), cc.CollisionManager()
+    mine, ref = CollisionManager(fcl), cc.CollisionManager()
     for name, mesh, tf in scene:
         mine.add_object(name, mesh, tf)
         ref.add_object(name, mesh, tf)

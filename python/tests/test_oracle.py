@@ -7,7 +7,8 @@ import pytest
 
 import cube_collision as cc
 import scenes
-from conftest import brute_colliding, brute_min_distance, build, mixed_scene, same_distance
+from conftest import (BOX_VERTICES, BOX_FACES, TrimeshLike, brute_colliding, brute_min_distance,
+                      build, mixed_scene, same_distance)
 
 SEEDS = [1, 2, 3]
 
@@ -89,6 +90,55 @@ def test_single_queries_equal_brute_force(seed, backend):
             assert same_distance(d, best)
             if best > 0:
                 assert dists[name] == pytest.approx(best, rel=1e-6, abs=1e-9)
+
+
+@pytest.mark.parametrize("probe", ["box", "mesh", "convex trimesh"])
+def test_single_query_at_many_poses_equals_each_pose_and_brute_force(backend, probe):
+    """in_collision_single with an (n, 4, 4) array: one answer per pose, each the single-pose
+    call's, under the same filter bits and margins."""
+    scene = mixed_scene(60, 41)
+    m = build(scene, backend)
+    rng = np.random.default_rng(42)
+    masks = {}
+    for name, _, _ in scene[::3]:  # category 2; half of them refuse the query's category 1
+        masks[name] = int(rng.integers(2, 4))
+        m.set_filter(name, 2, masks[name])
+    if probe == "box":
+        geometry, kw = cc.box(0.9, 0.5, 0.4), {}
+    elif probe == "mesh":
+        geometry, kw = cc.mesh(*scenes.uv_sphere(5, 0.5)), {}
+    else:  # trimesh's keyword and a convex trimesh, taken as a solid as for one pose
+        geometry, kw = None, {"mesh": TrimeshLike(BOX_VERTICES * 0.4, BOX_FACES, True)}
+    solid = geometry if geometry is not None else cc.convex(BOX_VERTICES * 0.4, BOX_FACES)
+    side = (4.0 * len(scene)) ** (1 / 3)
+    poses = np.array([scenes.pose(scenes.random_rotation(rng), rng.uniform(0, side, 3))
+                      for _ in range(120)])
+    hits = m.in_collision_single(geometry, poses, **kw)
+    assert isinstance(hits, np.ndarray) and hits.dtype == bool and hits.shape == (len(poses),)
+    assert hits.tolist() == [m.in_collision_single(geometry, p, **kw) for p in poses]
+    expected = [any(masks.get(n, 1) & 1 and cc.pair_in_collision(g, tf, solid, p)
+                    for n, g, tf in scene) for p in poses]
+    assert hits.tolist() == expected
+    assert 0 < sum(expected) < len(expected)
+    # margins: the poses within the margin of an allowed object hit too, as for one pose
+    m.set_margin(0.3)
+    wide = m.in_collision_single(geometry, poses, **kw)
+    assert wide.tolist() == [m.in_collision_single(geometry, p, **kw) for p in poses]
+    assert np.all(wide >= hits) and wide.sum() > hits.sum()
+    assert m.in_collision_single(geometry, poses[:0], **kw).shape == (0,)
+
+
+def test_single_query_at_many_poses_refuses_names_and_bad_poses(backend):
+    m = build(mixed_scene(20, 43), backend)
+    poses = np.array([np.eye(4)] * 3)
+    with pytest.raises(ValueError, match="one pose"):
+        m.in_collision_single(cc.sphere(0.5), poses, return_names=True)
+    bad = poses.copy()
+    bad[2, 0, 0] = 2.0  # a scale
+    with pytest.raises(ValueError, match=r"transforms\[2\]"):
+        m.in_collision_single(cc.sphere(0.5), bad)
+    with pytest.raises(ValueError, match="shape"):
+        m.in_collision_single(cc.sphere(0.5), np.zeros((3, 3, 4)))
 
 
 @pytest.mark.parametrize("other_backend", ["cube", "fcl"])
