@@ -31,6 +31,11 @@ _owners = {}
 _serial = itertools.count()
 
 
+def forget():
+    """Lets go of every geometry made so far (their managers no longer in use)."""
+    _owners.clear()
+
+
 class BVHModel:
     def __init__(self):
         self._g = None

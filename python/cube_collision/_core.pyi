@@ -21,7 +21,8 @@ class UnknownNameError(KeyError, ValueError):
     """No object has this name (a KeyError, and a ValueError as trimesh raises)."""
 
 class Geometry:
-    """A collision shape in its own frame (mesh, convex, box, sphere, cylinder, capsule, cone, plane)."""
+    """A collision shape in its own frame (mesh, convex, box, sphere, ellipsoid, cylinder, capsule,
+    cone, plane)."""
     @property
     def kind(self) -> str: ...
     @property
@@ -43,6 +44,8 @@ def box(x: float, y: float, z: float) -> Geometry:
     """A box of these full side lengths, centred on the origin."""
 def sphere(radius: float) -> Geometry:
     """A sphere centred on the origin."""
+def ellipsoid(a: float, b: float, c: float) -> Geometry:
+    """An ellipsoid of these radii along x, y and z, centred on the origin."""
 def cylinder(radius: float, height: float) -> Geometry:
     """A cylinder along z, centred on the origin."""
 def capsule(radius: float, height: float) -> Geometry:

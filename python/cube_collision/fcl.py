@@ -11,8 +11,8 @@ pair) and fills cdata.result as python-fcl's would: contacts whose o1 / o2 are t
 geometry objects. Any other callable is called per candidate pair, as python-fcl does, with the
 user's own CollisionObjects.
 
-Not available (NotImplementedError, see UNSUPPORTED): Ellipsoid, Halfspace, TriangleP, OcTree
-(the package cannot make these shapes) and continuousCollide with its request and result (the
+Not available (NotImplementedError, see UNSUPPORTED): Halfspace, TriangleP, OcTree (the package
+cannot make these shapes) and continuousCollide with its request and result (the
 package has no continuous collision of two objects). See docs/python.md.
 """
 
@@ -36,7 +36,6 @@ __all__ = [
 
 #: python-fcl names that exist here but raise NotImplementedError, and why.
 UNSUPPORTED = {
-    "Ellipsoid": "cube_collision cannot make ellipsoids",
     "Halfspace": "cube_collision cannot make halfspaces (Plane is supported)",
     "TriangleP": "cube_collision cannot make a single-triangle shape (use a BVHModel)",
     "OcTree": "cube_collision has no octrees (python-fcl's octomap build)",
@@ -309,8 +308,15 @@ class TriangleP(CollisionGeometry):
 
 
 class Ellipsoid(CollisionGeometry):
+    """The ellipsoid of radii a, b, c along x, y, z."""
+    _node_type = NODE_TYPE.GEOM_ELLIPSOID
+
     def __init__(self, a, b, c):
-        _unsupported("Ellipsoid")
+        self._g = _core.ellipsoid(float(a), float(b), float(c))
+
+    @property
+    def radii(self):
+        return np.array(self._g.params[:3])
 
 
 class Halfspace(CollisionGeometry):

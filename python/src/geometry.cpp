@@ -6,6 +6,7 @@
 #include <fcl/geometry/shape/cone.h>
 #include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
 #include <fcl/geometry/shape/plane.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
@@ -77,6 +78,8 @@ std::shared_ptr<fcl::CollisionGeometryd> buildFcl(const Geometry& g) {
     out = std::make_shared<fcl::Capsuled>(p[0], p[1]);
   } else if (g.kind == "cone") {
     out = std::make_shared<fcl::Coned>(p[0], p[1]);
+  } else if (g.kind == "ellipsoid") {
+    out = std::make_shared<fcl::Ellipsoidd>(p[0], p[1], p[2]);
   } else if (g.kind == "plane") {
     out = std::make_shared<fcl::Planed>(fcl::Vector3d(p[0], p[1], p[2]), p[3]);
   } else {
@@ -121,6 +124,9 @@ GeometryPtr makeGeometry(const std::string& kind, std::vector<double> params,
   } else if (kind == "box") {
     if (params.size() != 3) throw py::value_error("box: 3 extents expected");
     for (double e : params) positive(e, "box extents");
+  } else if (kind == "ellipsoid") {
+    if (params.size() != 3) throw py::value_error("ellipsoid: 3 radii expected");
+    for (double e : params) positive(e, "ellipsoid radii");
   } else if (kind == "sphere") {
     if (params.size() != 1) throw py::value_error("sphere: a radius expected");
     positive(params[0], "sphere radius");
@@ -250,6 +256,14 @@ then wrong). Same checks and errors as mesh().)doc");
   m.def(
       "sphere", [](double r) { return makeGeometry("sphere", {r}, {}, {}); }, py::arg("radius"),
       "A sphere centred on the origin. ValueError unless the radius is finite and > 0.");
+  m.def(
+      "ellipsoid",
+      [](double a, double b, double c) {
+        return makeGeometry("ellipsoid", {a, b, c}, {}, {});
+      },
+      py::arg("a"), py::arg("b"), py::arg("c"),
+      "An ellipsoid centred on the origin with these radii along x, y and z (FCL's Ellipsoid, a "
+      "solid). ValueError unless each is finite and > 0.");
   m.def(
       "cylinder",
       [](double r, double h) {

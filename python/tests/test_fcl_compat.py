@@ -26,6 +26,8 @@ def to_fcl(g):
         return fcl.Box(*p[:3])
     if g.kind == "sphere":
         return fcl.Sphere(p[0])
+    if g.kind == "ellipsoid":
+        return fcl.Ellipsoid(*p[:3])
     if g.kind == "cylinder":
         return fcl.Cylinder(p[0], p[1])
     if g.kind == "capsule":
@@ -196,7 +198,6 @@ def test_convex_takes_python_fcl_flattened_polygon_faces():
 
 
 @pytest.mark.parametrize("name, make", [
-    ("Ellipsoid", lambda: fcl.Ellipsoid(1, 2, 3)),
     ("Halfspace", lambda: fcl.Halfspace(np.array([0.0, 0, 1]), 0)),
     ("TriangleP", lambda: fcl.TriangleP(np.zeros(3), np.ones(3), np.array([1.0, 0, 0]))),
     ("OcTree", lambda: fcl.OcTree(0.1)),
@@ -231,7 +232,8 @@ def gap(r):
 
 
 def shape_zoo(rng):
-    return [cc.box(0.6, 0.9, 1.1), cc.sphere(0.5), cc.cylinder(0.4, 1.0), cc.capsule(0.3, 0.8),
+    return [cc.box(0.6, 0.9, 1.1), cc.sphere(0.5), cc.ellipsoid(0.3, 0.5, 0.7),
+            cc.cylinder(0.4, 1.0), cc.capsule(0.3, 0.8),
             cc.cone(0.5, 1.0), scenes.random_convex(rng, 1.0),
             cc.mesh(*scenes.uv_sphere(6, 0.5)), cc.plane([0.3, 0.2, 1.0], 0.1)]
 

@@ -1,6 +1,7 @@
 """Answers against brute force over every pair with FCL's narrow phase, on both backends."""
 
 import itertools
+import pickle
 
 import numpy as np
 import pytest
@@ -90,6 +91,35 @@ def test_single_queries_equal_brute_force(seed, backend):
             assert same_distance(d, best)
             if best > 0:
                 assert dists[name] == pytest.approx(best, rel=1e-6, abs=1e-9)
+
+
+def test_ellipsoids_equal_brute_force(backend):
+    rng = np.random.default_rng(44)
+    scene = [(f"e{i}", cc.ellipsoid(*rng.uniform(0.2, 0.8, 3)),
+              scenes.pose(scenes.random_rotation(rng), rng.uniform(0, 5, 3))) for i in range(30)]
+    scene += mixed_scene(30, 45, side=5.0)
+    m = build(scene, backend)
+    expected = brute_colliding(scene)
+    assert any(a.startswith("e") and b.startswith("e") for a, b in expected)
+    assert any(a.startswith("e") != b.startswith("e") for a, b in expected)
+    assert m.in_collision_internal(return_names=True) == (True, expected)
+    best, names = brute_min_distance(scene)
+    d, found = m.min_distance_internal(return_names=True)
+    assert same_distance(d, best)
+    probe = cc.ellipsoid(0.9, 0.4, 0.6)
+    for _ in range(5):
+        t = scenes.pose(scenes.random_rotation(rng), rng.uniform(0, 5, 3))
+        hits = {n for n, g, tf in scene if cc.pair_in_collision(g, tf, probe, t)}
+        assert m.in_collision_single(probe, t, return_names=True) == (bool(hits), hits)
+        assert same_distance(m.min_distance_single(probe, t),
+                             min(cc.pair_distance(g, tf, probe, t) for _, g, tf in scene))
+    again = pickle.loads(pickle.dumps(m))
+    assert again.in_collision_internal(return_names=True) == (True, expected)
+    assert again.get_geometry("e0").kind == "ellipsoid"
+    assert again.get_geometry("e0").params == scene[0][1].params
+    for bad in ((0, 1, 1), (1, -1, 1), (1, 1, float("nan"))):
+        with pytest.raises(ValueError, match="ellipsoid"):
+            cc.ellipsoid(*bad)
 
 
 @pytest.mark.parametrize("probe", ["box", "mesh", "convex trimesh"])
