@@ -201,10 +201,6 @@ def test_convex_takes_python_fcl_flattened_polygon_faces():
     ("Halfspace", lambda: fcl.Halfspace(np.array([0.0, 0, 1]), 0)),
     ("TriangleP", lambda: fcl.TriangleP(np.zeros(3), np.ones(3), np.array([1.0, 0, 0]))),
     ("OcTree", lambda: fcl.OcTree(0.1)),
-    ("ContinuousCollisionRequest", lambda: fcl.ContinuousCollisionRequest()),
-    ("ContinuousCollisionResult", lambda: fcl.ContinuousCollisionResult()),
-    ("continuousCollide", lambda: fcl.continuousCollide(None, fcl.Transform(), None,
-                                                        fcl.Transform())),
 ])
 def test_unsupported_names_raise_not_implemented_with_the_reason(name, make):
     assert name in fcl.UNSUPPORTED
@@ -281,6 +277,60 @@ def test_pair_collide_and_distance_agree_with_fcl_for_every_kind_pair():
                 p1, p2 = dres.nearest_points
                 assert np.linalg.norm(p1 - p2) == pytest.approx(d, rel=1e-3, abs=1e-4)
     assert hits[True] > 20 and hits[False] > 20
+
+
+def lerp_pose(R, t0, t1, s):
+    """FCL's CCDM_TRANS motion at time s: the start rotation, the translation interpolated."""
+    return scenes.pose(R, t0 + (t1 - t0) * s)
+
+
+def test_continuous_collide_is_fcls_naive_sampling_of_the_translation():
+    # FCL's default request: CCDM_TRANS, the naive solver, 10 iterations: fcl::collide at
+    # t = i / 9, the first colliding t the time of contact. The oracle samples the same poses
+    # with FCL's own pair_in_collision.
+    rng = np.random.default_rng(21)
+    zoo = [g for g in shape_zoo(rng) if g.kind != "plane"]
+    geoms = [to_fcl(g) for g in zoo]
+    seen = collections.Counter()
+    for _ in range(60):
+        i, j = rng.integers(len(zoo), size=2)
+        Ra, Rb = scenes.random_rotation(rng), scenes.random_rotation(rng)
+        a0, a1, b0, b1 = (rng.uniform(-2, 2, 3) for _ in range(4))
+        oa = fcl.CollisionObject(geoms[i], fcl.Transform(Ra, a0))
+        ob = fcl.CollisionObject(geoms[j], fcl.Transform(Rb, b0))
+        result = fcl.ContinuousCollisionResult()
+        toc = fcl.continuousCollide(oa, fcl.Transform(scenes.random_rotation(rng), a1), ob,
+                                    fcl.Transform(Rb, b1), fcl.ContinuousCollisionRequest(),
+                                    result)
+        expect = next((k / 9 for k in range(10)
+                       if cc.pair_in_collision(zoo[i], lerp_pose(Ra, a0, a1, k / 9),
+                                               zoo[j], lerp_pose(Rb, b0, b1, k / 9))), None)
+        assert result.is_collide == (expect is not None)
+        assert toc == result.time_of_contact == (1.0 if expect is None else expect)
+        if expect is not None:
+            assert np.allclose(result.contact_tf1.getTranslation(), a0 + (a1 - a0) * expect)
+            assert np.allclose(result.contact_tf2.getRotation(), Rb)
+        seen[expect is None, expect == 0] += 1
+    assert seen[False, False] >= 5 and seen[True, False] >= 5 and seen[False, True] >= 2
+
+
+def test_continuous_collide_accumulates_and_refuses_motions_it_cannot_bound():
+    a = fcl.CollisionObject(fcl.Sphere(0.5), fcl.Transform(np.array([-3.0, 0, 0])))
+    b = fcl.CollisionObject(fcl.Sphere(0.5), fcl.Transform(np.array([3.0, 0, 0])))
+    still_a, still_b = fcl.Transform(np.array([-3.0, 0, 0])), fcl.Transform(np.array([3.0, 0, 0]))
+    result = fcl.ContinuousCollisionResult()
+    assert fcl.continuousCollide(a, still_a, b, still_b, None, result) == 1.0
+    assert not result.is_collide and result.time_of_contact == 1.0
+    # both to the origin: 6 - 6t apart, touching from t = 5/6, first sampled at t = 8/9
+    assert fcl.continuousCollide(a, fcl.Transform(), b, fcl.Transform(), None, result) == \
+        pytest.approx(8 / 9)
+    assert result.is_collide and result.time_of_contact == pytest.approx(8 / 9)
+    fcl.continuousCollide(a, still_a, b, still_b, None, result)  # a miss keeps what was found
+    assert result.is_collide and result.time_of_contact == pytest.approx(8 / 9)
+    for motion in (fcl.CCDMotionType.CCDM_LINEAR, fcl.CCDMotionType.CCDM_SPLINE):
+        with pytest.raises(ValueError):
+            fcl.continuousCollide(a, still_a, b, still_b,
+                                  fcl.ContinuousCollisionRequest(ccd_motion_type=motion))
 
 
 def test_collide_accumulates_into_a_result_as_python_fcl():
