@@ -22,7 +22,7 @@ class UnknownNameError(KeyError, ValueError):
 
 class Geometry:
     """A collision shape in its own frame (mesh, convex, box, sphere, ellipsoid, cylinder, capsule,
-    cone, plane)."""
+    cone, plane, halfspace)."""
     @property
     def kind(self) -> str: ...
     @property
@@ -44,6 +44,8 @@ def box(x: float, y: float, z: float) -> Geometry:
     """A box of these full side lengths, centred on the origin."""
 def sphere(radius: float) -> Geometry:
     """A sphere centred on the origin."""
+def halfspace(normal: ArrayLike, offset: float = 0.0) -> Geometry:
+    """The solid half-space n . x <= offset (unbounded: 'cube' backend only)."""
 def ellipsoid(a: float, b: float, c: float) -> Geometry:
     """An ellipsoid of these radii along x, y and z, centred on the origin."""
 def cylinder(radius: float, height: float) -> Geometry:

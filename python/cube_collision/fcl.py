@@ -13,7 +13,7 @@ user's own CollisionObjects.
 
 continuousCollide runs FCL's continuous collision of the two objects through the library's
 (CCDM_TRANS and CCDM_SCREW motions). Not available (NotImplementedError, see UNSUPPORTED):
-Halfspace, TriangleP, OcTree (the package cannot make these shapes). See docs/python.md.
+TriangleP, OcTree (the package cannot make these shapes). See docs/python.md.
 """
 
 import itertools
@@ -36,7 +36,6 @@ __all__ = [
 
 #: python-fcl names that exist here but raise NotImplementedError, and why.
 UNSUPPORTED = {
-    "Halfspace": "cube_collision cannot make halfspaces (Plane is supported)",
     "TriangleP": "cube_collision cannot make a single-triangle shape (use a BVHModel)",
     "OcTree": "cube_collision has no octrees (python-fcl's octomap build)",
 }
@@ -327,8 +326,19 @@ class Ellipsoid(CollisionGeometry):
 
 
 class Halfspace(CollisionGeometry):
+    """The half-space n . x <= d (FCL normalises n and scales d with it)."""
+    _node_type = NODE_TYPE.GEOM_HALFSPACE
+
     def __init__(self, n, d):
-        _unsupported("Halfspace")
+        self._g = _core.halfspace(_vec3(n, "Halfspace's n"), float(d))
+
+    @property
+    def n(self):
+        return np.array(self._g.params[:3])
+
+    @property
+    def d(self):
+        return self._g.params[3]
 
 
 class OcTree(CollisionGeometry):

@@ -7,6 +7,7 @@
 #include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/cylinder.h>
 #include <fcl/geometry/shape/ellipsoid.h>
+#include <fcl/geometry/shape/halfspace.h>
 #include <fcl/geometry/shape/plane.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
@@ -82,6 +83,8 @@ std::shared_ptr<fcl::CollisionGeometryd> buildFcl(const Geometry& g) {
     out = std::make_shared<fcl::Ellipsoidd>(p[0], p[1], p[2]);
   } else if (g.kind == "plane") {
     out = std::make_shared<fcl::Planed>(fcl::Vector3d(p[0], p[1], p[2]), p[3]);
+  } else if (g.kind == "halfspace") {
+    out = std::make_shared<fcl::Halfspaced>(fcl::Vector3d(p[0], p[1], p[2]), p[3]);
   } else {
     throw py::value_error("unknown geometry kind '" + g.kind + "'");
   }
@@ -134,13 +137,13 @@ GeometryPtr makeGeometry(const std::string& kind, std::vector<double> params,
     if (params.size() != 2) throw py::value_error(kind + ": radius and height expected");
     positive(params[0], (kind + " radius").c_str());
     positive(params[1], (kind + " height").c_str());
-  } else if (kind == "plane") {
-    if (params.size() != 4) throw py::value_error("plane: normal (3) and offset expected");
+  } else if (kind == "plane" || kind == "halfspace") {
+    if (params.size() != 4) throw py::value_error(kind + ": normal (3) and offset expected");
     for (double e : params)
-      if (!std::isfinite(e)) throw py::value_error("plane: normal and offset must be finite");
+      if (!std::isfinite(e)) throw py::value_error(kind + ": normal and offset must be finite");
     const double len =
         std::sqrt(params[0] * params[0] + params[1] * params[1] + params[2] * params[2]);
-    if (!(len > 1e-12)) throw py::value_error("plane: the normal must not be zero");
+    if (!(len > 1e-12)) throw py::value_error(kind + ": the normal must not be zero");
     for (int i = 0; i < 3; ++i) params[i] /= len;
     params[3] /= len;
   } else {
@@ -297,6 +300,17 @@ then wrong). Same checks and errors as mesh().)doc");
       "The infinite plane n . x = offset (a surface, FCL's Plane); the normal is normalised. "
       "ValueError for a zero or non-finite normal or offset. Unbounded: keep planes out of the "
       "FCL backend, whose tree needs bounded boxes.");
+  m.def(
+      "halfspace",
+      [](py::handle normal, double offset) {
+        Array n = floats(normal, "halfspace normal", {3});
+        return makeGeometry("halfspace", {n.at(0), n.at(1), n.at(2), offset}, {}, {});
+      },
+      py::arg("normal"), py::arg("offset") = 0.0,
+      "The solid half-space n . x <= offset (FCL's Halfspace); the normal is normalised. "
+      "ValueError for a zero or non-finite normal or offset. Unbounded, and refused where a "
+      "plane is (the FCL backend, links, distances on the FCL backend, a convex in the same "
+      "query).");
 }
 
 }  // namespace cubepy
