@@ -21,6 +21,14 @@ py::array_t<double> vec(const fcl::Vector3d& v) {
   return a;
 }
 
+// The object a result names for a handle's side: its Geometry, or what `owners` maps it to (the
+// caller's own geometry object, as python-fcl reads it from the FCL object's user data).
+py::object owner(const Handle& h, const py::object& owners) {
+  if (owners.is_none()) return h.geometry;
+  PyObject* o = PyDict_GetItem(owners.ptr(), h.geometry.ptr());
+  return o ? py::reinterpret_borrow<py::object>(o) : h.geometry;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(cube_collision_bench, m) {
@@ -32,7 +40,7 @@ PYBIND11_MODULE(cube_collision_bench, m) {
   m.def(
       "fcl_collide",
       [](const Handle& a, const Handle& b, py::object request, py::object result,
-         py::object contact_type) {
+         py::object contact_type, py::object owners) {
         fcl::CollisionRequestd req(request.attr("num_max_contacts").cast<std::size_t>(),
                                    request.attr("enable_contact").cast<bool>(),
                                    request.attr("num_max_cost_sources").cast<std::size_t>(),
@@ -43,11 +51,12 @@ PYBIND11_MODULE(cube_collision_bench, m) {
         result.attr("is_collision") = result.attr("is_collision").cast<bool>() || res.isCollision();
         py::list contacts = result.attr("contacts");
         const auto* ga = a.obj->collisionGeometry().get();
+        const py::object oa = owner(a, owners), ob = owner(b, owners);
         for (std::size_t k = 0; k < res.numContacts(); ++k) {
           const auto& ct = res.getContact(k);
           py::object c = contact_type();
-          c.attr("o1") = ct.o1 == ga ? a.geometry : b.geometry;
-          c.attr("o2") = ct.o2 == ga ? a.geometry : b.geometry;
+          c.attr("o1") = ct.o1 == ga ? oa : ob;
+          c.attr("o2") = ct.o2 == ga ? oa : ob;
           c.attr("b1") = ct.b1;
           c.attr("b2") = ct.b2;
           c.attr("normal") = vec(ct.normal);
@@ -58,10 +67,13 @@ PYBIND11_MODULE(cube_collision_bench, m) {
         return ret;
       },
       py::arg("o1"), py::arg("o2"), py::arg("request"), py::arg("result"), py::arg("contact_type"),
-      "python-fcl's fcl.collide(o1, o2, request, result) on two handles.");
+      py::arg("owners") = py::none(),
+      "python-fcl's fcl.collide(o1, o2, request, result) on two handles; owners: None, or a "
+      "dict from a handle's geometry to the object the contacts name instead.");
   m.def(
       "fcl_distance",
-      [](const Handle& a, const Handle& b, py::object request, py::object result) {
+      [](const Handle& a, const Handle& b, py::object request, py::object result,
+         py::object owners) {
         fcl::DistanceRequestd req(request.attr("enable_nearest_points").cast<bool>());
         fcl::DistanceResultd res;
         const double d = fcl::distance(a.obj, b.obj, req, res);
@@ -72,13 +84,15 @@ PYBIND11_MODULE(cube_collision_bench, m) {
           pts.append(vec(res.nearest_points[1]));
           result.attr("nearest_points") = pts;
           const auto* ga = a.obj->collisionGeometry().get();
-          result.attr("o1") = res.o1 == ga ? a.geometry : b.geometry;
-          result.attr("o2") = res.o2 == ga ? a.geometry : b.geometry;
+          result.attr("o1") = res.o1 == ga ? owner(a, owners) : owner(b, owners);
+          result.attr("o2") = res.o2 == ga ? owner(a, owners) : owner(b, owners);
           result.attr("b1") = res.b1;
           result.attr("b2") = res.b2;
         }
         return d;
       },
       py::arg("o1"), py::arg("o2"), py::arg("request"), py::arg("result"),
-      "python-fcl's fcl.distance(o1, o2, request, result) on two handles.");
+      py::arg("owners") = py::none(),
+      "python-fcl's fcl.distance(o1, o2, request, result) on two handles (owners as "
+      "fcl_collide).");
 }

@@ -175,3 +175,39 @@ def build(scene, backend="cube", threads=0):
         names, geometries, transforms = zip(*scene)
         m.add_objects(list(names), list(geometries), np.stack(transforms))
     return m
+
+
+def cone_mesh(segments, radius, length):
+    """A closed cone along z (FCL's: base at -length / 2, apex at +length / 2)."""
+    a = np.linspace(0, 2 * math.pi, segments, endpoint=False)
+    ring = np.stack([radius * np.cos(a), radius * np.sin(a), np.full(segments, -length / 2)], 1)
+    v = np.vstack([ring, [[0, 0, length / 2], [0, 0, -length / 2]]])
+    k = np.arange(segments)
+    n = (k + 1) % segments
+    f = np.vstack([np.stack([k, n, np.full(segments, segments)], 1),
+                   np.stack([np.full(segments, segments + 1), n, k], 1)])
+    return v, f
+
+
+def as_mesh(g):
+    """(vertices, faces, is_convex) of a scene's geometry as trimesh would hold it: a mesh stays
+    a mesh (not convex); a convex and the primitives (tessellated) are convex meshes."""
+    p = g.params
+    if g.kind == "mesh":
+        return g.vertices, g.faces, False
+    if g.kind == "convex":
+        return g.vertices, g.faces, True
+    if g.kind == "box":
+        return (*grid_box(1, p[:3]), True)
+    if g.kind == "sphere":
+        return (*uv_sphere(4, p[0]), True)
+    if g.kind == "cylinder":
+        return (*tube(12, p[0], p[1]), True)
+    if g.kind == "capsule":  # a sphere's halves moved apart by the length
+        v, f = uv_sphere(4, p[0])
+        v = v.copy()
+        v[:, 2] += np.where(v[:, 2] >= 0, p[1] / 2, -p[1] / 2)
+        return v, f, True
+    if g.kind == "cone":
+        return (*cone_mesh(12, p[0], p[1]), True)
+    raise ValueError(f"as_mesh: no mesh for {g.kind}")

@@ -6,7 +6,8 @@
                                                      # cube_collision.mesh(v, f)
     hit, names = m.in_collision_internal(return_names=True)
 
-Geometry: mesh, convex, box, sphere, cylinder, capsule, cone, plane (each returns a Geometry).
+Geometry: mesh, convex, box, sphere, ellipsoid, cylinder, capsule, cone, plane, halfspace (each
+returns a Geometry).
 The manager (CollisionManager) runs every query in C++ (broadphase, culling, FCL's narrow phase)
 with the GIL released; backend="fcl" builds it on FCL's DynamicAABBTreeCollisionManager instead.
 Batched planner checks: Body and CollisionManager.check_states / check_motions. Everything
@@ -25,6 +26,8 @@ from ._core import (  # noqa: F401
     cone,
     convex,
     cylinder,
+    ellipsoid,
+    halfspace,
     mesh,
     pair_distance,
     pair_in_collision,
@@ -36,5 +39,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ALL_BITS", "Body", "CollisionManager", "Geometry", "UnknownNameError", "box", "capsule",
-    "cone", "convex", "cylinder", "mesh", "pair_distance", "pair_in_collision", "plane", "sphere",
+    "cone", "convex", "cylinder", "ellipsoid", "halfspace", "mesh", "pair_distance",
+    "pair_in_collision", "plane", "sphere",
 ]

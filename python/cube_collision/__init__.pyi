@@ -9,6 +9,8 @@ from ._core import (
     cone as cone,
     convex as convex,
     cylinder as cylinder,
+    ellipsoid as ellipsoid,
+    halfspace as halfspace,
     mesh as mesh,
     pair_distance as pair_distance,
     pair_in_collision as pair_in_collision,

@@ -21,7 +21,8 @@ class UnknownNameError(KeyError, ValueError):
     """No object has this name (a KeyError, and a ValueError as trimesh raises)."""
 
 class Geometry:
-    """A collision shape in its own frame (mesh, convex, box, sphere, cylinder, capsule, cone, plane)."""
+    """A collision shape in its own frame (mesh, convex, box, sphere, ellipsoid, cylinder, capsule,
+    cone, plane, halfspace)."""
     @property
     def kind(self) -> str: ...
     @property
@@ -43,6 +44,10 @@ def box(x: float, y: float, z: float) -> Geometry:
     """A box of these full side lengths, centred on the origin."""
 def sphere(radius: float) -> Geometry:
     """A sphere centred on the origin."""
+def halfspace(normal: ArrayLike, offset: float = 0.0) -> Geometry:
+    """The solid half-space n . x <= offset (unbounded: 'cube' backend only)."""
+def ellipsoid(a: float, b: float, c: float) -> Geometry:
+    """An ellipsoid of these radii along x, y and z, centred on the origin."""
 def cylinder(radius: float, height: float) -> Geometry:
     """A cylinder along z, centred on the origin."""
 def capsule(radius: float, height: float) -> Geometry:
@@ -127,8 +132,9 @@ class CollisionManager:
                             return_data: bool = False, max_contacts: int = 100000, *,
                             mesh: Optional[GeometryLike] = None) -> Union[
                                 bool, Tuple[bool, Set[str]], Tuple[bool, Contacts],
-                                Tuple[bool, Set[str], Contacts]]:
-        """is_collision[, set of names][, contacts]."""
+                                Tuple[bool, Set[str], Contacts], npt.NDArray[np.bool_]]:
+        """is_collision[, set of names][, contacts]; with an (n, 4, 4) transform, a numpy bool
+        array of n (one answer per pose)."""
     def in_collision_other(self, other_manager: "CollisionManager", return_names: bool = False,
                            return_data: bool = False, max_contacts: int = 100000) -> Union[
                                bool, Tuple[bool, Set[Tuple[str, str]]], Tuple[bool, Contacts],

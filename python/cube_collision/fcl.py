@@ -11,9 +11,9 @@ pair) and fills cdata.result as python-fcl's would: contacts whose o1 / o2 are t
 geometry objects. Any other callable is called per candidate pair, as python-fcl does, with the
 user's own CollisionObjects.
 
-Not available (NotImplementedError, see UNSUPPORTED): Ellipsoid, Halfspace, TriangleP, OcTree
-(the package cannot make these shapes) and continuousCollide with its request and result (the
-package has no continuous collision of two objects). See docs/python.md.
+continuousCollide runs FCL's continuous collision of the two objects through the library's
+(CCDM_TRANS and CCDM_SCREW motions). Not available (NotImplementedError, see UNSUPPORTED):
+TriangleP, OcTree (the package cannot make these shapes). See docs/python.md.
 """
 
 import itertools
@@ -36,13 +36,8 @@ __all__ = [
 
 #: python-fcl names that exist here but raise NotImplementedError, and why.
 UNSUPPORTED = {
-    "Ellipsoid": "cube_collision cannot make ellipsoids",
-    "Halfspace": "cube_collision cannot make halfspaces (Plane is supported)",
     "TriangleP": "cube_collision cannot make a single-triangle shape (use a BVHModel)",
     "OcTree": "cube_collision has no octrees (python-fcl's octomap build)",
-    "continuousCollide": "cube_collision has no continuous collision of two objects",
-    "ContinuousCollisionRequest": "continuousCollide is not supported",
-    "ContinuousCollisionResult": "continuousCollide is not supported",
 }
 
 
@@ -116,13 +111,23 @@ class CollisionResult:
 
 
 class ContinuousCollisionRequest:
-    def __init__(self, *args, **kwargs):
-        _unsupported("ContinuousCollisionRequest")
+    def __init__(self, num_max_iterations=10, toc_err=0.0001,
+                 ccd_motion_type=CCDMotionType.CCDM_TRANS,
+                 gjk_solver_type=GJKSolverType.GST_LIBCCD,
+                 ccd_solver_type=CCDSolverType.CCDC_NAIVE):
+        self.num_max_iterations = num_max_iterations
+        self.toc_err = toc_err
+        self.ccd_motion_type = ccd_motion_type
+        self.gjk_solver_type = gjk_solver_type
+        self.ccd_solver_type = ccd_solver_type
 
 
 class ContinuousCollisionResult:
-    def __init__(self, *args, **kwargs):
-        _unsupported("ContinuousCollisionResult")
+    def __init__(self, is_collide=False, time_of_contact=1.0):
+        self.is_collide = is_collide
+        self.time_of_contact = time_of_contact
+        self.contact_tf1 = None
+        self.contact_tf2 = None
 
 
 class DistanceRequest:
@@ -309,13 +314,31 @@ class TriangleP(CollisionGeometry):
 
 
 class Ellipsoid(CollisionGeometry):
+    """The ellipsoid of radii a, b, c along x, y, z."""
+    _node_type = NODE_TYPE.GEOM_ELLIPSOID
+
     def __init__(self, a, b, c):
-        _unsupported("Ellipsoid")
+        self._g = _core.ellipsoid(float(a), float(b), float(c))
+
+    @property
+    def radii(self):
+        return np.array(self._g.params[:3])
 
 
 class Halfspace(CollisionGeometry):
+    """The half-space n . x <= d (FCL normalises n and scales d with it)."""
+    _node_type = NODE_TYPE.GEOM_HALFSPACE
+
     def __init__(self, n, d):
-        _unsupported("Halfspace")
+        self._g = _core.halfspace(_vec3(n, "Halfspace's n"), float(d))
+
+    @property
+    def n(self):
+        return np.array(self._g.params[:3])
+
+    @property
+    def d(self):
+        return self._g.params[3]
 
 
 class OcTree(CollisionGeometry):
@@ -599,8 +622,31 @@ def distance(o1, o2, request=None, result=None):
                                     o1._geom, o2._geom)
 
 
+def _matrix_of(tf):
+    m = np.eye(4)
+    m[:3, :3] = tf._R
+    m[:3, 3] = tf._t
+    return m
+
+
 def continuousCollide(o1, tf1_end, o2, tf2_end, request=None, result=None):
-    _unsupported("continuousCollide")
+    """fcl::continuousCollide of o1 and o2 moving from their transforms to tf1_end / tf2_end;
+    result updated as python-fcl's (is_collide or-ed, the earliest time of contact kept, and
+    here the transforms at that time as Transforms); returns the time of contact (1.0 if
+    none). ValueError for CCDM_LINEAR or CCDM_SPLINE motions, which the library refuses."""
+    if request is None:
+        request = ContinuousCollisionRequest()
+    if result is None:
+        result = ContinuousCollisionResult()
+    hit, toc, tf1, tf2 = _core._fcl_pair_continuous(o1._g, o1._matrix(), _matrix_of(tf1_end),
+                                                    o2._g, o2._matrix(), _matrix_of(tf2_end),
+                                                    request)
+    result.is_collide = result.is_collide or hit
+    if hit and toc < result.time_of_contact:
+        result.contact_tf1 = Transform(tf1[:3, :3], tf1[:3, 3])
+        result.contact_tf2 = Transform(tf2[:3, :3], tf2[:3, 3])
+    result.time_of_contact = min(toc, result.time_of_contact)
+    return toc
 
 
 def defaultCollisionCallback(o1, o2, cdata):

@@ -27,7 +27,8 @@ struct Body {
   std::vector<Link> links;
 
   std::size_t addLink(GeometryPtr g, double margin, std::uint64_t category, std::uint64_t mask) {
-    if (g->kind == "plane") throw py::value_error("add_link: a link must be bounded (no plane)");
+    if (g->kind == "plane" || g->kind == "halfspace")
+      throw py::value_error("add_link: a link must be bounded (no plane or halfspace)");
     if (!std::isfinite(margin) || margin < 0)
       throw py::value_error("add_link: margin must be finite and >= 0");
     const std::size_t i = set.addLink(g->fcl, margin, category, mask);

@@ -294,6 +294,48 @@ Want want(bool names, bool data, int max_contacts) {
   return {names, data, max_contacts};
 }
 
+// in_collision_single's transform argument holds several poses: an array (or nested lists) of
+// three dimensions.
+bool manyPoses(py::handle tf) {
+  if (tf.is_none() || py::isinstance<py::str>(tf)) return false;
+  py::array a = py::array::ensure(tf);
+  if (!a) {
+    PyErr_Clear();
+    return false;
+  }
+  return a.ndim() == 3;
+}
+
+// The single-object query at each of an (n, 4, 4) array's poses: one pass in C++, the query
+// object moved from pose to pose under one lock, each answer the single-pose call's.
+py::object collideAtPoses(const Manager& m, const GeometryPtr& g, py::handle tfs, const Want& w) {
+  if (!w.anyOnly())
+    throw py::value_error(
+        "in_collision_single: return_names / return_data take one pose (a 4x4 transform), not "
+        "an (n, 4, 4) array");
+  Array a = floats(tfs, "transforms", {-1, 4, 4}, false);
+  const std::size_t n = static_cast<std::size_t>(a.shape(0));
+  std::vector<fcl::Transform3d> poses(n);
+  for (std::size_t i = 0; i < n; ++i)
+    poses[i] = transformFrom(a.data() + 16 * i, "transforms[" + std::to_string(i) + "]");
+  std::vector<unsigned char> hit(n, 0);
+  if (n > 0) {
+    Object q(g->fcl, poses[0]);
+    py::gil_scoped_release nogil;
+    ReadLocks lock(m, nullptr);
+    refuseFclCrashes(&m, nullptr, {g->kind}, false, "in_collision_single");
+    const double pad = m.isCube() ? 0.0 : m.managerMargin();
+    for (std::size_t i = 0; i < n; ++i) {
+      q.setTransform(poses[i]);
+      q.refresh(pad);
+      hit[i] = collide(m, &q, nullptr, w).any;
+    }
+  }
+  py::array_t<bool> out(static_cast<py::ssize_t>(n));
+  std::copy(hit.begin(), hit.end(), out.mutable_data());
+  return py::object(std::move(out));
+}
+
 }  // namespace
 
 void bindCollideQueries(ManagerClass& cls) {
@@ -316,9 +358,10 @@ Names only stop each pair's narrow phase at its first contact; data asks FCL for
       .def(
           "in_collision_single",
           [](const Manager& m, py::handle geometry, py::handle tf, bool names, bool data,
-             int max_contacts, py::handle mesh) {
+             int max_contacts, py::handle mesh) -> py::object {
             const Want w = want(names, data, max_contacts);
             GeometryPtr g = geometryOf(geometryArg(geometry, mesh, "in_collision_single"));
+            if (manyPoses(tf)) return collideAtPoses(m, g, tf, w);
             Object q(g->fcl, transform(tf));
             return collideQuery(m, nullptr, w, Kind::single, [&] {
               refuseFclCrashes(&m, nullptr, {g->kind}, false, "in_collision_single");
@@ -334,7 +377,12 @@ solid; or by trimesh's keyword mesh=) placed by `transform` (4x4 rigid, None: id
 with any object? Returns is_collision, plus the set of names hit, plus the contacts dict (names
 (object, '__external')), as in_collision_internal. The query has the default filter bits and the
 manager-wide margin. TypeError / ValueError for a bad geometry or transform, TypeError for both
-or neither of geometry and mesh.)doc")
+or neither of geometry and mesh.
+
+With `transform` an (n, 4, 4) array of poses: one call for them all, returning a numpy bool array
+of n, entry i the answer of the single-pose call at transforms[i] (the same rules: filter bits,
+ignored pairs, margins). Every pose is checked first (ValueError naming the first bad one);
+return_names / return_data are refused (ValueError) with several poses.)doc")
       .def(
           "in_collision_other",
           [](const Manager& m, const Manager& other, bool names, bool data, int max_contacts) {

@@ -40,10 +40,10 @@ py::array_t<double> toArray(const fcl::Vector3d& v);
 
 /// The geometry behind a Python Geometry: FCL's object and what rebuilds it (pickling).
 struct Geometry {
-  std::string kind;  ///< "mesh", "convex", "box", "sphere", "cylinder", "capsule", "cone", "plane"
-  std::vector<double> params;       ///< sizes (box: 3 extents; plane: normal and offset)
-  std::vector<double> vertices;     ///< mesh and convex: n x 3
-  std::vector<std::int64_t> faces;  ///< mesh and convex: m x 3
+  std::string kind;  ///< mesh, convex, box, sphere, ellipsoid, cylinder, capsule, cone, plane
+  std::vector<double> params;    ///< sizes (box: 3 extents; ellipsoid: 3 radii; plane: n, offset)
+  std::vector<double> vertices;  ///< mesh and convex: n x 3
+  std::vector<std::int64_t> faces;               ///< mesh and convex: m x 3
   std::shared_ptr<fcl::CollisionGeometryd> fcl;  ///< built once, shared by the objects using it
 };
 using GeometryPtr = std::shared_ptr<Geometry>;

@@ -3,6 +3,7 @@
 // python-fcl's collide() / distance() on two placed geometries; and FCL's own pair calls
 // (pair_in_collision, pair_distance), the tests' oracle.
 
+#include <cube_collision/continuous.h>
 #include <cube_collision/queries.h>
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
@@ -377,6 +378,50 @@ void bindPairCalls(py::module_& m) {
       "cube_collision.fcl.distance: fcl::distance with a python-fcl request on two placed "
       "geometries; result updated if closer (python-fcl's rule); returns the distance. "
       "ValueError with a plane (FCL 0.7's fcl::distance crashes on it).");
+
+  m.def(
+      "_fcl_pair_continuous",
+      [](py::handle ga, py::handle ta, py::handle ta_end, py::handle gb, py::handle tb,
+         py::handle tb_end, py::object request) {
+        fcl::ContinuousCollisionRequestd req;
+        req.num_max_iterations = request.attr("num_max_iterations").cast<std::size_t>();
+        req.toc_err = request.attr("toc_err").cast<double>();
+        req.ccd_motion_type =
+            static_cast<fcl::CCDMotionType>(request.attr("ccd_motion_type").cast<int>());
+        req.gjk_solver_type =
+            static_cast<fcl::GJKSolverType>(request.attr("gjk_solver_type").cast<int>());
+        req.ccd_solver_type =
+            static_cast<fcl::CCDSolverType>(request.attr("ccd_solver_type").cast<int>());
+        GeometryPtr a = geometryOf(ga), b = geometryOf(gb);
+        refuseFclCrashes(nullptr, nullptr, {a->kind, b->kind}, false, "continuousCollide");
+        Object oa(a->fcl, transform(ta, "transform_a")), ob(b->fcl, transform(tb, "transform_b"));
+        const std::vector<cube::Motion<double>> motions = {{&oa, transform(ta_end, "tf1_end")},
+                                                           {&ob, transform(tb_end, "tf2_end")}};
+        std::vector<cube::ContinuousContact> hits;
+        {
+          py::gil_scoped_release nogil;
+          // A manager of the two objects: the library's continuousCollideAll gives
+          // fcl::continuousCollide's answer for the pair (with its rule for FCL's defects).
+          cube::CubeCollisionManagerd pair;
+          pair.registerObject(&oa);
+          pair.registerObject(&ob);
+          pair.setup();
+          hits = cube::continuousCollideAll(pair, motions, req);
+          pair.clear();
+        }
+        if (hits.empty()) return py::make_tuple(false, 1.0, py::none(), py::none());
+        const auto& h = hits.front();
+        const bool a_first = h.a == &oa;
+        return py::make_tuple(true, h.time_of_contact, toArray(a_first ? h.tf_a : h.tf_b),
+                              toArray(a_first ? h.tf_b : h.tf_a));
+      },
+      py::arg("geometry_a"), py::arg("transform_a"), py::arg("end_a"), py::arg("geometry_b"),
+      py::arg("transform_b"), py::arg("end_b"), py::arg("request"),
+      "cube_collision.fcl.continuousCollide: fcl::continuousCollide of two geometries moving "
+      "from transform_* to end_* with a python-fcl ContinuousCollisionRequest, through the "
+      "library's continuousCollideAll. Returns (is_collide, time_of_contact (1.0 if none), "
+      "contact transform a, b (None if none)). ValueError for a motion type the library "
+      "refuses (CCDM_LINEAR, CCDM_SPLINE) and for pairs that crash FCL 0.7.");
 
   auto pairObjects = [](py::handle ga, py::handle ta, py::handle gb, py::handle tb) {
     GeometryPtr a = geometryOf(ga), b = geometryOf(gb);

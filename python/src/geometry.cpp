@@ -6,6 +6,8 @@
 #include <fcl/geometry/shape/cone.h>
 #include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/ellipsoid.h>
+#include <fcl/geometry/shape/halfspace.h>
 #include <fcl/geometry/shape/plane.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
@@ -77,8 +79,12 @@ std::shared_ptr<fcl::CollisionGeometryd> buildFcl(const Geometry& g) {
     out = std::make_shared<fcl::Capsuled>(p[0], p[1]);
   } else if (g.kind == "cone") {
     out = std::make_shared<fcl::Coned>(p[0], p[1]);
+  } else if (g.kind == "ellipsoid") {
+    out = std::make_shared<fcl::Ellipsoidd>(p[0], p[1], p[2]);
   } else if (g.kind == "plane") {
     out = std::make_shared<fcl::Planed>(fcl::Vector3d(p[0], p[1], p[2]), p[3]);
+  } else if (g.kind == "halfspace") {
+    out = std::make_shared<fcl::Halfspaced>(fcl::Vector3d(p[0], p[1], p[2]), p[3]);
   } else {
     throw py::value_error("unknown geometry kind '" + g.kind + "'");
   }
@@ -121,6 +127,9 @@ GeometryPtr makeGeometry(const std::string& kind, std::vector<double> params,
   } else if (kind == "box") {
     if (params.size() != 3) throw py::value_error("box: 3 extents expected");
     for (double e : params) positive(e, "box extents");
+  } else if (kind == "ellipsoid") {
+    if (params.size() != 3) throw py::value_error("ellipsoid: 3 radii expected");
+    for (double e : params) positive(e, "ellipsoid radii");
   } else if (kind == "sphere") {
     if (params.size() != 1) throw py::value_error("sphere: a radius expected");
     positive(params[0], "sphere radius");
@@ -128,13 +137,13 @@ GeometryPtr makeGeometry(const std::string& kind, std::vector<double> params,
     if (params.size() != 2) throw py::value_error(kind + ": radius and height expected");
     positive(params[0], (kind + " radius").c_str());
     positive(params[1], (kind + " height").c_str());
-  } else if (kind == "plane") {
-    if (params.size() != 4) throw py::value_error("plane: normal (3) and offset expected");
+  } else if (kind == "plane" || kind == "halfspace") {
+    if (params.size() != 4) throw py::value_error(kind + ": normal (3) and offset expected");
     for (double e : params)
-      if (!std::isfinite(e)) throw py::value_error("plane: normal and offset must be finite");
+      if (!std::isfinite(e)) throw py::value_error(kind + ": normal and offset must be finite");
     const double len =
         std::sqrt(params[0] * params[0] + params[1] * params[1] + params[2] * params[2]);
-    if (!(len > 1e-12)) throw py::value_error("plane: the normal must not be zero");
+    if (!(len > 1e-12)) throw py::value_error(kind + ": the normal must not be zero");
     for (int i = 0; i < 3; ++i) params[i] /= len;
     params[3] /= len;
   } else {
@@ -251,6 +260,14 @@ then wrong). Same checks and errors as mesh().)doc");
       "sphere", [](double r) { return makeGeometry("sphere", {r}, {}, {}); }, py::arg("radius"),
       "A sphere centred on the origin. ValueError unless the radius is finite and > 0.");
   m.def(
+      "ellipsoid",
+      [](double a, double b, double c) {
+        return makeGeometry("ellipsoid", {a, b, c}, {}, {});
+      },
+      py::arg("a"), py::arg("b"), py::arg("c"),
+      "An ellipsoid centred on the origin with these radii along x, y and z (FCL's Ellipsoid, a "
+      "solid). ValueError unless each is finite and > 0.");
+  m.def(
       "cylinder",
       [](double r, double h) {
         return makeGeometry("cylinder", {r, h}, {}, {});
@@ -283,6 +300,17 @@ then wrong). Same checks and errors as mesh().)doc");
       "The infinite plane n . x = offset (a surface, FCL's Plane); the normal is normalised. "
       "ValueError for a zero or non-finite normal or offset. Unbounded: keep planes out of the "
       "FCL backend, whose tree needs bounded boxes.");
+  m.def(
+      "halfspace",
+      [](py::handle normal, double offset) {
+        Array n = floats(normal, "halfspace normal", {3});
+        return makeGeometry("halfspace", {n.at(0), n.at(1), n.at(2), offset}, {}, {});
+      },
+      py::arg("normal"), py::arg("offset") = 0.0,
+      "The solid half-space n . x <= offset (FCL's Halfspace); the normal is normalised. "
+      "ValueError for a zero or non-finite normal or offset. Unbounded, and refused where a "
+      "plane is (the FCL backend, links, distances on the FCL backend, a convex in the same "
+      "query).");
 }
 
 }  // namespace cubepy

@@ -28,7 +28,7 @@ void refuseFclCrashes(const Manager* a, const Manager* b, const std::vector<std:
       cube = cube && m->isCube();
     }
   for (const auto& k : kinds) {
-    planes += k == "plane";
+    planes += k == "plane" || k == "halfspace";  // unbounded: FCL treats both alike
     convexes += k == "convex";
   }
   // The library answers a distance to a plane in closed form; FCL's own fcl::distance crashes.
@@ -154,10 +154,10 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
   noCallback(what);
   for (const auto& o : objects) {
     if (o.margin >= 0) checkMargin(o.margin);
-    if (!cube_ && o.geometry->kind == "plane")
+    if (!cube_ && (o.geometry->kind == "plane" || o.geometry->kind == "halfspace"))
       throw py::value_error(std::string(what) +
-                            ": the FCL backend's tree needs bounded objects; planes only with "
-                            "backend='cube'");
+                            ": the FCL backend's tree needs bounded objects; planes and "
+                            "halfspaces only with backend='cube'");
   }
   // Made and, on failure, dropped with the GIL (declared before it is released).
   std::vector<py::object> pynames;
@@ -215,7 +215,7 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
     const std::string& kind = e->geometry->kind;
     if (e->own_margin) ++own_margins_;
     meshes_ += kind == "mesh";
-    planes_ += kind == "plane";
+    planes_ += kind == "plane" || kind == "halfspace";
     convexes_ += kind == "convex";
     by_geometry_[e->obj->collisionGeometry().get()] = e.get();
     std::string name = e->name;
@@ -244,7 +244,7 @@ void Manager::remove(const std::string& name) {
     }
   if (e->own_margin) --own_margins_;
   if (e->geometry->kind == "mesh") --meshes_;
-  if (e->geometry->kind == "plane") --planes_;
+  if (e->geometry->kind == "plane" || e->geometry->kind == "halfspace") --planes_;
   if (e->geometry->kind == "convex") --convexes_;
   by_geometry_.erase(e->obj->collisionGeometry().get());
   const auto it = entries_.find(name);

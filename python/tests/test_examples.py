@@ -1,8 +1,9 @@
-"""The Dask example on a LocalCluster of two workers, and the benchmark script, at tiny sizes
+"""The Dask example on a LocalCluster of two workers, and the benchmark scripts, at tiny sizes
 (speed lives in the scripts' output, not here)."""
 
 import dask_states
 
+import bench_fcl_compat
 import bench_trimesh
 
 
@@ -16,3 +17,12 @@ def test_benchmark_runs(capsys):
     bench_trimesh.main(["--primitives", "300", "--meshes", "40", "--repeat", "1"])
     out = capsys.readouterr().out
     assert "same on every manager" in out and "targets" in out
+
+
+def test_fcl_compat_benchmark_runs(capsys):
+    # trimesh's manager on cube_collision.fcl and on python-fcl's way give the same names, and
+    # the batched poses the single-pose answers (the script exits otherwise)
+    bench_fcl_compat.main(["--primitives", "300", "--meshes", "40", "--poses", "50",
+                           "--repeat", "1"])
+    out = capsys.readouterr().out
+    assert "trimesh clash" in out and "poses clash" in out and "targets" in out

@@ -12,6 +12,7 @@ import cube_collision as cc
 import cube_collision.fcl as fcl
 from conftest import mixed_scene
 import scenes
+from trimesh_collision import CollisionManager, Mesh
 
 
 # ---------------------------------------------------------------------------------------------
@@ -25,6 +26,8 @@ def to_fcl(g):
         return fcl.Box(*p[:3])
     if g.kind == "sphere":
         return fcl.Sphere(p[0])
+    if g.kind == "ellipsoid":
+        return fcl.Ellipsoid(*p[:3])
     if g.kind == "cylinder":
         return fcl.Cylinder(p[0], p[1])
     if g.kind == "capsule":
@@ -33,6 +36,8 @@ def to_fcl(g):
         return fcl.Cone(p[0], p[1])
     if g.kind == "plane":
         return fcl.Plane(np.array(p[:3]), p[3])
+    if g.kind == "halfspace":
+        return fcl.Halfspace(np.array(p[:3]), p[3])
     if g.kind == "convex":
         faces = np.hstack([np.full((len(g.faces), 1), 3), g.faces]).reshape(-1)
         return fcl.Convex(g.vertices, len(g.faces), faces)
@@ -180,6 +185,24 @@ def test_bvh_model_builds_from_sub_models_vertices_and_triangles():
         fcl.CollisionObject(fcl.BVHModel())  # not built
 
 
+def test_halfspace_collides_as_fcl_and_in_a_manager():
+    rng = np.random.default_rng(23)
+    h = fcl.Halfspace(np.array([0.0, 0.3, 1.0]), 0.5)
+    assert np.allclose(np.linalg.norm(h.n), 1) and h.getNodeType() == fcl.NODE_TYPE.GEOM_HALFSPACE
+    space = fcl.CollisionObject(h)
+    objs = [fcl.CollisionObject(g, fcl.Transform(scenes.random_rotation(rng),
+                                                 rng.uniform(-2, 2, 3)))
+            for g in [fcl.Sphere(0.4), fcl.Box(0.5, 0.6, 0.7), fcl.Capsule(0.2, 0.6)] * 6]
+    for o in objs:
+        assert fcl.collide(space, o) == int(cc.pair_in_collision(h._g, np.eye(4), o._g,
+                                                                 pose_of(o)))
+    m = manager_of(objs + [space])
+    cdata = fcl.CollisionData(fcl.CollisionRequest(num_max_contacts=ALL_CONTACTS))
+    m.collide(cdata, fcl.defaultCollisionCallback)
+    expect = brute_pairs(objs + [space])
+    assert any(id(h) in p for p in expect) and contact_pairs(cdata.result) == expect
+
+
 def test_convex_takes_python_fcl_flattened_polygon_faces():
     # a unit cube with quadrilateral faces: [4, i0, i1, i2, i3] * 6
     v = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
@@ -195,14 +218,8 @@ def test_convex_takes_python_fcl_flattened_polygon_faces():
 
 
 @pytest.mark.parametrize("name, make", [
-    ("Ellipsoid", lambda: fcl.Ellipsoid(1, 2, 3)),
-    ("Halfspace", lambda: fcl.Halfspace(np.array([0.0, 0, 1]), 0)),
     ("TriangleP", lambda: fcl.TriangleP(np.zeros(3), np.ones(3), np.array([1.0, 0, 0]))),
     ("OcTree", lambda: fcl.OcTree(0.1)),
-    ("ContinuousCollisionRequest", lambda: fcl.ContinuousCollisionRequest()),
-    ("ContinuousCollisionResult", lambda: fcl.ContinuousCollisionResult()),
-    ("continuousCollide", lambda: fcl.continuousCollide(None, fcl.Transform(), None,
-                                                        fcl.Transform())),
 ])
 def test_unsupported_names_raise_not_implemented_with_the_reason(name, make):
     assert name in fcl.UNSUPPORTED
@@ -230,7 +247,8 @@ def gap(r):
 
 
 def shape_zoo(rng):
-    return [cc.box(0.6, 0.9, 1.1), cc.sphere(0.5), cc.cylinder(0.4, 1.0), cc.capsule(0.3, 0.8),
+    return [cc.box(0.6, 0.9, 1.1), cc.sphere(0.5), cc.ellipsoid(0.3, 0.5, 0.7),
+            cc.cylinder(0.4, 1.0), cc.capsule(0.3, 0.8),
             cc.cone(0.5, 1.0), scenes.random_convex(rng, 1.0),
             cc.mesh(*scenes.uv_sphere(6, 0.5)), cc.plane([0.3, 0.2, 1.0], 0.1)]
 
@@ -278,6 +296,60 @@ def test_pair_collide_and_distance_agree_with_fcl_for_every_kind_pair():
                 p1, p2 = dres.nearest_points
                 assert np.linalg.norm(p1 - p2) == pytest.approx(d, rel=1e-3, abs=1e-4)
     assert hits[True] > 20 and hits[False] > 20
+
+
+def lerp_pose(R, t0, t1, s):
+    """FCL's CCDM_TRANS motion at time s: the start rotation, the translation interpolated."""
+    return scenes.pose(R, t0 + (t1 - t0) * s)
+
+
+def test_continuous_collide_is_fcls_naive_sampling_of_the_translation():
+    # FCL's default request: CCDM_TRANS, the naive solver, 10 iterations: fcl::collide at
+    # t = i / 9, the first colliding t the time of contact. The oracle samples the same poses
+    # with FCL's own pair_in_collision.
+    rng = np.random.default_rng(21)
+    zoo = [g for g in shape_zoo(rng) if g.kind != "plane"]
+    geoms = [to_fcl(g) for g in zoo]
+    seen = collections.Counter()
+    for _ in range(60):
+        i, j = rng.integers(len(zoo), size=2)
+        Ra, Rb = scenes.random_rotation(rng), scenes.random_rotation(rng)
+        a0, a1, b0, b1 = (rng.uniform(-2, 2, 3) for _ in range(4))
+        oa = fcl.CollisionObject(geoms[i], fcl.Transform(Ra, a0))
+        ob = fcl.CollisionObject(geoms[j], fcl.Transform(Rb, b0))
+        result = fcl.ContinuousCollisionResult()
+        toc = fcl.continuousCollide(oa, fcl.Transform(scenes.random_rotation(rng), a1), ob,
+                                    fcl.Transform(Rb, b1), fcl.ContinuousCollisionRequest(),
+                                    result)
+        expect = next((k / 9 for k in range(10)
+                       if cc.pair_in_collision(zoo[i], lerp_pose(Ra, a0, a1, k / 9),
+                                               zoo[j], lerp_pose(Rb, b0, b1, k / 9))), None)
+        assert result.is_collide == (expect is not None)
+        assert toc == result.time_of_contact == (1.0 if expect is None else expect)
+        if expect is not None:
+            assert np.allclose(result.contact_tf1.getTranslation(), a0 + (a1 - a0) * expect)
+            assert np.allclose(result.contact_tf2.getRotation(), Rb)
+        seen[expect is None, expect == 0] += 1
+    assert seen[False, False] >= 5 and seen[True, False] >= 5 and seen[False, True] >= 2
+
+
+def test_continuous_collide_accumulates_and_refuses_motions_it_cannot_bound():
+    a = fcl.CollisionObject(fcl.Sphere(0.5), fcl.Transform(np.array([-3.0, 0, 0])))
+    b = fcl.CollisionObject(fcl.Sphere(0.5), fcl.Transform(np.array([3.0, 0, 0])))
+    still_a, still_b = fcl.Transform(np.array([-3.0, 0, 0])), fcl.Transform(np.array([3.0, 0, 0]))
+    result = fcl.ContinuousCollisionResult()
+    assert fcl.continuousCollide(a, still_a, b, still_b, None, result) == 1.0
+    assert not result.is_collide and result.time_of_contact == 1.0
+    # both to the origin: 6 - 6t apart, touching from t = 5/6, first sampled at t = 8/9
+    assert fcl.continuousCollide(a, fcl.Transform(), b, fcl.Transform(), None, result) == \
+        pytest.approx(8 / 9)
+    assert result.is_collide and result.time_of_contact == pytest.approx(8 / 9)
+    fcl.continuousCollide(a, still_a, b, still_b, None, result)  # a miss keeps what was found
+    assert result.is_collide and result.time_of_contact == pytest.approx(8 / 9)
+    for motion in (fcl.CCDMotionType.CCDM_LINEAR, fcl.CCDMotionType.CCDM_SPLINE):
+        with pytest.raises(ValueError):
+            fcl.continuousCollide(a, still_a, b, still_b,
+                                  fcl.ContinuousCollisionRequest(ccd_motion_type=motion))
 
 
 def test_collide_accumulates_into_a_result_as_python_fcl():
@@ -473,145 +545,7 @@ def test_user_callback_may_stop_the_walk(scene40):
 
 
 # ---------------------------------------------------------------------------------------------
-# trimesh's CollisionManager, re-created call for call over the module
-
-
-class Mesh:
-    """The parts of a trimesh.Trimesh that trimesh's collision module reads."""
-
-    def __init__(self, vertices, faces, is_convex):
-        self.vertices = np.asarray(vertices, dtype=np.float64)
-        self.faces = np.asarray(faces, dtype=np.int64)
-        self.is_convex = is_convex
-
-
-def mesh_to_BVH(mesh):
-    bvh = fcl.BVHModel()
-    bvh.beginModel(num_tris_=len(mesh.faces), num_vertices_=len(mesh.vertices))
-    bvh.addSubModel(verts=mesh.vertices, triangles=mesh.faces)
-    bvh.endModel()
-    return bvh
-
-
-def mesh_to_convex(mesh):
-    fs = np.concatenate((3 * np.ones((len(mesh.faces), 1), dtype=np.int64), mesh.faces), axis=1)
-    return fcl.Convex(mesh.vertices, len(fs), fs.flatten())
-
-
-class TrimeshStyleManager:
-    """trimesh.collision.CollisionManager's calls to python-fcl (names and data included)."""
-
-    def __init__(self):
-        self._objs = {}
-        self._names = collections.defaultdict(lambda: None)
-        self._manager = fcl.DynamicAABBTreeCollisionManager()
-        self._manager.setup()
-
-    def add_object(self, name, mesh, transform=None):
-        if transform is None:
-            transform = np.eye(4)
-        transform = np.asanyarray(transform, dtype=np.float32)
-        geom = mesh_to_convex(mesh) if mesh.is_convex else mesh_to_BVH(mesh)
-        t = fcl.Transform(transform[:3, :3], transform[:3, 3])
-        o = fcl.CollisionObject(geom, t)
-        if name in self._objs:
-            self._manager.unregisterObject(self._objs[name])
-        self._objs[name] = {"obj": o, "geom": geom}
-        self._names[id(geom)] = name
-        self._manager.registerObject(o)
-        self._manager.update()
-        return o
-
-    def remove_object(self, name):
-        self._manager.unregisterObject(self._objs[name]["obj"])
-        self._manager.update(self._objs[name]["obj"])
-        self._names.pop(id(self._objs.pop(name)["geom"]))
-
-    def set_transform(self, name, transform):
-        o = self._objs[name]["obj"]
-        o.setRotation(transform[:3, :3])
-        o.setTranslation(transform[:3, 3])
-        self._manager.update(o)
-
-    def _request(self, return_names, return_data):
-        if return_names or return_data:
-            return fcl.CollisionData(request=fcl.CollisionRequest(num_max_contacts=100000,
-                                                                  enable_contact=True))
-        return fcl.CollisionData()
-
-    def _extract_name(self, geom):
-        return self._names[id(geom)]
-
-    def in_collision_single(self, mesh, transform=None, return_names=False, return_data=False):
-        if transform is None:
-            transform = np.eye(4)
-        geom = mesh_to_convex(mesh) if mesh.is_convex else mesh_to_BVH(mesh)
-        o = fcl.CollisionObject(geom, fcl.Transform(transform[:3, :3], transform[:3, 3]))
-        cdata = self._request(return_names, return_data)
-        self._manager.collide(o, cdata, fcl.defaultCollisionCallback)
-        names, data = set(), []
-        for contact in cdata.result.contacts:
-            cg = contact.o1
-            if cg == geom:
-                cg = contact.o2
-            name = self._extract_name(cg)
-            names.add(name)
-            data.append((name, contact.pos, contact.normal, contact.penetration_depth))
-        return cdata.result.is_collision, names, data
-
-    def in_collision_internal(self, return_names=False, return_data=False):
-        cdata = self._request(return_names, return_data)
-        self._manager.collide(cdata, fcl.defaultCollisionCallback)
-        names, data = set(), []
-        for contact in cdata.result.contacts:
-            pair = (self._extract_name(contact.o1), self._extract_name(contact.o2))
-            names.add(tuple(sorted(pair)))
-            data.append((pair, contact.b1, contact.b2, contact.penetration_depth))
-        return cdata.result.is_collision, names, data
-
-    def in_collision_other(self, other_manager, return_names=False, return_data=False):
-        cdata = self._request(return_names, return_data)
-        self._manager.collide(other_manager._manager, cdata, fcl.defaultCollisionCallback)
-        names = set()
-        for contact in cdata.result.contacts:
-            pair = (self._extract_name(contact.o1), other_manager._extract_name(contact.o2))
-            if pair[0] is None:
-                pair = (self._extract_name(contact.o2), other_manager._extract_name(contact.o1))
-            names.add(pair)
-        return cdata.result.is_collision, names
-
-    def _distance_result(self, ddata, geom=None):
-        r = ddata.result
-        if geom is None:
-            return r.min_distance, (self._extract_name(r.o1), self._extract_name(r.o2)), r
-        cg = r.o1 if r.o1 != geom else r.o2
-        return r.min_distance, self._extract_name(cg), r
-
-    def min_distance_single(self, mesh, transform=None):
-        if transform is None:
-            transform = np.eye(4)
-        geom = mesh_to_convex(mesh) if mesh.is_convex else mesh_to_BVH(mesh)
-        o = fcl.CollisionObject(geom, fcl.Transform(transform[:3, :3], transform[:3, 3]))
-        ddata = fcl.DistanceData(fcl.DistanceRequest(enable_nearest_points=True,
-                                                     enable_signed_distance=True))
-        self._manager.distance(o, ddata, fcl.defaultDistanceCallback)
-        return self._distance_result(ddata, geom)
-
-    def min_distance_internal(self):
-        ddata = fcl.DistanceData(fcl.DistanceRequest(enable_nearest_points=True),
-                                 fcl.DistanceResult())
-        self._manager.distance(ddata, fcl.defaultDistanceCallback)
-        return self._distance_result(ddata)
-
-    def min_distance_other(self, other_manager):
-        ddata = fcl.DistanceData(fcl.DistanceRequest(enable_nearest_points=True),
-                                 fcl.DistanceResult())
-        self._manager.distance(other_manager._manager, ddata, fcl.defaultDistanceCallback)
-        r = ddata.result
-        pair = (self._extract_name(r.o1), other_manager._extract_name(r.o2))
-        if pair[0] is None:
-            pair = (self._extract_name(r.o2), other_manager._extract_name(r.o1))
-        return r.min_distance, pair, r
+# trimesh's CollisionManager, re-created call for call over the module (trimesh_collision.py)
 
 
 def mesh_scene(n, seed, side):
@@ -636,7 +570,7 @@ def mesh_scene(n, seed, side):
 def both_managers(scene):
     """The trimesh-style manager over the module, and the package's own manager (the oracle:
     same meshes, as trimesh makes them, with cube_collision's trimesh calls)."""
-    mine, ref = TrimeshStyleManager(), cc.CollisionManager()
+    mine, ref = CollisionManager(fcl), cc.CollisionManager()
     for name, mesh, tf in scene:
         mine.add_object(name, mesh, tf)
         ref.add_object(name, mesh, tf)

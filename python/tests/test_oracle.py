@@ -1,13 +1,15 @@
 """Answers against brute force over every pair with FCL's narrow phase, on both backends."""
 
 import itertools
+import pickle
 
 import numpy as np
 import pytest
 
 import cube_collision as cc
 import scenes
-from conftest import brute_colliding, brute_min_distance, build, mixed_scene, same_distance
+from conftest import (BOX_VERTICES, BOX_FACES, TrimeshLike, brute_colliding, brute_min_distance,
+                      build, mixed_scene, same_distance)
 
 SEEDS = [1, 2, 3]
 
@@ -89,6 +91,134 @@ def test_single_queries_equal_brute_force(seed, backend):
             assert same_distance(d, best)
             if best > 0:
                 assert dists[name] == pytest.approx(best, rel=1e-6, abs=1e-9)
+
+
+def test_ellipsoids_equal_brute_force(backend):
+    rng = np.random.default_rng(44)
+    scene = [(f"e{i}", cc.ellipsoid(*rng.uniform(0.2, 0.8, 3)),
+              scenes.pose(scenes.random_rotation(rng), rng.uniform(0, 5, 3))) for i in range(30)]
+    scene += mixed_scene(30, 45, side=5.0)
+    m = build(scene, backend)
+    expected = brute_colliding(scene)
+    assert any(a.startswith("e") and b.startswith("e") for a, b in expected)
+    assert any(a.startswith("e") != b.startswith("e") for a, b in expected)
+    assert m.in_collision_internal(return_names=True) == (True, expected)
+    best, names = brute_min_distance(scene)
+    d, found = m.min_distance_internal(return_names=True)
+    assert same_distance(d, best)
+    probe = cc.ellipsoid(0.9, 0.4, 0.6)
+    for _ in range(5):
+        t = scenes.pose(scenes.random_rotation(rng), rng.uniform(0, 5, 3))
+        hits = {n for n, g, tf in scene if cc.pair_in_collision(g, tf, probe, t)}
+        assert m.in_collision_single(probe, t, return_names=True) == (bool(hits), hits)
+        assert same_distance(m.min_distance_single(probe, t),
+                             min(cc.pair_distance(g, tf, probe, t) for _, g, tf in scene))
+    again = pickle.loads(pickle.dumps(m))
+    assert again.in_collision_internal(return_names=True) == (True, expected)
+    assert again.get_geometry("e0").kind == "ellipsoid"
+    assert again.get_geometry("e0").params == scene[0][1].params
+    for bad in ((0, 1, 1), (1, -1, 1), (1, 1, float("nan"))):
+        with pytest.raises(ValueError, match="ellipsoid"):
+            cc.ellipsoid(*bad)
+
+
+def cone_meets_halfspace(cone, tf, n, d):
+    """Exact: the lowest point of the cone along n is within n . x <= d."""
+    r, h = cone.params
+    R, t = tf[:3, :3], tf[:3, 3]
+    m = R.T @ n
+    low = min(m[2] * h / 2, -m[2] * h / 2 - r * np.hypot(m[0], m[1]))
+    return low <= d - n @ t
+
+
+def test_halfspaces_on_the_cube_backend_equal_brute_force():
+    scene = [s for s in mixed_scene(60, 47, side=5.0) if s[1].kind != "convex"]
+    spaces = [("h0", cc.halfspace([0.2, 0.1, 1.0], 0.8), np.eye(4)),
+              ("h1", cc.halfspace([-1.0, 0.3, 0.2], -4.0), scenes.pose(np.eye(3), [0, 0, 0.5]))]
+    scene += spaces
+    m = build(scene)
+
+    def collides(a, b):
+        (na, ga, ta), (nb, gb, tb) = sorted((a, b), key=lambda s: s[1].kind != "halfspace")
+        if ga.kind == "halfspace" and gb.kind == "cone":
+            # FCL 0.7's cone-halfspace test is wrong; the library answers from the geometry
+            n, d = np.array(ga.params[:3]), ga.params[3]
+            n_w = ta[:3, :3] @ n
+            return cone_meets_halfspace(gb, tb, n_w, d + n_w @ ta[:3, 3])
+        return cc.pair_in_collision(ga, ta, gb, tb)
+
+    expected = {tuple(sorted((a[0], b[0]))) for a, b in itertools.combinations(scene, 2)
+                if collides(a, b)}
+    assert any("h0" in p for p in expected) and any("h1" in p for p in expected)
+    assert m.in_collision_internal(return_names=True) == (True, expected)
+    probe = scenes.pose(np.eye(3), [1.0, 1.0, 0.0])
+    assert m.in_collision_single(cc.sphere(0.3), probe, return_names=True)[1] == \
+        {n for n, g, tf in scene if collides((n, g, tf), ("q", cc.sphere(0.3), probe))}
+    again = pickle.loads(pickle.dumps(m))
+    assert again.in_collision_internal(return_names=True) == (True, expected)
+    # the library's distance to a halfspace: the sphere's gap above n . x = d
+    alone = cc.CollisionManager()
+    alone.add_object("h", cc.halfspace([0, 0, 2.0], 1.0))  # z <= 0.5
+    alone.add_object("s", cc.sphere(0.5), scenes.pose(np.eye(3), [0, 0, 3.0]))
+    assert alone.min_distance_internal() == pytest.approx(2.0)
+    # refused where a plane is: the FCL backend, links, a convex beside it
+    with pytest.raises(ValueError, match="halfspace"):
+        cc.CollisionManager(backend="fcl").add_object("h", cc.halfspace([0, 0, 1.0], 0))
+    with pytest.raises(ValueError, match="halfspace"):
+        cc.Body().add_link(cc.halfspace([0, 0, 1.0], 0))
+    with pytest.raises(ValueError, match="convex"):
+        m.in_collision_single(scenes.random_convex(np.random.default_rng(1), 1.0), probe)
+    with pytest.raises(ValueError, match="normal"):
+        cc.halfspace([0, 0, 0], 1.0)
+
+
+@pytest.mark.parametrize("probe", ["box", "mesh", "convex trimesh"])
+def test_single_query_at_many_poses_equals_each_pose_and_brute_force(backend, probe):
+    """in_collision_single with an (n, 4, 4) array: one answer per pose, each the single-pose
+    call's, under the same filter bits and margins."""
+    scene = mixed_scene(60, 41)
+    m = build(scene, backend)
+    rng = np.random.default_rng(42)
+    masks = {}
+    for name, _, _ in scene[::3]:  # category 2; half of them refuse the query's category 1
+        masks[name] = int(rng.integers(2, 4))
+        m.set_filter(name, 2, masks[name])
+    if probe == "box":
+        geometry, kw = cc.box(0.9, 0.5, 0.4), {}
+    elif probe == "mesh":
+        geometry, kw = cc.mesh(*scenes.uv_sphere(5, 0.5)), {}
+    else:  # trimesh's keyword and a convex trimesh, taken as a solid as for one pose
+        geometry, kw = None, {"mesh": TrimeshLike(BOX_VERTICES * 0.4, BOX_FACES, True)}
+    solid = geometry if geometry is not None else cc.convex(BOX_VERTICES * 0.4, BOX_FACES)
+    side = (4.0 * len(scene)) ** (1 / 3)
+    poses = np.array([scenes.pose(scenes.random_rotation(rng), rng.uniform(0, side, 3))
+                      for _ in range(120)])
+    hits = m.in_collision_single(geometry, poses, **kw)
+    assert isinstance(hits, np.ndarray) and hits.dtype == bool and hits.shape == (len(poses),)
+    assert hits.tolist() == [m.in_collision_single(geometry, p, **kw) for p in poses]
+    expected = [any(masks.get(n, 1) & 1 and cc.pair_in_collision(g, tf, solid, p)
+                    for n, g, tf in scene) for p in poses]
+    assert hits.tolist() == expected
+    assert 0 < sum(expected) < len(expected)
+    # margins: the poses within the margin of an allowed object hit too, as for one pose
+    m.set_margin(0.3)
+    wide = m.in_collision_single(geometry, poses, **kw)
+    assert wide.tolist() == [m.in_collision_single(geometry, p, **kw) for p in poses]
+    assert np.all(wide >= hits) and wide.sum() > hits.sum()
+    assert m.in_collision_single(geometry, poses[:0], **kw).shape == (0,)
+
+
+def test_single_query_at_many_poses_refuses_names_and_bad_poses(backend):
+    m = build(mixed_scene(20, 43), backend)
+    poses = np.array([np.eye(4)] * 3)
+    with pytest.raises(ValueError, match="one pose"):
+        m.in_collision_single(cc.sphere(0.5), poses, return_names=True)
+    bad = poses.copy()
+    bad[2, 0, 0] = 2.0  # a scale
+    with pytest.raises(ValueError, match=r"transforms\[2\]"):
+        m.in_collision_single(cc.sphere(0.5), bad)
+    with pytest.raises(ValueError, match="shape"):
+        m.in_collision_single(cc.sphere(0.5), np.zeros((3, 3, 4)))
 
 
 @pytest.mark.parametrize("other_backend", ["cube", "fcl"])
