@@ -188,6 +188,13 @@ template <typename S>
   return true;
 }
 
+template <typename S>
+fcl::Matrix3<S> rotationFromZ(const fcl::Vector3<S>& v) {
+  return Eigen::Quaternion<S>::FromTwoVectors(fcl::Vector3<S>::UnitZ(), v).toRotationMatrix();
+}
+
+template fcl::Matrix3<double> rotationFromZ<double>(const fcl::Vector3<double>&);
+template fcl::Matrix3<float> rotationFromZ<float>(const fcl::Vector3<float>&);
 template bool exactFirst<double>(const fcl::CollisionGeometry<double>&, const double*,
                                  const double*, double&);
 template bool exactFirst<float>(const fcl::CollisionGeometry<float>&, const double*, const double*,

@@ -95,6 +95,11 @@ bool narrowable(const fcl::CollisionObject<S>& obj) {
   }
 }
 
+/// Eigen::Quaternion<S>::FromTwoVectors(UnitZ, v).toRotationMatrix(): a capsule's local z axis
+/// turned onto v. Compiled once (ray_tests.cpp): Eigen's solver behind it is slow to compile.
+template <typename S>
+fcl::Matrix3<S> rotationFromZ(const fcl::Vector3<S>& v);
+
 // The bisection of the other geometries: a capsule of radius 0 from `from` along the segment,
 // stretched to each t asked. Owned by the query (one per call), so queries share nothing.
 template <typename S>
@@ -109,8 +114,7 @@ class Caster {
     rot_.setIdentity();
     // The capsule's axis is its local z.
     if (len_ > 0)
-      rot_ = Eigen::Quaternion<S>::FromTwoVectors(fcl::Vector3<S>::UnitZ(), d_ / S(len_))
-                 .toRotationMatrix();
+      rot_ = rotationFromZ<S>(d_ / S(len_));
   }
   // Whether the part of the segment from t = 0 to t meets the object.
   bool reaches(const fcl::CollisionObject<S>& obj, double t) {
