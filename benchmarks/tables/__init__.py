@@ -1,0 +1,1 @@
+"""The renderers of make_table.py, one module per kind of result file."""
