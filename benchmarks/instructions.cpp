@@ -12,7 +12,10 @@
 // of the objects moved, update(), 10 steps), distance (10 object distances, FCL's narrow phase),
 // contacts (collideAll self-collide, FCL's narrow phase), states (checkStates of 50 states of a
 // 30-link robot, one thread), first (the first pipeline query of a manager: collideAll with FCL's
-// default request, which builds the per-object volumes). distance, contacts and states count
+// default request, which builds the per-object volumes), still (update() with nothing moved, then
+// a self-collide, counting callback, 10 steps), keep (the same with Config::keep_pairs and 1% of
+// the objects moved before each step, the motion not counted), keepstill (keep_pairs, nothing
+// moved). distance, contacts and states count
 // steady queries: one pipeline query runs before the count, as it would have in a program that
 // queries the world repeatedly.
 
@@ -134,6 +137,26 @@ int main(int argc, char** argv) {
     }
     CALLGRIND_STOP_INSTRUMENTATION;
     world.collide(&run.checksum, countPair);
+    run.calls = 10;
+  } else if (which == "still" || which == "keep" || which == "keepstill") {
+    // A motion loop's steps as a user of FCL's interface runs them: update(), then a
+    // self-collide with the user's callback, 10 steps; 1% of the objects moved before each
+    // step ("keep", outside the count) or none ("still", "keepstill"); "keep" and "keepstill"
+    // with Config::keep_pairs, listed once before the count.
+    cube::Config config;
+    config.keep_pairs = which != "still";
+    cube::CubeCollisionManager<S> loop(config);
+    loop.registerObjects(scene.pointers());
+    loop.setup();
+    loop.update();
+    for (int step = 0; step < 10; ++step) {
+      if (which == "keep")
+        scenes::jitter(scene, 0.01, 0.1 * scenes::typicalSize(o), true, 100 + step);
+      CALLGRIND_START_INSTRUMENTATION;
+      loop.update();
+      loop.collide(&run.checksum, countPair);
+      CALLGRIND_STOP_INSTRUMENTATION;
+    }
     run.calls = 10;
   } else if (which == "distance") {
     const auto qs = queryObjects(o, 10, 11);

@@ -759,6 +759,43 @@ TYPED_TEST(Dynamic, PairListKeepsWalkOrderAndStops) {
   }
 }
 
+// With keep_pairs, an update() that moves nothing keeps the list as it stands: still listed, the
+// same callbacks in the same order (the moved objects' pairs of earlier refreshes still last),
+// the pairs of the current boxes; a motion after it is followed as before.
+TYPED_TEST(Dynamic, PairListStandsThroughUpdatesThatMoveNothing) {
+  using S = TypeParam;
+  auto sc = scene<S>(600, 35);
+  const auto objs = sc.pointers();
+  Config on;
+  on.keep_pairs = true;
+  CubeCollisionManager<S> cube(on);
+  cube.registerObjects(objs);
+  cube.setup();
+  cube.update();  // listed
+  for (std::uint32_t step = 0; step < 3; ++step) {
+    scenes::jitter(sc, 0.02, 30, false, 700 + step);
+    cube.update();  // refreshed: the moved objects' pairs last
+  }
+  ASSERT_TRUE(cube.pairsListed());
+  Calls<S> before;
+  cube.collide(&before, &Calls<S>::record);
+  ASSERT_GT(before.calls.size(), 10u);
+  for (int k = 0; k < 3; ++k) {
+    SCOPED_TRACE("update " + std::to_string(k));
+    cube.update();
+    ASSERT_TRUE(cube.pairsListed());
+    Calls<S> after;
+    cube.collide(&after, &Calls<S>::record);
+    EXPECT_TRUE(after.calls == before.calls);
+    EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+    EXPECT_TRUE(valid(cube));
+  }
+  scenes::jitter(sc, 0.02, 30, false, 710);
+  cube.update();
+  ASSERT_TRUE(cube.pairsListed());
+  EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+}
+
 // A batch build holds each object once and no more room than its objects need: the slots are
 // exactly the objects, the pointer map is sized to its load limit, and a batch into a manager
 // that holds objects (live ones, dead slots) builds over both with the same answers.

@@ -401,7 +401,6 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
   std::uint32_t bad_seq = kNone;
   const Object* bad = nullptr;
   std::vector<std::pair<ObjectId, Box<S>>> crossers;  // change of kind: rare, allocation is fine
-  Box<S> b;
   // A few moved objects refit their paths to the root (stopping where nothing changes); many
   // refit every cube in one pass, which costs about as much as refitting 1/32 of the paths.
   const std::size_t path_limit = std::max<std::size_t>(8, tree_.size() / 32);
@@ -411,6 +410,7 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
     for (std::uint32_t p = 0; p < n; ++p) {
       Item<S>& it = items[p];
       if (it.obj == nullptr) continue;
+      Box<S> b;  // here, not outside the loop: kept in registers, not stored for every object
       read(it.obj, b);
       if constexpr (decltype(margins)::value) b = grown(b, it.id);
       if (sameBox(it.box, b)) {       // unmoved: same kind, nothing to refit

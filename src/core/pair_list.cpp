@@ -52,6 +52,10 @@ void PairList<S>::list(const Scene<S>& scene) {
 template <typename S>
 void PairList<S>::refresh(const Scene<S>& scene, const std::vector<ObjectId>& moved,
                           std::size_t id_bound) {
+  if (moved.empty()) {  // an update that moved nothing: the list stands as it was
+    valid_ = true;
+    return;
+  }
   valid_ = false;
   marks_.assign((id_bound + 63) / 64, 0);
   found_.clear();
