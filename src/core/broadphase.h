@@ -312,7 +312,7 @@ class Broadphase {
   struct Against {
     const Broadphase* other = nullptr;
     /// The other side's view, not a copy: the caller's view was just written, and a copy's wide
-    /// loads of it waited for those stores (the batch's body queries took 1.1x the time).
+    /// loads of it waited for those stores (a measurable loss in the batch's body queries).
     const View<S>* view = nullptr;
     const SingleView<S>* one = nullptr;  ///< a query object: its view's storage (ids kNone)
     Object* obj = nullptr;               ///< a query object: the object

@@ -23,7 +23,7 @@ namespace detail {
 
 /// Fewer objects than this keep no per-object volumes (ObjectTable::keepVolumes): a robot's
 /// links move at every step, and building their records in each update() cost more than the
-/// cull saved (30 links: update() 670 ns longer a pose, the query 170 ns shorter); the pipeline
+/// cull saved (a 30-link robot's update() grew more than its query shrank); the pipeline
 /// builds the volumes of such objects during the query, each at most once.
 inline constexpr std::size_t kVolumeMinObjects = 256;
 

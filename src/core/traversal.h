@@ -88,7 +88,7 @@ bool walkCubePairs(const View<S>& a, const View<S>& b, bool self, void* data, Co
 /// allPairsFit(a, b, self, all_pairs_limit), by the walk of one object down `a` where `b` is a
 /// single object and there is no gate, else by the walk of cube pairs. fn comes third so that it
 /// is passed in registers: from the stack, its first 16-byte load waited for the caller's two
-/// 8-byte stores to retire (the batch's body queries took 1.1x the time).
+/// 8-byte stores to retire (a measurable loss in the batch's body queries).
 template <typename S>
 bool collideViews(const View<S>& a, const View<S>& b, CollideFnArg<S> fn, void* data, bool self,
                   std::size_t all_pairs_limit, QueryStats* stats = nullptr,

@@ -61,7 +61,7 @@ bool continueWithBest(Stack& stack, const bool (&take)[N], const E (&e)[N], E& n
   if constexpr (!V::kOrdered) {
     // From the last entry down, every index a constant once unrolled: the entry gone on with is
     // copied from registers. (With the first taken index found at run time, e[first] was read
-    // back from the array just stored: the robot query took 1.2x the time.)
+    // back from the array just stored, which slowed the robot query.)
     bool found = false;
 #pragma GCC unroll 4
     for (int i = N - 1; i >= 0; --i) {
@@ -208,8 +208,8 @@ template <class F>
 /// `bool enter(std::uint32_t a, std::uint32_t b, State&)`, `bool leafSelf(std::uint32_t)`,
 /// `bool leafPair(std::uint32_t, std::uint32_t)`, `void prefetch(bool in_a, std::uint32_t)`.
 // Inlined into each query's walk, as it was before its expansion step became childPairs: out of
-// line (GCC's choice once the step was a lambda) the robot query took 1.2x the time with the
-// same instruction count, the visitor's state going through memory.
+// line (GCC's choice once the step was a lambda) the robot query was slower at the same
+// instruction count, the visitor's state going through memory.
 template <class V>
 [[gnu::always_inline]] inline bool walkPair(const Node* na_nodes, const Node* nb_nodes,
                                             std::uint32_t root_a, std::uint32_t root_b,
