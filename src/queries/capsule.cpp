@@ -105,8 +105,7 @@ std::vector<fcl::CollisionObject<S>*> objectsInCapsule(const CubeCollisionManage
   const fcl::Vector3<S> d = b - a;
   const S length = d.norm();
   fcl::Matrix3<S> rot = fcl::Matrix3<S>::Identity();
-  if (length != S(0))
-    rot = detail::rotationFromZ<S>(d);
+  if (length != S(0)) rot = detail::rotationFromZ<S>(d);
   const fcl::CollisionObject<S> capsule(std::make_shared<fcl::Capsule<S>>(radius, length), rot,
                                         fcl::Vector3<S>(a + d / S(2)));
 

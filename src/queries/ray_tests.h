@@ -113,8 +113,7 @@ class Caster {
         obj_(cap_) {
     rot_.setIdentity();
     // The capsule's axis is its local z.
-    if (len_ > 0)
-      rot_ = rotationFromZ<S>(d_ / S(len_));
+    if (len_ > 0) rot_ = rotationFromZ<S>(d_ / S(len_));
   }
   // Whether the part of the segment from t = 0 to t meets the object.
   bool reaches(const fcl::CollisionObject<S>& obj, double t) {
