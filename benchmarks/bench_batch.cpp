@@ -100,7 +100,7 @@ struct Robot {
       geometry.push_back(g);
       body.addLink(g);
     }
-    for (std::size_t i = 0; i + 1 < kLinks; ++i) body.allowPair(i, i + 1);
+    for (std::size_t i = 0; i + 1 < kLinks; ++i) body.excludePair(i, i + 1);
   }
   void pose(const fcl::Transform3<S>& base, const double* q, fcl::Transform3<S>* out) const {
     fcl::Transform3<S> t = base;

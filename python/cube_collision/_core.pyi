@@ -75,11 +75,16 @@ class Body:
     def add_link(self, geometry: GeometryLike, *, margin: float = 0.0, category: int = 1,
                  mask: int = ...) -> int:
         """Adds a link; returns its index."""
-    def allow_pair(self, i: int, j: int) -> None:
+    def exclude_pair(self, i: int, j: int) -> None:
         """Links i and j are never checked against each other."""
+    def allow_pair(self, i: int, j: int) -> None:
+        """Alias of exclude_pair (the former name)."""
     def __len__(self) -> int: ...
     @property
-    def allowed_pairs(self) -> List[Tuple[int, int]]: ...
+    def excluded_pairs(self) -> List[Tuple[int, int]]: ...
+    @property
+    def allowed_pairs(self) -> List[Tuple[int, int]]:
+        """Alias of excluded_pairs (the former name)."""
 
 class CollisionManager:
     """Named collision objects with trimesh.collision.CollisionManager's calls, in C++."""
@@ -91,7 +96,10 @@ class CollisionManager:
     @property
     def names(self) -> List[str]: ...
     @property
-    def ignored_pairs(self) -> List[Tuple[str, str]]: ...
+    def excluded_pairs(self) -> List[Tuple[str, str]]: ...
+    @property
+    def ignored_pairs(self) -> List[Tuple[str, str]]:
+        """Alias of excluded_pairs."""
     def __len__(self) -> int: ...
     def __contains__(self, name: object) -> bool: ...
 
@@ -114,10 +122,17 @@ class CollisionManager:
     def set_filter(self, name: str, category: int, mask: int) -> None:
         """Filter bits: a pair is tested if a.category & b.mask and b.category & a.mask."""
     def get_filter(self, name: str) -> Tuple[int, int]: ...
-    def ignore_pair(self, name_a: str, name_b: str) -> None:
+    def exclude_pair(self, name_a: str, name_b: str) -> None:
         """Never test or report this pair."""
-    def unignore_pair(self, name_a: str, name_b: str) -> None: ...
-    def clear_ignored(self) -> None: ...
+    def include_pair(self, name_a: str, name_b: str) -> None:
+        """Undoes exclude_pair."""
+    def clear_excluded(self) -> None: ...
+    def ignore_pair(self, name_a: str, name_b: str) -> None:
+        """Alias of exclude_pair."""
+    def unignore_pair(self, name_a: str, name_b: str) -> None:
+        """Alias of include_pair."""
+    def clear_ignored(self) -> None:
+        """Alias of clear_excluded."""
     def set_margin(self, margin: float, name: Optional[str] = None) -> None:
         """Contact margin of one object or of the manager."""
     def get_margin(self, name: Optional[str] = None) -> float: ...

@@ -15,7 +15,7 @@ namespace cubepy {
 namespace {
 
 /// What the BodySet does not answer of a link: the Python geometry it was made from and its
-/// filter bits (pickling). Its margin and the allowed pairs are read from the BodySet.
+/// filter bits (pickling). Its margin and the excluded pairs are read from the BodySet.
 struct Link {
   GeometryPtr geometry;
   std::uint64_t category, mask;
@@ -40,14 +40,15 @@ struct Body {
     for (const auto& l : links) out.push_back(l.geometry->kind);
     return out;
   }
-  void allowPair(std::size_t i, std::size_t j) {
+  /// `where`: the Python call named in errors.
+  void excludePair(std::size_t i, std::size_t j, const char* where) {
     if (i >= links.size() || j >= links.size() || i == j)
-      throw py::value_error("allow_pair: two different link indices below " +
+      throw py::value_error(std::string(where) + ": two different link indices below " +
                             std::to_string(links.size()) + " expected");
-    set.allowPair(i, j);
+    set.excludePair(i, j);
   }
   /// The pairs of links never checked, (i, j) with i < j, sorted.
-  std::vector<std::pair<std::size_t, std::size_t>> allowed() const {
+  std::vector<std::pair<std::size_t, std::size_t>> excluded() const {
     std::vector<std::pair<std::size_t, std::size_t>> out;
     for (std::size_t i = 0; i < links.size(); ++i)
       for (std::size_t j = i + 1; j < links.size(); ++j)
@@ -134,7 +135,7 @@ Returns a dict of arrays over the states: 'colliding' (bool), and with first_pai
 colliding pair: 'link' (int64, -1 if none), 'object' (the world object's name or None) or
 'other_link' (-1 if none); 'clearance' (float64: with clearance, a free state's smallest
 fcl::distance, 0 if colliding; inf otherwise). self_collision: also links against links (pairs
-not allowed by Body.allow_pair). Filter bits, ignored pairs and margins of the world apply (as
+excluded by Body.exclude_pair). Filter bits, excluded pairs and margins of the world apply (as
 the library's checkStates). threads: None = the manager's; answers do not depend on it. Raises
 ValueError (wrong shape, a pose not finite or rigid, a body without links, backend='fcl'),
 TypeError (non-numeric poses).)doc")
@@ -205,13 +206,23 @@ Body at once; add links from one thread.)doc")
 Adds a link and returns its index (0, 1, ...). margin: it touches what lies within margin + the
 world object's margin. category / mask: filter bits against the world's objects. ValueError for
 a plane or a negative or non-finite margin; TypeError for something not a geometry.)doc")
-      .def("allow_pair", &Body::allowPair, py::arg("i"), py::arg("j"),
-           "Links i and j are never checked against each other (adjacent links). ValueError for "
-           "an unknown index or i == j.")
+      .def(
+          "exclude_pair",
+          [](Body& b, std::size_t i, std::size_t j) { b.excludePair(i, j, "exclude_pair"); },
+          py::arg("i"), py::arg("j"),
+          "Links i and j are never checked against each other (adjacent links). ValueError for "
+          "an unknown index or i == j.")
+      .def(
+          "allow_pair",
+          [](Body& b, std::size_t i, std::size_t j) { b.excludePair(i, j, "allow_pair"); },
+          py::arg("i"), py::arg("j"), "Alias of exclude_pair (the former name).")
       .def("__len__", [](const Body& b) { return b.links.size(); })
       .def_property_readonly(
-          "allowed_pairs", [](const Body& b) { return b.allowed(); },
-          "The allowed pairs, as (i, j) with i < j, sorted.")
+          "excluded_pairs", [](const Body& b) { return b.excluded(); },
+          "The excluded pairs, as (i, j) with i < j, sorted.")
+      .def_property_readonly(
+          "allowed_pairs", [](const Body& b) { return b.excluded(); },
+          "Alias of excluded_pairs (the former name).")
       .def(py::pickle(
           [](const Body& b) {
             py::list links;
@@ -219,7 +230,7 @@ a plane or a negative or non-finite margin; TypeError for something not a geomet
               const Link& l = b.links[i];
               links.append(py::make_tuple(l.geometry, b.set.margin(i), l.category, l.mask));
             }
-            return py::make_tuple(links, b.allowed());
+            return py::make_tuple(links, b.excluded());
           },
           [](py::tuple t) {
             auto b = std::make_shared<Body>();
@@ -229,7 +240,7 @@ a plane or a negative or non-finite margin; TypeError for something not a geomet
                          l[3].cast<std::uint64_t>());
             }
             for (const auto& [i, j] : t[1].cast<std::vector<std::pair<std::size_t, std::size_t>>>())
-              b->allowPair(i, j);
+              b->excludePair(i, j, "unpickling");
             return b;
           }));
 }

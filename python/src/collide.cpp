@@ -348,7 +348,7 @@ void bindCollideQueries(ManagerClass& cls) {
          },
          py::arg("return_names") = false, py::arg("return_data") = false,
          py::arg("max_contacts") = 100000, R"doc(
-Does any pair of objects collide (filter bits and ignored pairs applied; with margins, or come
+Does any pair of objects collide (filter bits and excluded pairs applied; with margins, or come
 closer than margin(a) + margin(b))? As trimesh: returns is_collision, plus (return_names) the set
 of colliding pairs as sorted (name, name) tuples, plus (return_data) the contacts as a dict of
 arrays: 'names' (n, 2) object, 'points' (n, 3), 'normals' (n, 3) (from the first to the second
@@ -398,7 +398,7 @@ return_names / return_data are refused (ValueError) with several poses.)doc")
 Does any object of this manager collide with one of `other_manager` (either backend)? Returns
 is_collision, plus the set of (name here, name there) tuples, plus the contacts dict, as
 in_collision_internal. Filter bits apply across the two managers, whichever backend each has;
-ignored pairs and margins do not. The same manager as other is in_collision_internal.)doc");
+excluded pairs and margins do not. The same manager as other is in_collision_internal.)doc");
 }
 
 }  // namespace cubepy

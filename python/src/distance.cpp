@@ -145,7 +145,7 @@ The smallest distance between two objects (FCL's fcl::distance; <= 0 when some p
 search stops at the first such pair; inf with fewer than two objects that may pair). A pair with
 a plane (the two-sided plane n . x = offset; cube backend only), on which FCL 0.7's fcl::distance
 crashes, gets its exact distance in closed form instead, -1 when they meet; a distance query
-with a plane and an 'fcl'-backend manager is refused (ValueError). Filter bits and ignored pairs apply, margins
+with a plane and an 'fcl'-backend manager is refused (ValueError). Filter bits and excluded pairs apply, margins
 do not. name: only the pairs of that object with the others (trimesh's name=: the distance from
 it to the rest; give it by keyword, trimesh's newest puts it first). Returns distance, plus
 (return_names) the sorted (name, name) tuple (None if none), plus (return_data) a dict:

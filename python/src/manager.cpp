@@ -100,11 +100,11 @@ const Entry* Manager::byGeometry(const fcl::CollisionGeometryd* g) const {
   return it == by_geometry_.end() ? nullptr : it->second;
 }
 
-bool Manager::ignoredPair(const Entry* a, const Entry* b) const {
-  // The cube backend's ignored pairs are its manager's excluded pairs, decided in its walks.
+bool Manager::isExcluded(const Entry* a, const Entry* b) const {
+  // The cube backend's excluded pairs are its manager's, decided in its walks.
   if (cube_) return cube_->isExcluded(a->obj.get(), b->obj.get());
-  if (!a->ignores || !b->ignores) return false;
-  auto [lo, hi] = ignored_.equal_range(key(a, b));
+  if (!a->exclusions || !b->exclusions) return false;
+  auto [lo, hi] = excluded_.equal_range(key(a, b));
   for (auto it = lo; it != hi; ++it)
     if ((it->second.first == a && it->second.second == b) ||
         (it->second.first == b && it->second.second == a))
@@ -121,13 +121,13 @@ double Manager::marginOf(const Entry* e) const {
   return rules([&](auto& r) { return r.margin(o); });
 }
 
-std::vector<std::pair<std::string, std::string>> Manager::ignored() const {
+std::vector<std::pair<std::string, std::string>> Manager::excludedPairs() const {
   std::vector<std::pair<std::string, std::string>> out;
   if (cube_)
     for (const auto& [a, b] : cube_->excludedPairs())
       out.emplace_back(entryOf(a)->name, entryOf(b)->name);
   else
-    for (const auto& [k, p] : ignored_) out.emplace_back(p.first->name, p.second->name);
+    for (const auto& [k, p] : excluded_) out.emplace_back(p.first->name, p.second->name);
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -139,14 +139,14 @@ void Manager::setPairFilter(
 
 void Manager::installPredicate() {
   if (cube_) return;  // the cube manager's excluded pairs need no predicate
-  if (ignored_.empty()) {
+  if (excluded_.empty()) {
     setPairFilter({});
     return;
   }
   setPairFilter([this](fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
     const Entry* ea = entryOf(a);
     const Entry* eb = entryOf(b);
-    return !(ea && eb && ea->ignores && eb->ignores && ignoredPair(ea, eb));
+    return !(ea && eb && ea->exclusions && eb->exclusions && isExcluded(ea, eb));
   });
 }
 
@@ -232,12 +232,12 @@ void Manager::remove(const std::string& name) {
   bp_->unregisterObject(e->obj.get());
   if (!cube_) bp_->setup();
   // The cube manager forgot the object's excluded pairs as it unregistered it.
-  if (e->ignores)
-    for (auto it = ignored_.begin(); it != ignored_.end();) {
+  if (e->exclusions)
+    for (auto it = excluded_.begin(); it != excluded_.end();) {
       if (it->second.first == e || it->second.second == e) {
         const Entry* other = it->second.first == e ? it->second.second : it->second.first;
-        const_cast<Entry*>(other)->ignores--;
-        it = ignored_.erase(it);
+        const_cast<Entry*>(other)->exclusions--;
+        it = excluded_.erase(it);
       } else {
         ++it;
       }
@@ -290,44 +290,44 @@ void Manager::setFilter(const std::string& name, std::uint64_t category, std::ui
   rules([&](auto& r) { r.setFilter(e->obj.get(), category, mask); });
 }
 
-void Manager::ignorePair(const std::string& a, const std::string& b, bool ignore) {
-  noCallback("ignore_pair");
+void Manager::excludePair(const std::string& a, const std::string& b, bool on, const char* where) {
+  noCallback(where);
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   Entry* ea = find(a);
   Entry* eb = find(b);
-  if (ea == eb) throw py::value_error("ignore_pair: an object never pairs with itself");
+  if (ea == eb) throw py::value_error(std::string(where) + ": an object never pairs with itself");
   if (cube_) {
-    cube_->excludePair(ea->obj.get(), eb->obj.get(), ignore);
+    cube_->excludePair(ea->obj.get(), eb->obj.get(), on);
     return;
   }
-  const bool present = ignoredPair(ea, eb);
-  if (ignore && !present) {
-    ignored_.emplace(key(ea, eb), std::make_pair(ea, eb));
-    ea->ignores++;
-    eb->ignores++;
-  } else if (!ignore && present) {
-    auto [lo, hi] = ignored_.equal_range(key(ea, eb));
+  const bool present = isExcluded(ea, eb);
+  if (on && !present) {
+    excluded_.emplace(key(ea, eb), std::make_pair(ea, eb));
+    ea->exclusions++;
+    eb->exclusions++;
+  } else if (!on && present) {
+    auto [lo, hi] = excluded_.equal_range(key(ea, eb));
     for (auto it = lo; it != hi; ++it)
       if ((it->second.first == ea && it->second.second == eb) ||
           (it->second.first == eb && it->second.second == ea)) {
-        ignored_.erase(it);
+        excluded_.erase(it);
         break;
       }
-    ea->ignores--;
-    eb->ignores--;
+    ea->exclusions--;
+    eb->exclusions--;
   }
   installPredicate();
 }
 
-void Manager::clearIgnored() {
-  noCallback("clear_ignored");
+void Manager::clearExcluded(const char* where) {
+  noCallback(where);
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   if (cube_)
     for (const auto& [a, b] : cube_->excludedPairs()) cube_->excludePair(a, b, false);
-  ignored_.clear();
-  for (auto& [n, e] : entries_) e->ignores = 0;
+  excluded_.clear();
+  for (auto& [n, e] : entries_) e->exclusions = 0;
   installPredicate();
 }
 

@@ -74,8 +74,8 @@ struct Entry {
   /// Whether set_margin(name=) gave it a margin of its own (the broadphase keeps the value; it
   /// answers an object's margin, not whether it is its own, which pickling keeps).
   bool own_margin = false;
-  int ignores = 0;  ///< how many ignored pairs name it (the FCL backend's; the cube backend's
-                    ///< are its manager's excluded pairs)
+  int exclusions = 0;  ///< how many excluded pairs name it (the FCL backend's; the cube
+                       ///< backend's are its manager's, CubeCollisionManager::excludePair)
 };
 
 /// Reads or writes on a manager from any Python thread: queries take it shared, mutations
@@ -104,8 +104,10 @@ class Manager {
   void setTransforms(const std::vector<std::string>& names,
                      const std::vector<fcl::Transform3d>& tfs);
   void setFilter(const std::string& name, std::uint64_t category, std::uint64_t mask);
-  void ignorePair(const std::string& a, const std::string& b, bool ignore);
-  void clearIgnored();
+  /// Excludes the pair (never tested or reported), or includes it again (`on` false); `where`
+  /// names the Python call in errors.
+  void excludePair(const std::string& a, const std::string& b, bool on, const char* where);
+  void clearExcluded(const char* where);
   void setMargin(double margin, const std::string* name);
 
   // Reads (callers hold the shared lock, or the GIL with no query running).
@@ -127,7 +129,7 @@ class Manager {
   std::size_t meshes() const { return meshes_; }
   std::size_t planes() const { return planes_; }
   std::size_t convexes() const { return convexes_; }
-  std::vector<std::pair<std::string, std::string>> ignored() const;
+  std::vector<std::pair<std::string, std::string>> excludedPairs() const;
 
   fcl::BroadPhaseCollisionManagerd& broadphase() const { return *bp_; }
   cube::CubeCollisionManagerd* cube() const { return cube_; }
@@ -145,7 +147,7 @@ class Manager {
   decltype(auto) rules(F&& f) const {
     return cube_ ? f(*cube_) : f(*fcl_);
   }
-  bool ignoredPair(const Entry* a, const Entry* b) const;
+  bool isExcluded(const Entry* a, const Entry* b) const;
   void installPredicate();
   void setPairFilter(std::function<bool(fcl::CollisionObjectd*, fcl::CollisionObjectd*)> keep);
 
@@ -156,8 +158,8 @@ class Manager {
   FclBackend* fcl_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Entry>> entries_;
   std::unordered_map<const fcl::CollisionGeometryd*, Entry*> by_geometry_;
-  // The FCL backend's ignored pairs (the cube backend's: CubeCollisionManager::excludePair).
-  std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> ignored_;
+  // The FCL backend's excluded pairs (the cube backend's: CubeCollisionManager::excludePair).
+  std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> excluded_;
   std::size_t own_margins_ = 0;
   std::size_t meshes_ = 0, planes_ = 0, convexes_ = 0;
   std::uint64_t next_seq_ = 0;

@@ -30,7 +30,7 @@ py::dict getState(const Manager& m) {
   d["threads"] = m.threads();
   d["margin"] = m.managerMargin();
   d["objects"] = objects;
-  d["ignored"] = m.ignored();
+  d["ignored"] = m.excludedPairs();  // the key of the first format, kept
   return d;
 }
 
@@ -50,7 +50,7 @@ std::shared_ptr<Manager> fromState(const py::dict& d) {
   m->add(std::move(objs), "unpickling");
   for (py::handle h : d["ignored"]) {
     auto p = h.cast<std::pair<std::string, std::string>>();
-    m->ignorePair(p.first, p.second, true);
+    m->excludePair(p.first, p.second, true, "unpickling");
   }
   return m;
 }
@@ -91,7 +91,7 @@ releases the GIL); a mutation (add, remove, set_transform(s), filters, margins) 
 running queries and runs alone. A mutation from Python code that runs inside a query (a
 callback of the python-fcl layer's _collide_python hooks, or a __del__ while a collide query or pickling
 builds its result) raises RuntimeError instead of waiting for that query. Pickles: the copy is
-rebuilt from geometry, names, transforms, filter bits, ignored pairs and margins.
+rebuilt from geometry, names, transforms, filter bits, excluded pairs and margins.
 
 An unknown name raises cube_collision.UnknownNameError, both the KeyError that the calls below
 name and the ValueError that trimesh raises.)doc");
@@ -166,7 +166,7 @@ an error: as add_object, plus ValueError for a name given twice or lengths that 
       .def(
           "remove_object", [](Manager& self, py::handle name) { self.remove(nameOfArg(name)); },
           py::arg("name"),
-          "Removes the object (and its ignored pairs). KeyError if no object has this name.")
+          "Removes the object (and its excluded pairs). KeyError if no object has this name.")
       .def(
           "set_transform",
           [](Manager& self, py::handle name, py::handle tf) {
@@ -235,30 +235,56 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
           },
           py::arg("name"), "(category, mask) of the object. KeyError for an unknown name.")
       .def(
-          "ignore_pair",
+          "exclude_pair",
           [](Manager& self, py::handle a, py::handle b) {
-            self.ignorePair(nameOfArg(a), nameOfArg(b), true);
+            self.excludePair(nameOfArg(a), nameOfArg(b), true, "exclude_pair");
           },
           py::arg("name_a"), py::arg("name_b"),
-          "Never report or test this pair (an allowed-collision entry), in every collision and "
-          "distance query. KeyError for an unknown name, ValueError for the same name twice.")
+          "Excludes this pair: never tested or reported (an allowed-collision entry), in every "
+          "collision and distance query. KeyError for an unknown name, ValueError for the same "
+          "name twice.")
+      .def(
+          "include_pair",
+          [](Manager& self, py::handle a, py::handle b) {
+            self.excludePair(nameOfArg(a), nameOfArg(b), false, "include_pair");
+          },
+          py::arg("name_a"), py::arg("name_b"),
+          "Undoes exclude_pair (no effect if the pair was not excluded). KeyError for an unknown "
+          "name.")
+      .def(
+          "clear_excluded", [](Manager& self) { self.clearExcluded("clear_excluded"); },
+          "Forgets every excluded pair.")
+      .def_property_readonly(
+          "excluded_pairs",
+          [](const Manager& self) {
+            std::shared_lock lock(self.mutex);
+            return self.excludedPairs();
+          },
+          "The excluded pairs, sorted, as (name, name) tuples (on the cube backend each in the "
+          "order the objects were added).")
+      // The former names, kept for existing code.
+      .def(
+          "ignore_pair",
+          [](Manager& self, py::handle a, py::handle b) {
+            self.excludePair(nameOfArg(a), nameOfArg(b), true, "ignore_pair");
+          },
+          py::arg("name_a"), py::arg("name_b"), "Alias of exclude_pair.")
       .def(
           "unignore_pair",
           [](Manager& self, py::handle a, py::handle b) {
-            self.ignorePair(nameOfArg(a), nameOfArg(b), false);
+            self.excludePair(nameOfArg(a), nameOfArg(b), false, "unignore_pair");
           },
-          py::arg("name_a"), py::arg("name_b"),
-          "Undoes ignore_pair (no effect if the pair was not ignored). KeyError for an unknown "
-          "name.")
-      .def("clear_ignored", &Manager::clearIgnored, "Forgets every ignored pair.")
+          py::arg("name_a"), py::arg("name_b"), "Alias of include_pair.")
+      .def(
+          "clear_ignored", [](Manager& self) { self.clearExcluded("clear_ignored"); },
+          "Alias of clear_excluded.")
       .def_property_readonly(
           "ignored_pairs",
           [](const Manager& self) {
             std::shared_lock lock(self.mutex);
-            return self.ignored();
+            return self.excludedPairs();
           },
-          "The ignored pairs, sorted, as (name, name) tuples (on the cube backend each in the "
-          "order the objects were added).")
+          "Alias of excluded_pairs.")
       .def(
           "set_margin",
           [](Manager& self, double margin, py::object name) {

@@ -11,7 +11,7 @@ def state(m):
     """Everything a mutation could change, for before/after comparisons."""
     return (m.names, [m.get_transform(n).tolist() for n in m.names],
             [m.get_filter(n) for n in m.names], [m.get_margin(n) for n in m.names],
-            m.ignored_pairs, m.in_collision_internal(return_names=True))
+            m.excluded_pairs, m.in_collision_internal(return_names=True))
 
 
 NAN = np.full((4, 4), np.nan)
@@ -53,6 +53,9 @@ CASES = [
     (TypeError, lambda m: m.set_transforms(["o1", 2], np.stack([np.eye(4)] * 2))),
     (KeyError, lambda m: m.set_filter("nobody", 1, 1)),
     (TypeError, lambda m: m.set_filter("o1", -1, 1)),
+    (KeyError, lambda m: m.exclude_pair("o1", "nobody")),
+    (ValueError, lambda m: m.exclude_pair("o1", "o1")),
+    (KeyError, lambda m: m.include_pair("nobody", "o1")),
     (KeyError, lambda m: m.ignore_pair("o1", "nobody")),
     (ValueError, lambda m: m.ignore_pair("o1", "o1")),
     (ValueError, lambda m: m.set_margin(-0.1)),
@@ -92,9 +95,9 @@ def test_unknown_backend():
 
 def test_removed_objects_leave_nothing_behind(backend):
     m = build(mixed_scene(20, 3), backend)
-    m.ignore_pair("o1", "o2")
+    m.exclude_pair("o1", "o2")
     m.remove_object("o1")
-    assert m.ignored_pairs == [] and "o1" not in m and len(m) == 19
+    assert m.excluded_pairs == [] and "o1" not in m and len(m) == 19
     m.add_object("o1", cc.sphere(0.1))  # the name is free again
     assert m.get_filter("o1") == (1, cc.ALL_BITS)
 

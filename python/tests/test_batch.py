@@ -8,7 +8,7 @@ import scenes
 from conftest import build, mixed_scene, same_distance
 
 
-def robot(links=5):
+def robot(links=5, exclude="exclude_pair"):
     body = cc.Body()
     geoms = []
     for i in range(links):
@@ -17,7 +17,7 @@ def robot(links=5):
         geoms.append(g)
         assert body.add_link(g) == i
     for i in range(links - 1):
-        body.allow_pair(i, i + 1)
+        getattr(body, exclude)(i, i + 1)
     return body, geoms
 
 
@@ -48,11 +48,15 @@ def brute_state(world, geoms, pose, allowed, self_collision):
     return first is not None, first, clearance
 
 
+@pytest.mark.parametrize("exclude", ["exclude_pair", "allow_pair"])
 @pytest.mark.parametrize("self_collision", [False, True])
-def test_check_states_equals_brute_force(self_collision):
+def test_check_states_equals_brute_force(self_collision, exclude):
+    """Either name of the excluded link pairs (allow_pair is exclude_pair's alias) gives the
+    answers of brute force over the pairs not excluded."""
     world = mixed_scene(40, 13)
     m = build(world)
-    body, geoms = robot()
+    body, geoms = robot(exclude=exclude)
+    assert body.excluded_pairs == body.allowed_pairs == [(i, i + 1) for i in range(len(geoms) - 1)]
     allowed = {(i, i + 1) for i in range(len(geoms) - 1)}
     rng = np.random.default_rng(5)
     p = poses(rng, 40, len(geoms))
@@ -118,8 +122,9 @@ def test_body_bad_input():
     with pytest.raises(TypeError):
         body.add_link("sphere")
     body.add_link(cc.sphere(1))
-    with pytest.raises(ValueError):
-        body.allow_pair(0, 0)
-    with pytest.raises(ValueError):
-        body.allow_pair(0, 3)
-    assert len(body) == 1
+    for exclude in (body.exclude_pair, body.allow_pair):
+        with pytest.raises(ValueError):
+            exclude(0, 0)
+        with pytest.raises(ValueError):
+            exclude(0, 3)
+    assert len(body) == 1 and body.excluded_pairs == []

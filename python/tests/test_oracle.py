@@ -236,7 +236,7 @@ def test_other_manager_equals_brute_force(backend, other_backend):
     assert pair[0] in ma and pair[1] in mb
 
 
-def test_filters_and_ignored_pairs_equal_brute_force(backend):
+def test_filters_and_excluded_pairs_equal_brute_force(backend):
     scene = mixed_scene(70, 5)
     m = build(scene, backend)
     rng = np.random.default_rng(9)
@@ -246,18 +246,54 @@ def test_filters_and_ignored_pairs_equal_brute_force(backend):
         bits[name] = (cat, mask)
         m.set_filter(name, cat, mask)
     pairs = sorted(brute_colliding(scene))
-    ignored = {pairs[i] for i in range(0, len(pairs), 3)}
-    for a, b in ignored:
-        m.ignore_pair(a, b)
+    excluded = {pairs[i] for i in range(0, len(pairs), 3)}
+    for a, b in excluded:
+        m.exclude_pair(a, b)
 
     def allowed(a, b):
         (ca, ma), (cb, mb) = bits[a], bits[b]
-        return bool(ca & mb) and bool(cb & ma) and tuple(sorted((a, b))) not in ignored
+        return bool(ca & mb) and bool(cb & ma) and tuple(sorted((a, b))) not in excluded
 
     assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene, allowed)
     assert same_distance(m.min_distance_internal(), brute_min_distance(scene, allowed)[0])
-    m.clear_ignored()
-    assert m.ignored_pairs == []
+    m.clear_excluded()
+    assert m.excluded_pairs == []
+
+
+EXCLUDE_NAMES = ("exclude_pair", "include_pair", "excluded_pairs", "clear_excluded")
+ALIAS_NAMES = ("ignore_pair", "unignore_pair", "ignored_pairs", "clear_ignored")
+
+
+@pytest.mark.parametrize("names", [EXCLUDE_NAMES, ALIAS_NAMES], ids=["exclude", "ignore"])
+def test_excluded_pairs_equal_brute_force_under_either_name(backend, names):
+    """exclude_pair / include_pair / excluded_pairs / clear_excluded and their aliases
+    ignore_pair / unignore_pair / ignored_pairs / clear_ignored give the same answers: the
+    colliding pairs and the smallest distance of brute force over the pairs not excluded, and
+    the same list under both property names."""
+    exclude, include, listed, clear = names
+    scene = mixed_scene(60, 31)
+    m = build(scene, backend)
+    pairs = sorted(brute_colliding(scene))
+    chosen = pairs[::2]
+    for a, b in chosen:
+        getattr(m, exclude)(a, b)
+    back = chosen[::3]
+    for a, b in back:
+        getattr(m, include)(b, a)  # either order names the pair
+    excluded = set(chosen) - set(back)
+    assert len(excluded) >= 5 and len(back) >= 2
+    got = getattr(m, listed)
+    assert {tuple(sorted(p)) for p in got} == excluded
+    assert m.excluded_pairs == m.ignored_pairs == got
+
+    def kept(a, b):
+        return tuple(sorted((a, b))) not in excluded
+
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene, kept)
+    assert same_distance(m.min_distance_internal(), brute_min_distance(scene, kept)[0])
+    getattr(m, clear)()
+    assert m.excluded_pairs == m.ignored_pairs == []
+    assert m.in_collision_internal(return_names=True)[1] == set(pairs)
 
 
 def test_margins_equal_brute_force(backend):

@@ -16,12 +16,12 @@ from conftest import build, mixed_scene
 def test_manager_pickles_with_its_rules(backend):
     m = build(mixed_scene(50, 17), backend)
     m.set_filter("o3", 2, 1)
-    m.ignore_pair("o4", "o5")
+    m.exclude_pair("o4", "o5")
     m.set_margin(0.05)
     m.set_margin(0.2, "o6")
     c = pickle.loads(pickle.dumps(m))
     assert c.backend == backend and c.names == m.names
-    assert c.get_filter("o3") == (2, 1) and c.ignored_pairs == [("o4", "o5")]
+    assert c.get_filter("o3") == (2, 1) and c.excluded_pairs == [("o4", "o5")]
     assert c.get_margin() == 0.05 and c.get_margin("o6") == 0.2 and c.get_margin("o7") == 0.05
     for n in m.names:
         np.testing.assert_array_equal(c.get_transform(n), m.get_transform(n))
@@ -33,9 +33,9 @@ def test_body_pickles():
     body = cc.Body()
     body.add_link(cc.capsule(0.1, 1), margin=0.01, category=2, mask=5)
     body.add_link(cc.mesh(*scenes.tube(8, 0.2, 1)))
-    body.allow_pair(0, 1)
+    body.exclude_pair(0, 1)
     b = pickle.loads(pickle.dumps(body))
-    assert len(b) == 2 and b.allowed_pairs == [(0, 1)]
+    assert len(b) == 2 and b.excluded_pairs == [(0, 1)]
 
 
 def test_manager_pickle_keeps_own_margins_apart_from_the_managers(backend):
@@ -66,19 +66,19 @@ def test_manager_pickle_keeps_filter_bits_that_decide_pairs(backend):
     assert (a, b) not in got and got == m.in_collision_internal(return_names=True)[1]
 
 
-def test_body_pickle_keeps_link_margins_bits_and_allowed_pairs():
+def test_body_pickle_keeps_link_margins_bits_and_excluded_pairs():
     """The copy answers every state as the original, on states where the links' margins, filter
-    bits and allowed pairs each decide an answer."""
+    bits and excluded pairs each decide an answer."""
     world = cc.CollisionManager()
     world.add_object("b", cc.sphere(0.5), category=4, mask=4)  # meets category-4 links only
     world.add_object("c", cc.sphere(0.5), scenes.pose(np.eye(3), [10.0, 0, 0]))
 
-    def make(margin, category, allow):
+    def make(margin, category, exclude):
         body = cc.Body()
         for _ in range(3):
             body.add_link(cc.sphere(0.3), margin=margin, category=category)
-        if allow:
-            body.allow_pair(0, 1)
+        if exclude:
+            body.exclude_pair(0, 1)
         return body
 
     def at(*xs):
@@ -93,7 +93,7 @@ def test_body_pickle_keeps_link_margins_bits_and_allowed_pairs():
     ])
     body = make(0.2, 4, True)
     copy = pickle.loads(pickle.dumps(body))
-    assert copy.allowed_pairs == body.allowed_pairs == [(0, 1)]
+    assert copy.excluded_pairs == body.excluded_pairs == [(0, 1)]
 
     def answers(b):
         return world.check_states(b, states, self_collision=True)["colliding"].tolist()

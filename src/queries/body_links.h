@@ -24,7 +24,7 @@ struct BodySet<S>::Links {
   std::vector<detail::Filter> bits;
   std::vector<S> mid_of[3], half_of[3];        // the local AABB per coordinate: centre, half
   std::vector<detail::VolumeSource> source;    // the cull's records' geometry part
-  std::vector<std::uint8_t> allowed;           // size() x size(): 1 = excluded, never checked
+  std::vector<std::uint8_t> excluded;          // size() x size(): 1 = excluded, never checked
   std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in
                                                // [after_at[i], after_at[i + 1]), ascending
   bool any_bits = false;                       // a link has filter bits other than the default
@@ -38,7 +38,7 @@ struct BodySet<S>::Links {
     for (std::size_t i = 0; i < n; ++i) {
       after_at[i] = std::uint32_t(after.size());
       for (std::size_t j = i + 1; j < n; ++j)
-        if (!allowed[i * n + j]) after.push_back(std::uint32_t(j));
+        if (!excluded[i * n + j]) after.push_back(std::uint32_t(j));
     }
     after_at[n] = std::uint32_t(after.size());
   }

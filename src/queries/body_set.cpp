@@ -60,9 +60,9 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   detail::VolumeShape shape;
   const fcl::CollisionObject<S> at_origin(geometry);
   detail::rebuildVolume(at_origin, source, sphere, shape);
-  std::vector<std::uint8_t> allowed((n + 1) * (n + 1), 0);
+  std::vector<std::uint8_t> excluded((n + 1) * (n + 1), 0);
   for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j) allowed[i * (n + 1) + j] = l.allowed[i * n + j];
+    for (std::size_t j = 0; j < n; ++j) excluded[i * (n + 1) + j] = l.excluded[i * n + j];
   detail::BodyView<S> view(std::uint32_t(n + 1));
   // Nothing can throw from here on but allocation, before any member changes.
   l.geometry.reserve(n + 1);
@@ -82,7 +82,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
     l.half_of[d].push_back(half[d]);
   }
   l.source.push_back(source);
-  l.allowed = std::move(allowed);
+  l.excluded = std::move(excluded);
   l.any_bits = l.any_bits || !l.bits.back().isDefault();
   l.view = std::move(view);
   l.listPairs();
@@ -94,14 +94,14 @@ void BodySet<S>::excludePair(std::size_t i, std::size_t j) {
   const std::size_t n = size();
   if (i >= n || j >= n) batchError("BodySet::excludePair", "unknown link index");
   if (i == j) batchError("BodySet::excludePair", "a link is never checked against itself");
-  links_->allowed[i * n + j] = links_->allowed[j * n + i] = 1;
+  links_->excluded[i * n + j] = links_->excluded[j * n + i] = 1;
   links_->listPairs();
 }
 
 template <typename S>
 bool BodySet<S>::checked(std::size_t i, std::size_t j) const {
   const std::size_t n = size();
-  return i < n && j < n && i != j && !links_->allowed[i * n + j];
+  return i < n && j < n && i != j && !links_->excluded[i * n + j];
 }
 
 template <typename S>

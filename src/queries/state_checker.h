@@ -70,7 +70,7 @@ class StateChecker {
         distance_judge_(distance_request_) {
     slots_.resize(links.size());
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
-    self_gate_.excluded = links.allowed.data();  // the pairs BodySet::allowPair rules out
+    self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
     self_gate_.excluded_n = links.size();
     for (int d = 0; d < 3; ++d) {
       c_[d].resize(links.size());
