@@ -980,4 +980,43 @@ TYPED_TEST(Culling, CullPairsKnobKeepsANarrowPhaseCallbacksContacts) {
     cullPairsKnob<TypeParam>(mine_n, mine_n == 170 ? 200 : 700);
 }
 
+// The records' float arithmetic squares differences of coordinates: an object whose centre or
+// size is beyond kVolumeMaxScale gets no volumes and its pairs go to FCL. A ball of radius 1e20
+// and a unit ball centred on its surface touch; collideAll on a manager that keeps records (300
+// more unit balls, apart from everything) finds every contact brute force with fcl::collide finds.
+TEST(CullingRange, PairsBeyondTheRecordsRangeAreLeftToFcl) {
+  using S = double;
+  const S far = 1e20;
+  std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
+  const auto ball = [&](S r, const fcl::Vector3<S>& at) {
+    objs.push_back(std::make_unique<fcl::CollisionObject<S>>(std::make_shared<fcl::Sphere<S>>(r),
+                                                             fcl::Matrix3<S>::Identity(), at));
+    objs.back()->computeAABB();
+    return objs.back().get();
+  };
+  fcl::CollisionObject<S>* big = ball(far, fcl::Vector3<S>::Zero());
+  fcl::CollisionObject<S>* small = ball(1, fcl::Vector3<S>(far, 0, 0));
+  for (int i = 0; i < 300; ++i) ball(1, fcl::Vector3<S>(S(3 * i), 3 * far, 0));
+  ASSERT_TRUE(collides(*big, *small));
+  cube::detail::VolumeSphere sphere;
+  cube::detail::VolumeShape shape;
+  cube::detail::buildVolume(*small, sphere, shape);
+  EXPECT_LT(sphere.r, 0.f) << "no volumes beyond the records range";
+  fcl::CollisionRequest<S> all;
+  all.num_max_contacts = 1 << 20;
+  std::size_t expected = 0;
+  for (std::size_t i = 0; i < objs.size(); ++i)
+    for (std::size_t j = i + 1; j < objs.size(); ++j) {
+      fcl::CollisionResult<S> r;
+      expected += fcl::collide(objs[i].get(), objs[j].get(), all, r);
+    }
+  ASSERT_GT(expected, 0u);
+  cube::CubeCollisionManager<S> m;
+  std::vector<fcl::CollisionObject<S>*> ptrs;
+  for (auto& o : objs) ptrs.push_back(o.get());
+  m.registerObjects(ptrs);
+  m.setup();
+  EXPECT_EQ(cube::collideAll<S>(m, all).numContacts(), expected);
+}
+
 }  // namespace

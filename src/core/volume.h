@@ -17,7 +17,8 @@ namespace cube {
 namespace detail {
 
 /// The bounding sphere: centre c, radius r. r < 0: the object has no volumes the cull may use
-/// (a plane, a halfspace, an octree, no geometry, or a non-finite size or pose).
+/// (a plane, a halfspace, an octree, no geometry, a non-finite size or pose, or a centre or size
+/// beyond kVolumeMaxScale).
 struct VolumeSphere {
   float c[3];
   float r;
@@ -25,6 +26,9 @@ struct VolumeSphere {
 static_assert(sizeof(VolumeSphere) == 16, "four spheres per cache line");
 /// No volumes: the cull leaves the pair to FCL.
 inline constexpr VolumeSphere kNoVolume{{0.f, 0.f, 0.f}, -1.f};
+/// The largest coordinate or size (VolumeShape::scale) of an object with volumes: the cull's float
+/// arithmetic squares differences of coordinates, which must stay below float's range.
+inline constexpr float kVolumeMaxScale = 1e18f;
 
 /// The rest, read only when the spheres settle nothing: the oriented box of the geometry's local
 /// AABB about the sphere's centre (axes the columns of the row-major R, half extents e), the

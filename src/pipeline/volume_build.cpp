@@ -179,8 +179,8 @@ void placeVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSp
     shape.inner_z = local.inner_z;
   }
   const float rf = static_cast<float>(r + slack);
-  // Out of float's range: no volumes (r stays negative).
-  if (std::isfinite(rf) && std::isfinite(shape.scale) && std::isfinite(sphere.c[0]) &&
+  // Beyond what the cull's float arithmetic takes: no volumes (r stays negative).
+  if (std::isfinite(rf) && shape.scale <= kVolumeMaxScale && std::isfinite(sphere.c[0]) &&
       std::isfinite(sphere.c[1]) && std::isfinite(sphere.c[2]) && std::isfinite(shape.e[0]) &&
       std::isfinite(shape.e[1]) && std::isfinite(shape.e[2]))
     sphere.r = rf;
