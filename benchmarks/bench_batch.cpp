@@ -8,7 +8,8 @@
 //
 // Names: batch_<kind>/<scene>/<n>/<manager>; kind states_free (70% of the states free),
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
-// 100 states from a free state, self-collision off), single (the states of states_free, one per
+// 100 states from a free state, self-collision off), edges_free (20 edges of 32 states, every
+// state free: short steps as a planner keeps), single (the states of states_free, one per
 // call: against FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL
 // managers first, then cube (one thread) and cube_t2 (two threads), which report vs_best_fcl = the
 // best FCL manager's time in this run / cube's, and us_per_state. Each case first checks, outside
@@ -198,7 +199,11 @@ struct FclRobot {
   }
 };
 
-enum class Kind { states_free, states_hit, states_self, edges, single };
+enum class Kind { states_free, states_hit, states_self, edges, edges_free, single };
+
+bool isEdges(Kind k) {
+  return k == Kind::edges || k == Kind::edges_free;
+}
 
 const char* kindName(Kind k) {
   switch (k) {
@@ -210,6 +215,8 @@ const char* kindName(Kind k) {
       return "states_self";
     case Kind::edges:
       return "edges";
+    case Kind::edges_free:
+      return "edges_free";
     case Kind::single:
       return "single";
   }
@@ -225,8 +232,11 @@ struct Setup {
   std::unique_ptr<Robot> robot;
   Poses free_mix, hit_mix, self_mix;  // kStates states each
   std::vector<Poses> singles;         // the states of free_mix, one vector each
-  Poses edge_poses;
-  std::vector<std::size_t> edge_starts;
+  Poses edge_poses, free_edge_poses;
+  std::vector<std::size_t> edge_starts, free_edge_starts;
+  const std::vector<std::size_t>& startsOf(Kind k) const {
+    return k == Kind::edges_free ? free_edge_starts : edge_starts;
+  }
   std::map<std::string, std::unique_ptr<Manager>> fcl;
   std::map<std::string, double> best_fcl;  // per kind: the best FCL manager's seconds per call
 
@@ -327,6 +337,33 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
       poseOf(*s.robot, c, s.edge_poses);
     }
   }
+  // Free edges: 20 edges of 32 states whose every state is free, short steps from a free
+  // configuration (the edges a planner keeps).
+  for (int tries = 0; tries < 20000 && s.free_edge_starts.size() < 20; ++tries) {
+    const Config a = randomConfig(rng, s.half);
+    Config b = a;
+    std::uniform_real_distribution<double> step(-0.01 * s.half, 0.01 * s.half), turn(-0.1, 0.1);
+    for (int k = 0; k < 3; ++k) b.base[k] += step(rng);
+    for (double& x : b.q) x += turn(rng);
+    Poses edge;
+    for (std::size_t k = 0; k < 32; ++k) {
+      const double t = double(k) / 31.0;
+      Config c;
+      c.base = a.base + t * (b.base - a.base);
+      for (std::size_t j = 0; j < kLinks; ++j) c.q[j] = a.q[j] + t * (b.q[j] - a.q[j]);
+      poseOf(*s.robot, c, edge);
+    }
+    bool free = true;
+    for (const auto& r : cube::checkStates(*s.world, s.robot->body, edge, one))
+      free = free && !r.colliding;
+    if (!free) continue;
+    s.free_edge_starts.push_back(s.free_edge_poses.size() / kLinks);
+    s.free_edge_poses.insert(s.free_edge_poses.end(), edge.begin(), edge.end());
+  }
+  if (s.free_edge_starts.empty()) {
+    std::fprintf(stderr, "bench_batch: %s/%zu: no free edge found\n", scene.c_str(), n);
+    g_extra_failed = true;
+  }
   return s;
 }
 
@@ -338,6 +375,8 @@ const Poses& posesOf(const Setup& s, Kind k) {
       return s.self_mix;
     case Kind::edges:
       return s.edge_poses;
+    case Kind::edges_free:
+      return s.free_edge_poses;
     default:
       return s.free_mix;
   }
@@ -357,13 +396,13 @@ std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Set
     return via_manager ? r.viaManager(world, p, self) : r.perLink(world, p, self);
   };
   std::vector<std::size_t> out;
-  if (k == Kind::edges) {
-    for (std::size_t e = 0; e < s.edge_starts.size(); ++e) {
-      const std::size_t end =
-          e + 1 < s.edge_starts.size() ? s.edge_starts[e + 1] : poses.size() / kLinks;
+  if (isEdges(k)) {
+    const std::vector<std::size_t>& starts = s.startsOf(k);
+    for (std::size_t e = 0; e < starts.size(); ++e) {
+      const std::size_t end = e + 1 < starts.size() ? starts[e + 1] : poses.size() / kLinks;
       std::size_t first = cube::kNoIndex;
-      for (std::size_t st = s.edge_starts[e]; st < end && first == cube::kNoIndex; ++st)
-        if (check(st)) first = st - s.edge_starts[e];
+      for (std::size_t st = starts[e]; st < end && first == cube::kNoIndex; ++st)
+        if (check(st)) first = st - starts[e];
       out.push_back(first);
     }
   } else {
@@ -377,8 +416,8 @@ std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
   o.threads = threads;
   o.self_collision = k == Kind::states_self;
   const Poses& poses = posesOf(s, k);
-  if (k == Kind::edges)
-    return cube::checkMotions(*s.world, s.robot->body, poses, s.edge_starts,
+  if (isEdges(k))
+    return cube::checkMotions(*s.world, s.robot->body, poses, s.startsOf(k),
                               cube::MotionOrder::path, o);
   std::vector<std::size_t> out;
   if (k == Kind::single) {  // the states of states_free, one call each
@@ -460,8 +499,7 @@ bool runsFcl(const std::string& m, const std::string& scene, std::size_t n, Kind
   if (m == "Naive" && n > 2000) return false;
   if (n >= 100000 && m != "DynamicAABBTree" && m != "DynamicAABBTree_Array") return false;
   // Edges and single states: the two tree managers (the fastest FCL ones on every other kind).
-  if ((k == Kind::edges || k == Kind::single) && m != "DynamicAABBTree" &&
-      m != "DynamicAABBTree_Array")
+  if ((isEdges(k) || k == Kind::single) && m != "DynamicAABBTree" && m != "DynamicAABBTree_Array")
     return false;
   (void)scene;
   return true;
@@ -471,8 +509,8 @@ void registerBatch() {
   for (const char* scene : {"uniform", "clustered", "meshes"})
     for (std::size_t n : {std::size_t(1000), std::size_t(10000), std::size_t(100000)}) {
       if (n >= 100000 && std::string(scene) == "meshes") continue;
-      for (Kind k :
-           {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges, Kind::single}) {
+      for (Kind k : {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges,
+                     Kind::edges_free, Kind::single}) {
         std::vector<std::string> managers;
         for (const char* m : kFcl)
           if (runsFcl(m, scene, n, k)) managers.push_back(m);

@@ -12,6 +12,7 @@
 
 #include "core/kernels/pose_boxes.h"
 #include "cube_collision/batch.h"
+#include "queries/state_checker.h"
 #include "support/batch_world.h"
 
 namespace {
@@ -162,6 +163,71 @@ TEST(SharedWalk, EdgesOfSmallStepsGiveTheSerialScansAnswer) {
     }
   EXPECT_GT(free_edges, 1u);
   EXPECT_LT(free_edges, 11u);
+}
+
+// The box a run's walk takes for a link holds the link's walked box in every state of the run:
+// local AABBs off their origin, rotations that turn their diagonals onto the axes (the widest
+// they reach), positions anywhere in the run's box, far from the origin too.
+TEST(SharedWalk, SweptBoxHoldsTheWalkedBoxAtEveryPose) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1), size(0.01, 2);
+  const double rate = 5e-6;
+  std::size_t tight = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double scale = trial % 4 == 3 ? 1e4 : 1;
+    const fcl::Vector3d half(size(rng), size(rng), size(rng));
+    // Half of the boxes lie off their origin along their diagonal: their farthest corner is
+    // then as far as the bound allows.
+    const fcl::Vector3d mid =
+        trial % 2 ? fcl::Vector3d(u(rng), u(rng), u(rng)) : 0.5 * (u(rng) + 1) * half;
+    const double margin = trial % 3 == 0 ? 0.1 : 0.0;
+    const double reach = mid.norm() + half.norm();
+    fcl::Vector3d lo = scale * fcl::Vector3d(u(rng), u(rng), u(rng)), hi = lo;
+    hi += fcl::Vector3d(size(rng), size(rng), size(rng));
+    const double far = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+    const cube::detail::Box<double> swept =
+        cube::detail::sweptBox(lo, hi, far, reach, rate, margin);
+    for (int k = 0; k < 20; ++k) {
+      fcl::Transform3d pose = fcl::Transform3d::Identity();
+      for (int d = 0; d < 3; ++d)
+        pose.translation()[d] = lo[d] + 0.5 * (u(rng) + 1) * (hi[d] - lo[d]);
+      if (k % 2 == 0) {
+        // The farthest corner turned onto an axis, the origin on that side of the run's box.
+        const int d = k / 2 % 3;
+        const double sign = k % 4 ? 1 : -1;
+        pose.linear() = fcl::Quaterniond::FromTwoVectors((mid + half).normalized(),
+                                                         sign * fcl::Vector3d::Unit(d))
+                            .toRotationMatrix();
+        pose.translation()[d] = sign > 0 ? hi[d] : lo[d];
+      } else {
+        pose.linear() =
+            fcl::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+      }
+      double c[3][1], h[3][1], g[1], wl[3][1], wh[3][1];
+      const double mids[3] = {mid[0], mid[1], mid[2]}, halves[3] = {half[0], half[1], half[2]};
+      cube::detail::poseBoxes(pose.data(), 1,
+                              cube::detail::PoseBoxes<double>{{&mids[0], &mids[1], &mids[2]},
+                                                              {&halves[0], &halves[1], &halves[2]},
+                                                              {c[0], c[1], c[2]},
+                                                              {h[0], h[1], h[2]}});
+      ASSERT_TRUE(
+          cube::detail::walkBoxes(1, cube::detail::WalkBoxes<double>{{c[0], c[1], c[2]},
+                                                                     {h[0], h[1], h[2]},
+                                                                     &margin,
+                                                                     rate,
+                                                                     g,
+                                                                     {wl[0], wl[1], wl[2]},
+                                                                     {wh[0], wh[1], wh[2]}}));
+      for (int d = 0; d < 3; ++d) {
+        ASSERT_LE(swept.lo[d], wl[d][0]) << "trial " << trial << " pose " << k;
+        ASSERT_GE(swept.hi[d], wh[d][0]) << "trial " << trial << " pose " << k;
+        // Within a hundredth of the reach of the bound.
+        tight += wh[d][0] > swept.hi[d] - 0.01 * reach || wl[d][0] < swept.lo[d] + 0.01 * reach;
+      }
+    }
+  }
+  // The turned poses of the boxes off their origin reach the bound.
+  EXPECT_GT(tight, 1000u);
 }
 
 TEST(SharedWalk, WalkBoxesKernelsAgreeBitForBit) {

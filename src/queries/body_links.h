@@ -22,7 +22,8 @@ struct BodySet<S>::Links {
   std::vector<std::shared_ptr<fcl::CollisionGeometry<S>>> geometry;
   std::vector<S> margin;
   std::vector<detail::Filter> bits;
-  std::vector<S> mid_of[3], half_of[3];        // the local AABB per coordinate: centre, half
+  std::vector<S> mid_of[3], half_of[3];  // the local AABB per coordinate: centre, half
+  std::vector<S> reach;  // the farthest point of the local AABB from the link's origin, bounded
   std::vector<detail::VolumeSource> source;    // the cull's records' geometry part
   std::vector<std::uint8_t> excluded;          // size() x size(): 1 = excluded, never checked
   std::vector<std::uint32_t> after, after_at;  // checked pairs (i, after[k]) for k in

@@ -73,6 +73,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
     l.half_of[d].reserve(n + 1);
   }
   l.source.reserve(n + 1);
+  l.reach.reserve(n + 1);
   l.geometry.push_back(std::move(geometry));
   l.margin.push_back(margin);
   l.bits.push_back(detail::Filter{category, mask});
@@ -81,6 +82,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
     l.mid_of[d].push_back(mid[d]);
     l.half_of[d].push_back(half[d]);
   }
+  l.reach.push_back(mid.norm() + half.norm());
   l.source.push_back(source);
   l.excluded = std::move(excluded);
   l.any_bits = l.any_bits || !l.bits.back().isDefault();

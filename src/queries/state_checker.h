@@ -53,6 +53,23 @@ class LinkObject final : public fcl::CollisionObject<S> {
 template <typename S>
 using Links = typename BodySet<S>::Links;
 
+/// A box that holds the walked box (placeBoxes: the posed local AABB grown by rate (1 + its
+/// largest coordinate and half extent) and by margin) of a link whose local AABB lies within
+/// `reach` of its origin, at any rotation and any position in [lo, hi] (`far`: the largest
+/// absolute coordinate there): the positions' box grown by reach, by twice the largest growth
+/// (rounding is far below it) and by the margin.
+template <typename S>
+Box<S> sweptBox(const fcl::Vector3<S>& lo, const fcl::Vector3<S>& hi, S far, S reach, S rate,
+                S margin) {
+  const S g = reach + S(2) * rate * (S(1) + far + reach) + margin;
+  Box<S> u;
+  for (int d = 0; d < 3; ++d) {
+    u.lo[d] = lo[d] - g;
+    u.hi[d] = hi[d] + g;
+  }
+  return u;
+}
+
 // One thread's checker: the links' objects, boxes and records for the state at hand, and the
 // walks of the world. Made once per thread and call; no allocation per state.
 template <typename S>
@@ -75,6 +92,18 @@ class StateChecker {
     self_gate_.excluded_n = links.size();
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
     close_.resize(body_.leafCount());
+    const std::size_t n = links.size();
+    for (int d = 0; d < 3; ++d) {
+      c_[d].resize(n);
+      h_[d].resize(n);
+      lo_[d].resize(n);
+      hi_[d].resize(n);
+    }
+    grow_.resize(n);
+    need_.resize(n);
+    at_lo_.resize(n);
+    at_hi_.resize(n);
+    far_.resize(n);
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
     eager_objects_ = bool(world.predicate());
   }
@@ -99,21 +128,20 @@ class StateChecker {
   /// states[j] those of state j, and returns how many it took (1 or more), each then checked by
   /// checkPlaced(j). Where states lie close together (an edge's, leaf by leaf of the links'
   /// tree), it takes the largest such run of count, count / 2, ... states (kGroupMinStates or
-  /// more), places them here, and those links share one walk of the world over the union of
-  /// their boxes, whose pairs each state then filters by its own boxes; the other links walk the
-  /// world state by state. Otherwise it takes all `count`, each placed and walking as it is
-  /// checked. With a pair predicate (which sees each state's link objects) every state walks.
-  /// The poses must stay until the last checkPlaced of the run.
+  /// more), and those links share one walk of the world over a box that holds all their boxes
+  /// in those states (from their positions alone: no state is placed here); a state then places
+  /// only the links that met something there, and tests their boxes against those objects. The
+  /// other links walk the world state by state. Otherwise it takes all `count`, each state
+  /// placed and walking as it is checked. With a pair predicate (which sees each state's link
+  /// objects) every state walks. The poses must stay until the last checkPlaced of the run.
   std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self) {
     const std::size_t n = links_.size();
-    first_bad_ = count;
-    gathered_ = false;
-    stored_ = false;
+    shared_ = false;
     for (std::size_t j = 0; j < count; ++j) state_poses_[j] = states[j];
     if (eager_objects_) return count;
     const std::size_t all_count = count;
     bool any = false, all = true;
-    for (; count >= kGroupMinStates && !any; count /= 2) {
+    for (; count >= kGroupMinStates; count /= 2) {
       all = true;
       for (std::size_t k = 0; k < body_.leafCount(); ++k) {
         close_[k] = closeTogether(states, count, body_.leafFirst(k), body_.leafSize(k));
@@ -123,36 +151,24 @@ class StateChecker {
       if (any) break;
     }
     if (!any) return all_count;
-    first_bad_ = count;
-    stored_ = true;
-    reserve(count * n);
-    for (std::size_t j = 0; j < count; ++j)
-      if (!placeBoxes(states[j], j * n)) {
-        first_bad_ = j;  // checked one by one up to it; the states after it are never checked
-        return count;
-      }
-    // The union of each link's boxes over the states; an empty box for the links that walk
-    // state by state.
+    // A box around each link of a close leaf over the states (sweptBox); an empty box for the
+    // links that walk state by state.
+    const S rate = S(judge_.rate());
     for (std::size_t k = 0; k < body_.leafCount(); ++k)
       for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l) {
-        Box<S> u = stateBox(l);
+        Box<S>& u = body_.box(l);
         if (close_[k]) {
-          for (std::size_t j = 1; j < count; ++j)
-            for (int d = 0; d < 3; ++d) {
-              u.lo[d] = std::min(u.lo[d], state_lo_[d][j * n + l]);
-              u.hi[d] = std::max(u.hi[d], state_hi_[d][j * n + l]);
-            }
+          u = sweptBox(at_lo_[l], at_hi_[l], far_[l], links_.reach[l], rate, links_.margin[l]);
         } else {
           for (int d = 0; d < 3; ++d) {
             u.lo[d] = std::numeric_limits<S>::max();
             u.hi[d] = std::numeric_limits<S>::lowest();
           }
         }
-        body_.box(l) = u;
       }
     body_.refit();
-    gathered_ = true;
-    self_gathered_ = all;
+    shared_ = true;
+    self_shared_ = all;
     gather_.clear();
     if (world_.size() != 0)
       world_.collide(body_.view(), links_.any_bits ? links_.bits.data() : nullptr, this,
@@ -167,29 +183,48 @@ class StateChecker {
     for (const auto& g : gather_)
       world_pairs_[bucket_fill_[g.first]++] = WorldPair{scene.item(g.second).box, g.second};
     self_pairs_.clear();
-    if (self && self_gathered_)
+    if (self && self_shared_)
       collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onGatherSelf), this,
                    true, 0, nullptr, &self_gate_);
+    // The links each state places: those that met something, those of leaves that walk, and
+    // every link when the self pairs walk state by state.
+    runs_.clear();
+    for (std::size_t k = 0; k < body_.leafCount(); ++k)
+      for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l)
+        need_[l] = !close_[k] || (self && !self_shared_) || world_at_[l] != world_at_[l + 1];
+    for (const auto& [i, j] : self_pairs_) need_[i] = need_[j] = 1;
+    for (std::uint32_t l = 0; l < n; ++l)
+      if (need_[l]) {
+        if (!runs_.empty() && runs_.back().second == l)
+          ++runs_.back().second;
+        else
+          runs_.emplace_back(l, l + 1);
+      }
     return count;
   }
 
-  /// State j of the group placed last: as check() for its poses.
+  /// State j of the run placeGroup took last: as check() for its poses.
   int checkPlaced(std::size_t j, bool self, bool first_pair, bool clearance, StateResult<S>* out) {
     const std::size_t n = links_.size();
-    if (!stored_) {  // placed now, into the walk's boxes
-      reserve(n);
-      if (!placeBoxes(state_poses_[j], 0)) return kBadPose;
-      select(0, state_poses_[j]);
-      for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(l);
-      body_.refit();
-    } else {
-      if (j >= first_bad_) return kBadPose;
-      select(j * n, state_poses_[j]);
-      if (!gathered_) {
-        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(j * n + l);
+    const fcl::Transform3<S>* poses = state_poses_[j];
+    select(poses);
+    if (!shared_ || clearance) {  // every link (a clearance walks them all)
+      if (!place(poses, 0, n)) return kBadPose;
+      if (!shared_) {
+        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = walkedBox(l);
         body_.refit();
       }
+    } else {
+      // The links that met nothing in the run are not placed; their poses are still checked
+      // (all of them placed where the check cannot tell at once).
+      if (sumIsFinite(poses->data(), 16 * n)) {
+        for (const auto& [first, end] : runs_) place(poses, first, end - first);
+      } else if (!place(poses, 0, n)) {
+        return kBadPose;
+      }
     }
+    if (eager_objects_)  // a predicate sees every link object the walk offers: placed now
+      for (std::uint32_t l = 0; l < n; ++l) object(l);
     // What the check keeps: the first pair in Candidate's order, or any pair.
     if (first_pair ? search<FirstInOrder<Candidate>>(self) : search<AnyHit<Candidate>>(self)) {
       if (out != nullptr && first_pair) {
@@ -271,7 +306,7 @@ class StateChecker {
   bool search(bool self) {
     C& hits = this->hits<C>();
     hits.reset();
-    if (gathered_) return searchGathered<C>(self);
+    if (shared_) return searchShared<C>(self);
     // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
     // the first group of links that touches (as a link-by-link check does), and a free one
     // walks little more than the whole tree at once would.
@@ -294,17 +329,16 @@ class StateChecker {
   // search() on the pairs the group's walk found, each kept if the state's boxes overlap, for
   // the leaves of links that took part in it; the other leaves walk the world as search() does.
   template <class C>
-  bool searchGathered(bool self) {
+  bool searchShared(bool self) {
     C& hits = this->hits<C>();
     const std::size_t n = links_.size();
-    const std::size_t at = state_at_;
     for (std::size_t k = 0; k < body_.leafCount() && !hits.found(); ++k) {
       pending_.clear();
       const std::uint32_t first = body_.leafFirst(k), end = first + body_.leafSize(k);
       if (close_[k]) {
         for (std::uint32_t l = first; l < end; ++l) {
           if (world_at_[l] == world_at_[l + 1]) continue;
-          const Box<S> box = stateBox(at + l);
+          const Box<S> box = walkedBox(l);
           for (std::uint32_t i = world_at_[l]; i < world_at_[l + 1]; ++i) {
             const WorldPair& w = world_pairs_[i];
             if (!overlap(box, w.box)) continue;
@@ -312,7 +346,7 @@ class StateChecker {
           }
         }
       } else if (world_.size() != 0) {
-        for (std::uint32_t l = first; l < end; ++l) body_.box(l) = stateBox(at + l);
+        for (std::uint32_t l = first; l < end; ++l) body_.box(l) = walkedBox(l);
         body_.refitLeaf(k);
         world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
                        CollideFn<S>(&StateChecker::onWorld<C>), nullptr);
@@ -322,13 +356,12 @@ class StateChecker {
     }
     if (self) {
       pending_.clear();
-      if (self_gathered_) {
+      if (self_shared_) {
         for (const auto& [i, j] : self_pairs_)
-          if (overlap(stateBox(at + i), stateBox(at + j)) &&
-              onLinks<C>(nullptr, i, nullptr, j, this))
+          if (overlap(walkedBox(i), walkedBox(j)) && onLinks<C>(nullptr, i, nullptr, j, this))
             return true;
       } else {
-        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(at + l);
+        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = walkedBox(l);
         body_.refit();
         collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this,
                      true, 0, nullptr, &self_gate_);
@@ -347,9 +380,10 @@ class StateChecker {
   // Whether links first .. first + size - 1 lie close enough together over the states to share
   // a walk: each link's positions over the states span (extents summed over the links) less
   // than kGroupSpread - 1 times the links' own extents (the union of a link's boxes is then
-  // within about kGroupSpread times one state's). Stops at the first link that says no.
+  // within about kGroupSpread times one state's). Keeps each link's positions' box (at_lo_,
+  // at_hi_) and largest coordinate (far_). Stops at the first link that says no.
   bool closeTogether(const fcl::Transform3<S>* const* states, std::size_t count,
-                     std::uint32_t first, std::uint32_t size) const {
+                     std::uint32_t first, std::uint32_t size) {
     S extent = 0;
     for (std::uint32_t l = first; l < first + size; ++l)
       extent += S(2) * (links_.half_of[0][l] + links_.half_of[1][l] + links_.half_of[2][l]) +
@@ -364,53 +398,39 @@ class StateChecker {
       }
       spread += (hi - lo).sum();
       if (!(spread <= limit)) return false;  // NaN: no either
+      at_lo_[l] = lo;
+      at_hi_[l] = hi;
+      far_[l] = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
     }
     return true;
   }
 
-  // Room for `entries` links' states.
-  void reserve(std::size_t entries) {
-    if (room_ >= entries) return;  // grown to the largest group seen, and kept
-    room_ = entries;
-    for (int d = 0; d < 3; ++d) {
-      state_c_[d].reset(new S[room_]);
-      state_h_[d].reset(new S[room_]);
-    }
-    state_grow_.reset(new S[room_]);
-    for (int d = 0; d < 3; ++d) {
-      state_lo_[d].reset(new S[room_]);
-      state_hi_[d].reset(new S[room_]);
-    }
-  }
-
-  // A state's boxes from its poses, into its links' entries from `at`: the boxes the walks test
-  // (the exact box of each posed local AABB grown by the cull's rate, so that pairs FCL counts as
-  // touching within its tolerance are met, and by the link's margin). False for a pose with a
-  // NaN or infinite entry (its link in bad_link_).
-  bool placeBoxes(const fcl::Transform3<S>* poses, std::size_t at) {
-    const std::size_t n = links_.size();
-    S* c[3] = {state_c_[0].get() + at, state_c_[1].get() + at, state_c_[2].get() + at};
-    S* h[3] = {state_h_[0].get() + at, state_h_[1].get() + at, state_h_[2].get() + at};
+  // Links first .. first + count - 1 of the state posed by `poses` (the one selected): their
+  // boxes, the boxes the walks test (walkedBox: the exact box of each posed local AABB grown by
+  // the cull's rate, so that pairs FCL counts as touching within its tolerance are met, and by
+  // the link's margin). False for a pose with a NaN or infinite entry (its link in bad_link_).
+  bool place(const fcl::Transform3<S>* poses, std::size_t first, std::size_t count) {
+    const std::size_t f = first;
     static_assert(sizeof(fcl::Transform3<S>) == 16 * sizeof(S), "a pose is 16 numbers");
-    // All links at once, in the kernels (four per instruction with AVX2): placing the links is
-    // most of a free state's check in a clustered world.
-    poseBoxes(
-        poses->data(), n,
-        PoseBoxes<S>{{links_.mid_of[0].data(), links_.mid_of[1].data(), links_.mid_of[2].data()},
-                     {links_.half_of[0].data(), links_.half_of[1].data(), links_.half_of[2].data()},
-                     {c[0], c[1], c[2]},
-                     {h[0], h[1], h[2]}});
-    const bool finite = walkBoxes(
-        n,
-        WalkBoxes<S>{{c[0], c[1], c[2]},
-                     {h[0], h[1], h[2]},
-                     links_.margin.data(),
-                     S(judge_.rate()),
-                     state_grow_.get() + at,
-                     {state_lo_[0].get() + at, state_lo_[1].get() + at, state_lo_[2].get() + at},
-                     {state_hi_[0].get() + at, state_hi_[1].get() + at, state_hi_[2].get() + at}});
+    // In the kernels (four links per instruction with AVX2): placing the links is most of a
+    // free state's check in a clustered world.
+    poseBoxes(poses[f].data(), count,
+              PoseBoxes<S>{{links_.mid_of[0].data() + f, links_.mid_of[1].data() + f,
+                            links_.mid_of[2].data() + f},
+                           {links_.half_of[0].data() + f, links_.half_of[1].data() + f,
+                            links_.half_of[2].data() + f},
+                           {c_[0].data() + f, c_[1].data() + f, c_[2].data() + f},
+                           {h_[0].data() + f, h_[1].data() + f, h_[2].data() + f}});
+    const bool finite =
+        walkBoxes(count, WalkBoxes<S>{{c_[0].data() + f, c_[1].data() + f, c_[2].data() + f},
+                                      {h_[0].data() + f, h_[1].data() + f, h_[2].data() + f},
+                                      links_.margin.data() + f,
+                                      S(judge_.rate()),
+                                      grow_.data() + f,
+                                      {lo_[0].data() + f, lo_[1].data() + f, lo_[2].data() + f},
+                                      {hi_[0].data() + f, hi_[1].data() + f, hi_[2].data() + f}});
     if (!finite) {  // every entry of R and t reaches c or h
-      for (std::size_t l = 0; l < n; ++l)
+      for (std::size_t l = first; l < first + count; ++l)
         if (!poses[l].linear().allFinite() || !poses[l].translation().allFinite()) {
           bad_link_ = l;
           return false;
@@ -419,30 +439,20 @@ class StateChecker {
     return true;
   }
 
-  // The walked box of entry e (a link in a state).
-  Box<S> stateBox(std::size_t e) const {
+  // Link l's walked box in the state selected.
+  Box<S> walkedBox(std::size_t l) const {
     Box<S> b;
     for (int d = 0; d < 3; ++d) {
-      b.lo[d] = state_lo_[d][e];
-      b.hi[d] = state_hi_[d][e];
+      b.lo[d] = lo_[d][l];
+      b.hi[d] = hi_[d][l];
     }
     return b;
   }
 
-  // Makes the state whose entries start at `at`, posed by `poses`, the one the records,
-  // objects and probes read.
-  void select(std::size_t at, const fcl::Transform3<S>* poses) {
+  // Makes the state posed by `poses` the one the records, objects and probes read.
+  void select(const fcl::Transform3<S>* poses) {
     ++state_;
-    state_at_ = at;
-    for (int d = 0; d < 3; ++d) {
-      c_[d] = state_c_[d].get() + at;
-      h_[d] = state_h_[d].get() + at;
-    }
-    grow_ = state_grow_.get() + at;
     poses_ = poses;
-    // A predicate sees every link object the walk offers: placed now. Otherwise on first use.
-    if (eager_objects_)
-      for (std::uint32_t l = 0; l < links_.size(); ++l) object(l);
   }
 
  public:
@@ -644,24 +654,21 @@ class StateChecker {
   const PairJudge<S> distance_judge_;  // whether a pair can lower the clearance
   std::uint64_t state_ = 0;
   std::vector<Slot> slots_;
-  // Per state of the group and link (state j's from j * size()): the posed local AABB per
-  // coordinate (centre, half extents), the cull's rate times its scale, the box walked.
-  std::unique_ptr<S[]> state_c_[3], state_h_[3], state_grow_, state_lo_[3], state_hi_[3];
-  std::size_t room_ = 0;  // the entries of each
+  // Per link, in the state at hand: the posed local AABB per coordinate (centre, half
+  // extents), the cull's rate times its scale, the walked box.
+  std::vector<S> c_[3], h_[3], grow_, lo_[3], hi_[3];
+  const fcl::Transform3<S>* poses_ = nullptr;  // the state's
   const fcl::Transform3<S>* state_poses_[kGroupStates] = {};
-  bool stored_ = false;        // the group's states are placed (else each as it is checked)
-  std::size_t first_bad_ = 0;  // the group's first state with a bad pose, or its size
-  // The selected state: its slices of the above, and its poses.
-  std::size_t state_at_ = 0;
-  const S* c_[3] = {};
-  const S* h_[3] = {};
-  const S* grow_ = nullptr;
-  const fcl::Transform3<S>* poses_ = nullptr;
-  // A walk shared by the group: per link l its world objects world_pairs_[world_at_[l] ..
-  // world_at_[l + 1]), and the pairs of links whose boxes may meet.
-  bool gathered_ = false;
-  bool self_gathered_ = false;       // every leaf took part: the self pairs too
-  std::vector<std::uint8_t> close_;  // per leaf of the links' tree: its links took part
+  // A walk shared by the run placeGroup took: per link l its world objects
+  // world_pairs_[world_at_[l] .. world_at_[l + 1]), the pairs of links whose boxes may meet, and
+  // the links a state places (runs_, ranges of links), from the links' positions over the run.
+  bool shared_ = false;
+  bool self_shared_ = false;                    // every leaf took part: the self pairs too
+  std::vector<std::uint8_t> close_;             // per leaf of the links' tree: its links took part
+  std::vector<std::uint8_t> need_;              // per link: placed in each state
+  std::vector<fcl::Vector3<S>> at_lo_, at_hi_;  // per link: its positions' box over the run
+  std::vector<S> far_;                          // per link: its positions' largest coordinate
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;
   std::vector<std::pair<std::uint32_t, ObjectId>> gather_;  // (link, world id) in walk order
   std::vector<std::uint32_t> world_at_, bucket_fill_;
   std::vector<WorldPair> world_pairs_;

@@ -53,7 +53,29 @@ bool walkPortable(std::size_t begin, std::size_t n, const WalkBoxes<S>& io) {
   return ok;
 }
 
+// The sum of finite numbers is finite or overflows; one with a NaN or an infinity is not.
+template <typename S>
+bool sumPortable(const S* x, std::size_t begin, std::size_t n, S sum) {
+  for (std::size_t k = begin; k < n; ++k) sum += x[k];
+  return sum - sum == S(0);
+}
+
 #if defined(CUBE_POSE_AVX2)
+
+[[gnu::target("avx2")]] std::size_t sumAvx2(const double* x, std::size_t n, double& sum) {
+  __m256d a = _mm256_setzero_pd(), b = a, c = a, d = a;
+  std::size_t k = 0;
+  for (; k + 16 <= n; k += 16) {
+    a = _mm256_add_pd(a, _mm256_loadu_pd(x + k));
+    b = _mm256_add_pd(b, _mm256_loadu_pd(x + k + 4));
+    c = _mm256_add_pd(c, _mm256_loadu_pd(x + k + 8));
+    d = _mm256_add_pd(d, _mm256_loadu_pd(x + k + 12));
+  }
+  double lanes[4];
+  _mm256_storeu_pd(lanes, _mm256_add_pd(_mm256_add_pd(a, b), _mm256_add_pd(c, d)));
+  sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+  return k;
+}
 
 // walkPortable four objects at a time, the same operations per lane in the same order; the
 // objects done (a multiple of four).
@@ -163,6 +185,23 @@ bool walkBoxes(std::size_t n, const WalkBoxes<float>& io) {
 
 bool walkBoxesPortable(std::size_t n, const WalkBoxes<double>& io) {
   return walkPortable(0, n, io);
+}
+
+bool sumIsFinite(const double* x, std::size_t n) {
+  std::size_t done = 0;
+  double sum = 0;
+#if defined(CUBE_POSE_AVX2)
+  if (hasAvx2()) done = sumAvx2(x, n, sum);
+#endif
+  return sumPortable(x, done, n, sum);
+}
+
+bool sumIsFinite(const float* x, std::size_t n) {
+  return sumPortable(x, 0, n, 0.0f);
+}
+
+bool sumIsFinitePortable(const double* x, std::size_t n) {
+  return sumPortable(x, 0, n, 0.0);
 }
 
 }  // namespace detail

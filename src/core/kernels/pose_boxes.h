@@ -44,6 +44,12 @@ void poseBoxesPortable(const double* poses, std::size_t n, const PoseBoxes<doubl
 /// finite. Every version gives the same results, bit for bit.
 bool walkBoxes(std::size_t n, const WalkBoxes<double>& io);
 bool walkBoxes(std::size_t n, const WalkBoxes<float>& io);
+/// Whether the sum of x[0 .. n-1] is finite: then every x is (false: one is not, or the sum
+/// overflowed). Versions may differ on sums near overflow only.
+bool sumIsFinite(const double* x, std::size_t n);
+bool sumIsFinite(const float* x, std::size_t n);
+bool sumIsFinitePortable(const double* x, std::size_t n);
+
 /// The version without AVX2, for the tests.
 bool walkBoxesPortable(std::size_t n, const WalkBoxes<double>& io);
 
