@@ -230,6 +230,27 @@ TEST(SharedWalk, SweptBoxHoldsTheWalkedBoxAtEveryPose) {
   EXPECT_GT(tight, 1000u);
 }
 
+// The pose check: a NaN or an infinity anywhere in a state's poses (any length, any place) is
+// seen by every version; finite poses pass.
+TEST(SharedWalk, PoseSumCheckSeesEveryNonFiniteEntry) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1e3, 1e3);
+  for (const std::size_t n : {1, 7, 16, 17, 33, 480, 481}) {
+    std::vector<double> x(n);
+    for (double& v : x) v = u(rng);
+    EXPECT_TRUE(cube::detail::sumIsFinite(x.data(), n));
+    EXPECT_TRUE(cube::detail::sumIsFinitePortable(x.data(), n));
+    for (std::size_t at = 0; at < n; at += std::max<std::size_t>(1, n / 7))
+      for (const double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+        const double keep = x[at];
+        x[at] = bad;
+        EXPECT_FALSE(cube::detail::sumIsFinite(x.data(), n)) << n << " " << at;
+        EXPECT_FALSE(cube::detail::sumIsFinitePortable(x.data(), n)) << n << " " << at;
+        x[at] = keep;
+      }
+  }
+}
+
 TEST(SharedWalk, WalkBoxesKernelsAgreeBitForBit) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-50, 50), pos(0, 3), m(0, 0.5);
