@@ -10,10 +10,14 @@
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
 // 100 states from a free state, self-collision off), single (the states of states_free, one per
 // call: against FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL
-// managers first, then cube (one thread) and cube_t2 (two threads), which report vs_best_fcl = the
-// best FCL manager's time in this run / cube's, and us_per_state. Each case first checks, outside
-// the timed part, that its answers equal the per-link check with FCL's dynamic tree (state by
-// state, edge by edge); a mismatch fails the binary.
+// managers first, then cube_loop and cube_loop_t2 (the library's single-state path on one and two
+// threads: a CubeCollisionManager of the 30 link objects moved per state, setTransform,
+// computeAABB and update(), then collideAll(world, robot), and with self-collision collideAll of
+// the robot manager, adjacent links excluded), then cube (one thread) and cube_t2 (two threads),
+// which report vs_best_fcl = the best FCL manager's time in this run / cube's, vs_loop = the
+// cube_loop case's time of the same thread count / cube's, and us_per_state. Each case first
+// checks, outside the timed part, that its answers equal the per-link check with FCL's dynamic tree
+// (state by state, edge by edge); a mismatch fails the binary.
 
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_SSaP.h>
@@ -40,6 +44,7 @@
 
 #include "cube_collision/batch.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
 #include "scenes.h"
 
 extern bool g_extra_failed;
@@ -198,6 +203,36 @@ struct FclRobot {
   }
 };
 
+// The library's single-state path: a robot CubeCollisionManager of the link objects, moved per
+// state, and the pipeline's query (collideAll) against the world.
+struct CubeLoop {
+  std::vector<std::unique_ptr<Object>> links;
+  cube::CubeCollisionManager<S> manager;
+  cube::NarrowPhaseOptions<S> options;
+
+  CubeLoop(const Robot& r, int threads) {
+    std::vector<Object*> ptrs;
+    for (const auto& g : r.geometry) {
+      links.push_back(std::make_unique<Object>(g));
+      ptrs.push_back(links.back().get());
+    }
+    manager.registerObjects(ptrs);
+    manager.setup();
+    for (std::size_t i = 0; i + 1 < ptrs.size(); ++i) manager.excludePair(ptrs[i], ptrs[i + 1]);
+    options.threads = threads;
+  }
+  bool check(const Manager& world, const fcl::Transform3<S>* poses, bool self) {
+    for (std::size_t l = 0; l < links.size(); ++l) {
+      links[l]->setTransform(poses[l]);
+      links[l]->computeAABB();
+    }
+    manager.update();
+    if (cube::collideAll<S>(world, manager, fcl::CollisionRequest<S>(), options).isCollision())
+      return true;
+    return self && cube::collideAll<S>(manager, fcl::CollisionRequest<S>(), options).isCollision();
+  }
+};
+
 enum class Kind { states_free, states_hit, states_self, edges, single };
 
 const char* kindName(Kind k) {
@@ -228,7 +263,8 @@ struct Setup {
   Poses edge_poses;
   std::vector<std::size_t> edge_starts;
   std::map<std::string, std::unique_ptr<Manager>> fcl;
-  std::map<std::string, double> best_fcl;  // per kind: the best FCL manager's seconds per call
+  std::map<std::string, double> best_fcl;      // per kind: the best FCL manager's seconds per call
+  std::map<std::string, double> loop_seconds;  // per kind and thread count: cube_loop's
 
   Manager& fclWorld(const std::string& name) {
     auto& m = fcl[name];
@@ -347,14 +383,14 @@ std::size_t statesIn(const Setup& s, Kind k) {
   return posesOf(s, k).size() / kLinks;
 }
 
-// FCL's answers: per state (colliding or not), or per edge (first colliding state, or none).
-std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Setup& s, Kind k,
-                                    bool via_manager) {
+// A single-state checker's answers: per state (colliding or not), or per edge (first colliding
+// state, or none). check(poses, self) answers one state.
+template <class Check>
+std::vector<std::size_t> stateAnswers(const Setup& s, Kind k, Check&& check_state) {
   const Poses& poses = posesOf(s, k);
   const bool self = k == Kind::states_self;
   const auto check = [&](std::size_t state) {
-    const fcl::Transform3<S>* p = poses.data() + state * kLinks;
-    return via_manager ? r.viaManager(world, p, self) : r.perLink(world, p, self);
+    return check_state(poses.data() + state * kLinks, self);
   };
   std::vector<std::size_t> out;
   if (k == Kind::edges) {
@@ -370,6 +406,19 @@ std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Set
     for (std::size_t st = 0; st < statesIn(s, k); ++st) out.push_back(check(st));
   }
   return out;
+}
+
+// FCL's answers, per state or per edge.
+std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Setup& s, Kind k,
+                                    bool via_manager) {
+  return stateAnswers(s, k, [&](const fcl::Transform3<S>* p, bool self) {
+    return via_manager ? r.viaManager(world, p, self) : r.perLink(world, p, self);
+  });
+}
+
+std::vector<std::size_t> loopAnswers(CubeLoop& loop, const Setup& s, Kind k) {
+  return stateAnswers(
+      s, k, [&](const fcl::Transform3<S>* p, bool self) { return loop.check(*s.world, p, self); });
 }
 
 std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
@@ -395,6 +444,7 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
          const std::string& manager) {
   Setup& s = setupFor(scene, n);
   const bool is_cube = manager == "cube" || manager == "cube_t2";
+  const bool is_loop = manager == "cube_loop" || manager == "cube_loop_t2";
   const std::string key = std::string(kindName(kind));
   // The reference: FCL's dynamic tree, link by link.
   static std::map<std::string, std::vector<std::size_t>> reference;
@@ -421,6 +471,22 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
       ++calls;
       state.SetIterationTime(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+  } else if (is_loop) {
+    CubeLoop loop(*s.robot, manager == "cube_loop" ? 1 : 2);
+    if (loopAnswers(loop, s, kind) != want) {
+      state.SkipWithError("the single-state path's answers differ from FCL's");
+      g_extra_failed = true;
+      return;
+    }
+    for (auto _ : state) {
+      const auto t0 = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(loopAnswers(loop, s, kind));
+      const double dt =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      seconds += dt;
+      ++calls;
+      state.SetIterationTime(dt);
     }
   } else {
     const Manager& world = s.fclWorld(manager);
@@ -452,8 +518,14 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
   const double per_call = seconds / double(std::max<std::size_t>(calls, 1));
   state.counters["us_per_state"] = 1e6 * per_call / double(states);
   auto& best = s.best_fcl[key];
-  if (!is_cube && (best == 0 || per_call < best)) best = per_call;
+  if (!is_cube && !is_loop && (best == 0 || per_call < best)) best = per_call;
   if (is_cube && best > 0) state.counters["vs_best_fcl"] = best / per_call;
+  // The single-state path of the same thread count, when it ran before in this process.
+  const bool two = manager == "cube_t2" || manager == "cube_loop_t2";
+  const std::string loop_key = key + (two ? "/t2" : "/t1");
+  if (is_loop) s.loop_seconds[loop_key] = per_call;
+  if (is_cube && s.loop_seconds.count(loop_key))
+    state.counters["vs_loop"] = s.loop_seconds[loop_key] / per_call;
 }
 
 bool runsFcl(const std::string& m, const std::string& scene, std::size_t n, Kind k) {
@@ -469,13 +541,20 @@ bool runsFcl(const std::string& m, const std::string& scene, std::size_t n, Kind
 
 void registerBatch() {
   for (const char* scene : {"uniform", "clustered", "meshes"})
-    for (std::size_t n : {std::size_t(1000), std::size_t(10000), std::size_t(100000)}) {
+    for (std::size_t n :
+         {std::size_t(1000), std::size_t(2000), std::size_t(10000), std::size_t(100000)}) {
+      // 2,000: meshes only (where the single-state path was the batch's closest rival).
+      if (n == 2000 && std::string(scene) != "meshes") continue;
       if (n >= 100000 && std::string(scene) == "meshes") continue;
       for (Kind k :
            {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges, Kind::single}) {
         std::vector<std::string> managers;
         for (const char* m : kFcl)
           if (runsFcl(m, scene, n, k)) managers.push_back(m);
+        if (k != Kind::single) {
+          managers.push_back("cube_loop");
+          managers.push_back("cube_loop_t2");
+        }
         managers.push_back("cube");
         if (k != Kind::single) managers.push_back("cube_t2");
         for (const std::string& m : managers) {
