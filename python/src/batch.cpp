@@ -227,7 +227,8 @@ Checks edges (motions): edge e is states edge_starts[e] .. edge_starts[e + 1] - 
 (states, links, 4, 4). Returns (edges,) int64: the index within the edge of its first colliding
 state in `order` ('path': 0, 1, 2...; 'bisection': OMPL's DiscreteMotionValidator order), -1 if
 the edge is free. ValueError for edge_starts not starting at 0 or not increasing, or as
-check_states.)doc");
+check_states; a pose not finite or rigid only where its state is checked (before its edge's
+first colliding state in `order`: the states after it are not read, on any thread count).)doc");
 }
 
 void bindBatch(py::module_& m) {
