@@ -149,7 +149,7 @@ def timed(repeat, py, cpp):
     return t_py, t_cpp
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--objects", type=int, default=10000)
     ap.add_argument("--states", type=int, default=10000)
@@ -157,7 +157,7 @@ def main():
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 0])
     ap.add_argument("--link", type=float, default=1.0,
                     help="link length in the world's typical object sizes")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rng = np.random.default_rng(7)
     scene, typical = world(args.objects, rng)
     m = scenes.build(scene)
