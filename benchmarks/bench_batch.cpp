@@ -9,7 +9,9 @@
 // Names: batch_<kind>/<scene>/<n>/<manager>; kind states_free (70% of the states free),
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
 // 100 states from a free state, self-collision off), single (the states of states_free, one per
-// call: against FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL
+// call: against FCL's per-state check, whose cost is the same as in states_free), states_long
+// (meshes only: random states as they come of the same chain with links 8 times as long, nearly
+// all in contact with several meshes). Managers: the FCL
 // managers first, then cube_loop and cube_loop_t2 (the library's single-state path on one and two
 // threads: a CubeCollisionManager of the 30 link objects moved per state, setTransform,
 // computeAABB and update(), then collideAll(world, robot), and with self-collision collideAll of
@@ -233,7 +235,7 @@ struct CubeLoop {
   }
 };
 
-enum class Kind { states_free, states_hit, states_self, edges, single };
+enum class Kind { states_free, states_hit, states_self, edges, single, states_long };
 
 const char* kindName(Kind k) {
   switch (k) {
@@ -247,6 +249,8 @@ const char* kindName(Kind k) {
       return "edges";
     case Kind::single:
       return "single";
+    case Kind::states_long:
+      return "states_long";
   }
   return "?";
 }
@@ -258,7 +262,9 @@ struct Setup {
   double typical = 1, half = 1;
   std::unique_ptr<cube::CubeCollisionManager<S>> world;
   std::unique_ptr<Robot> robot;
+  std::unique_ptr<Robot> long_robot;  // links 8 typical sizes long: states_long's
   Poses free_mix, hit_mix, self_mix;  // kStates states each
+  Poses long_states;                  // kStates random states of long_robot, as they come
   std::vector<Poses> singles;         // the states of free_mix, one vector each
   Poses edge_poses;
   std::vector<std::size_t> edge_starts;
@@ -363,6 +369,12 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
       poseOf(*s.robot, c, s.edge_poses);
     }
   }
+  // Long links: random states as they come (nearly all in contact among meshes), from a
+  // generator of their own (the other kinds' states stay as they were).
+  s.long_robot = std::make_unique<Robot>(8.0 * s.typical);
+  std::mt19937 long_rng(11);
+  for (std::size_t k = 0; k < kStates; ++k)
+    poseOf(*s.long_robot, randomConfig(long_rng, s.half), s.long_states);
   return s;
 }
 
@@ -374,9 +386,15 @@ const Poses& posesOf(const Setup& s, Kind k) {
       return s.self_mix;
     case Kind::edges:
       return s.edge_poses;
+    case Kind::states_long:
+      return s.long_states;
     default:
       return s.free_mix;
   }
+}
+
+const Robot& robotOf(const Setup& s, Kind k) {
+  return k == Kind::states_long ? *s.long_robot : *s.robot;
 }
 
 std::size_t statesIn(const Setup& s, Kind k) {
@@ -435,7 +453,7 @@ std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
       out.push_back(cube::checkStates(*s.world, s.robot->body, one, o)[0].colliding);
     return out;
   }
-  for (const auto& r : cube::checkStates(*s.world, s.robot->body, poses, o))
+  for (const auto& r : cube::checkStates(*s.world, robotOf(s, k).body, poses, o))
     out.push_back(r.colliding);
   return out;
 }
@@ -450,7 +468,7 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
   static std::map<std::string, std::vector<std::size_t>> reference;
   const std::string ref_key = key + "/" + scene + "/" + std::to_string(n);
   if (!reference.count(ref_key)) {
-    FclRobot ref(*s.robot, "DynamicAABBTree", s.half);
+    FclRobot ref(robotOf(s, kind), "DynamicAABBTree", s.half);
     reference[ref_key] = fclAnswers(ref, s.fclWorld("DynamicAABBTree"), s, kind, false);
   }
   const std::vector<std::size_t>& want = reference[ref_key];
@@ -473,7 +491,7 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
   } else if (is_loop) {
-    CubeLoop loop(*s.robot, manager == "cube_loop" ? 1 : 2);
+    CubeLoop loop(robotOf(s, kind), manager == "cube_loop" ? 1 : 2);
     if (loopAnswers(loop, s, kind) != want) {
       state.SkipWithError("the single-state path's answers differ from FCL's");
       g_extra_failed = true;
@@ -490,7 +508,7 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
     }
   } else {
     const Manager& world = s.fclWorld(manager);
-    FclRobot r(*s.robot, manager, s.half);
+    FclRobot r(robotOf(s, kind), manager, s.half);
     // FCL 0.7's SaP and IntervalTree do not return from update() after the robot's motions
     // between states: for them, only (b).
     const bool can_a = manager != "SaP" && manager != "IntervalTree";
@@ -532,7 +550,7 @@ bool runsFcl(const std::string& m, const std::string& scene, std::size_t n, Kind
   if (m == "Naive" && n > 2000) return false;
   if (n >= 100000 && m != "DynamicAABBTree" && m != "DynamicAABBTree_Array") return false;
   // Edges and single states: the two tree managers (the fastest FCL ones on every other kind).
-  if ((k == Kind::edges || k == Kind::single) && m != "DynamicAABBTree" &&
+  if ((k == Kind::edges || k == Kind::single || k == Kind::states_long) && m != "DynamicAABBTree" &&
       m != "DynamicAABBTree_Array")
     return false;
   (void)scene;
@@ -546,8 +564,10 @@ void registerBatch() {
       // 2,000: meshes only (where the single-state path was the batch's closest rival).
       if (n == 2000 && std::string(scene) != "meshes") continue;
       if (n >= 100000 && std::string(scene) == "meshes") continue;
-      for (Kind k :
-           {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges, Kind::single}) {
+      for (Kind k : {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges,
+                     Kind::single, Kind::states_long}) {
+        // Long links: meshes only, where a state meets many objects FCL must answer.
+        if (k == Kind::states_long && std::string(scene) != "meshes") continue;
         std::vector<std::string> managers;
         for (const char* m : kFcl)
           if (runsFcl(m, scene, n, k)) managers.push_back(m);
