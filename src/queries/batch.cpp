@@ -81,16 +81,30 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
   core.table().wantVolumes();
   const int threads = detail::batchThreads(states, options.threads);
   const std::size_t n = links.size();
-  detail::parallelForWith(
-      states, threads, 4, [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
-      [&](auto& checker, std::size_t k) {
-        const int answer = checker->check(poses.data() + k * n, options.self_collision,
-                                          options.first_pair, options.clearance, &out[k]);
+  // Runs of consecutive states, placed together where they lie close (StateChecker::placeGroup).
+  constexpr std::size_t kRun = detail::StateChecker<S>::kGroupStates;
+  const auto check_run = [&](auto& checker, std::size_t run) {
+    const std::size_t first = run * kRun;
+    const std::size_t count = std::min(kRun, states - first);
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j) at[j] = poses.data() + (first + j) * n;
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took = checker->placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t k = first + done + j;
+        const int answer = checker->checkPlaced(j, options.self_collision, options.first_pair,
+                                                options.clearance, &out[k]);
         if (answer == detail::StateChecker<S>::kBadPose)
           detail::badPose("checkStates", k * n + checker->badLink());
         out[k].colliding = answer != 0;
         if (out[k].colliding && options.clearance) out[k].clearance = S(0);
-      });
+      }
+      done += took;
+    }
+  };
+  detail::parallelForWith((states + kRun - 1) / kRun, threads, 1,
+                          [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
+                          check_run);
   return out;
 }
 
@@ -98,17 +112,19 @@ namespace detail {
 namespace {
 
 // One thread's scratch of a motion check: the checker and, for poses written on demand, room
-// for one state's.
+// for the states of one run.
 template <typename S>
 struct MotionScratch {
   StateChecker<S> checker;
   std::vector<fcl::Transform3<S>> poses;
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand)
-      : checker(world, links), poses(on_demand ? links.size() : 0) {}
+      : checker(world, links),
+        poses(on_demand ? StateChecker<S>::kGroupStates * links.size() : 0) {}
 };
 
-// checkMotions over `states` states whose poses pose_at(scratch, state) gives (a pointer to the
-// links' poses), edges as edge_starts says (checked by the caller).
+// checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
+// the links' poses, the j-th state of a run placed together), edges as edge_starts says (checked
+// by the caller).
 template <typename S, class PoseAt>
 std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
                                          std::size_t states,
@@ -135,34 +151,74 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     for (std::size_t r = 0; r < visit.size(); ++r, ++item)
       items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + visit[r]};
   }
+  // Runs of items placed together (StateChecker::placeGroup): per edge its first state in the
+  // order alone, then runs of consecutive ranks of 4, 8, 16 states and then kGroupStates (states
+  // consecutive along an edge lie close together and share a walk). A run's states are placed
+  // before any is checked: the doubling keeps the states placed beyond an edge's answer fewer
+  // than those before it.
+  constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
+  struct Run {
+    std::size_t first;  // item
+    std::size_t count;
+  };
+  std::vector<Run> runs;
+  for (std::size_t e = 0; e < edges; ++e) {
+    const std::size_t begin = edge_starts[e];
+    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+    for (std::size_t i = begin, size = 1; i < end;) {
+      runs.push_back(Run{i, std::min(size, end - i)});
+      i += size;
+      size = size == 1 ? 4 : std::min(kRun, 2 * size);
+    }
+  }
   // Per edge: the lowest rank known to collide (or to hold a bad pose).
   std::vector<std::atomic<std::size_t>> best(edges);
   for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
   std::vector<std::pair<std::size_t, std::size_t>> bad;  // (item, pose index): rare
   const std::size_t n = links.size();
   const auto make = [&] { return std::make_unique<MotionScratch<S>>(core, links, on_demand); };
-  const auto check = [&](auto& scratch, std::size_t i) {
-    const Item& item = items[i];
-    std::atomic<std::size_t>& b = best[item.edge];
-    if (item.rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
-    const int answer = scratch->checker.check(pose_at(*scratch, item.state), options.self_collision,
-                                              false, false, nullptr);
-    if (answer == 0) return;
-    if (answer == StateChecker<S>::kBadPose) {
-      // As a contact: no state after it in the order is started, and the serial scan's
-      // first event decides (a pose error before any contact throws).
+  // The states of run r in rank order, up to the edge's first collision; the number checked.
+  const auto check = [&](auto& scratch, std::size_t r) -> std::size_t {
+    const Run& run = runs[r];
+    std::atomic<std::size_t>& b = best[items[run.first].edge];
+    const std::size_t seen = b.load(std::memory_order_relaxed);
+    std::size_t count = 0;  // an earlier rank collides: the states after it are not read
+    while (count < run.count && items[run.first + count].rank <= seen) ++count;
+    if (count == 0) return 0;
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j)
+      at[j] = pose_at(*scratch, items[run.first + j].state, j);
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took =
+          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t i = run.first + done + j;
+        const Item& item = items[i];
+        if (item.rank > b.load(std::memory_order_relaxed)) return done + j;  // an earlier one
+        const int answer =
+            scratch->checker.checkPlaced(j, options.self_collision, false, false, nullptr);
+        if (answer == 0) continue;
+        if (answer == StateChecker<S>::kBadPose) {
+          // As a contact: no state after it in the order is started, and the serial scan's
+          // first event decides (a pose error before any contact throws).
 #pragma omp critical(cube_batch_bad_pose)
-      bad.emplace_back(i, item.state * n + scratch->checker.badLink());
+          bad.emplace_back(i, item.state * n + scratch->checker.badLink());
+        }
+        std::size_t known = b.load(std::memory_order_relaxed);
+        while (item.rank < known &&
+               !b.compare_exchange_weak(known, item.rank, std::memory_order_relaxed)) {
+        }
+        return done + j + 1;
+      }
+      done += took;
     }
-    std::size_t seen = b.load(std::memory_order_relaxed);
-    while (item.rank < seen &&
-           !b.compare_exchange_weak(seen, item.rank, std::memory_order_relaxed)) {
-    }
+    return count;
   };
+
   // An edge stops at its first colliding state (thread_policy.h): a lone edge's first
-  // kMotionSerialStates states checked run on this thread, and the items left go to the threads
-  // only if at least kMotionParallelMinStates of them are still undecided. Several edges are
-  // independent scans: their items go to the threads from kParallelMinStates undecided on.
+  // kMotionSerialStates states checked run on this thread, and the runs left go to the threads
+  // only if at least kMotionParallelMinStates of their states are still undecided. Several edges
+  // are independent scans: their runs go to the threads from kParallelMinStates undecided on.
   std::size_t next = 0;
   int team = 1;
   // The calling thread's checker: made once, kept for its share of a region (a checker costs
@@ -172,23 +228,20 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     auto& scratch = mine;
     const std::size_t prefix = edges == 1 ? kMotionSerialStates : 0;
     const std::size_t min_left = edges == 1 ? kMotionParallelMinStates : kParallelMinStates;
-    for (std::size_t checked = 0; next < states && checked < prefix; ++next) {
-      const Item& item = items[next];
-      if (item.rank > best[item.edge].load(std::memory_order_relaxed)) continue;
-      check(scratch, next);
-      ++checked;
-    }
+    for (std::size_t checked = 0; next < runs.size() && checked < prefix; ++next)
+      checked += check(scratch, next);
     std::size_t undecided = 0;
-    if (next < states && resolveThreads(options.threads) > 1)
-      for (std::size_t i = next; i < states; ++i)
-        undecided += best[items[i].edge].load(std::memory_order_relaxed) == kNoIndex;
+    if (next < runs.size() && resolveThreads(options.threads) > 1)
+      for (std::size_t r = next; r < runs.size(); ++r)
+        if (best[items[runs[r].first].edge].load(std::memory_order_relaxed) == kNoIndex)
+          undecided += runs[r].count;
     if (undecided >= min_left) team = regionTeam(resolveThreads(options.threads));
     if (team <= 1)
-      for (; next < states; ++next) check(scratch, next);
+      for (; next < runs.size(); ++next) check(scratch, next);
   }
-  if (next < states)
+  if (next < runs.size())
     parallelForWith(
-        states - next, team, 4,
+        runs.size() - next, team, 1,
         [&]() -> std::unique_ptr<MotionScratch<S>> {
           if (omp_get_thread_num() == 0 && mine) return std::move(mine);
           return make();
@@ -226,7 +279,7 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
   const std::size_t n = links.size();
   return detail::firstCollisions(
       detail::coreOf(world), links, states, edge_starts, order, options, false,
-      [&](auto&, std::size_t state) { return poses.data() + state * n; });
+      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; });
 }
 
 template <typename S>
@@ -250,9 +303,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (states == 0) return kNoIndex;
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
-                                 [&](auto& scratch, std::size_t state) {
-                                   pose_of(state, scratch.poses.data());
-                                   return scratch.poses.data();
+                                 [&](auto& scratch, std::size_t state, std::size_t j) {
+                                   fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+                                   pose_of(state, at);
+                                   return at;
                                  })[0];
 }
 
@@ -268,18 +322,36 @@ std::vector<StateResult<S>> checkStates(
   core.table().wantVolumes();
   const int threads = detail::batchThreads(states, options.threads);
   const std::size_t n = links.size();
-  detail::parallelForWith(
-      states, threads, 4,
-      [&] { return std::make_unique<detail::MotionScratch<S>>(core, links, true); },
-      [&](auto& scratch, std::size_t k) {
-        pose_of(k, scratch->poses.data());
-        const int answer = scratch->checker.check(scratch->poses.data(), options.self_collision,
-                                                  options.first_pair, options.clearance, &out[k]);
+  // As the array form: runs of consecutive states, each run's poses written into the thread's
+  // room for a run, then placed together where they lie close.
+  constexpr std::size_t kRun = detail::StateChecker<S>::kGroupStates;
+  const auto check_run = [&](auto& scratch, std::size_t run) {
+    const std::size_t first = run * kRun;
+    const std::size_t count = std::min(kRun, states - first);
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j) {
+      fcl::Transform3<S>* room = scratch->poses.data() + j * n;
+      pose_of(first + j, room);
+      at[j] = room;
+    }
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took =
+          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t k = first + done + j;
+        const int answer = scratch->checker.checkPlaced(
+            j, options.self_collision, options.first_pair, options.clearance, &out[k]);
         if (answer == detail::StateChecker<S>::kBadPose)
           detail::badPose("checkStates", k * n + scratch->checker.badLink());
         out[k].colliding = answer != 0;
         if (out[k].colliding && options.clearance) out[k].clearance = S(0);
-      });
+      }
+      done += took;
+    }
+  };
+  detail::parallelForWith(
+      (states + kRun - 1) / kRun, threads, 1,
+      [&] { return std::make_unique<detail::MotionScratch<S>>(core, links, true); }, check_run);
   return out;
 }
 
@@ -300,9 +372,10 @@ std::vector<std::size_t> checkMotions(
       batchError("checkMotions",
                  "edge_starts must start at 0 and increase strictly within the states");
   return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
-                                 true, [&](auto& scratch, std::size_t state) {
-                                   pose_of(state, scratch.poses.data());
-                                   return scratch.poses.data();
+                                 true, [&](auto& scratch, std::size_t state, std::size_t j) {
+                                   fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+                                   pose_of(state, at);
+                                   return at;
                                  });
 }
 
