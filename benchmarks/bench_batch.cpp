@@ -10,11 +10,17 @@
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
 // 100 states from a free state, self-collision off), edges_free (20 edges of 32 states, every
 // state free: short steps as a planner keeps), single (the states of states_free, one per
-// call: against FCL's per-state check, whose cost is the same as in states_free). Managers: the FCL
-// managers first, then cube (one thread) and cube_t2 (two threads), which report vs_best_fcl = the
-// best FCL manager's time in this run / cube's, and us_per_state. Each case first checks, outside
-// the timed part, that its answers equal the per-link check with FCL's dynamic tree (state by
-// state, edge by edge); a mismatch fails the binary.
+// call: against FCL's per-state check, whose cost is the same as in states_free), states_long
+// (meshes only: random states as they come of the same chain with links 8 times as long, nearly
+// all in contact with several meshes). Managers: the FCL
+// managers first, then cube_loop and cube_loop_t2 (the library's single-state path on one and two
+// threads: a CubeCollisionManager of the 30 link objects moved per state, setTransform,
+// computeAABB and update(), then collideAll(world, robot), and with self-collision collideAll of
+// the robot manager, adjacent links excluded), then cube (one thread) and cube_t2 (two threads),
+// which report vs_best_fcl = the best FCL manager's time in this run / cube's, vs_loop = the
+// cube_loop case's time of the same thread count / cube's, and us_per_state. Each case first
+// checks, outside the timed part, that its answers equal the per-link check with FCL's dynamic tree
+// (state by state, edge by edge); a mismatch fails the binary.
 
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_SSaP.h>
@@ -41,6 +47,7 @@
 
 #include "cube_collision/batch.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
 #include "scenes.h"
 
 extern bool g_extra_failed;
@@ -199,7 +206,37 @@ struct FclRobot {
   }
 };
 
-enum class Kind { states_free, states_hit, states_self, edges, edges_free, single };
+// The library's single-state path: a robot CubeCollisionManager of the link objects, moved per
+// state, and the pipeline's query (collideAll) against the world.
+struct CubeLoop {
+  std::vector<std::unique_ptr<Object>> links;
+  cube::CubeCollisionManager<S> manager;
+  cube::NarrowPhaseOptions<S> options;
+
+  CubeLoop(const Robot& r, int threads) {
+    std::vector<Object*> ptrs;
+    for (const auto& g : r.geometry) {
+      links.push_back(std::make_unique<Object>(g));
+      ptrs.push_back(links.back().get());
+    }
+    manager.registerObjects(ptrs);
+    manager.setup();
+    for (std::size_t i = 0; i + 1 < ptrs.size(); ++i) manager.excludePair(ptrs[i], ptrs[i + 1]);
+    options.threads = threads;
+  }
+  bool check(const Manager& world, const fcl::Transform3<S>* poses, bool self) {
+    for (std::size_t l = 0; l < links.size(); ++l) {
+      links[l]->setTransform(poses[l]);
+      links[l]->computeAABB();
+    }
+    manager.update();
+    if (cube::collideAll<S>(world, manager, fcl::CollisionRequest<S>(), options).isCollision())
+      return true;
+    return self && cube::collideAll<S>(manager, fcl::CollisionRequest<S>(), options).isCollision();
+  }
+};
+
+enum class Kind { states_free, states_hit, states_self, edges, edges_free, single, states_long };
 
 bool isEdges(Kind k) {
   return k == Kind::edges || k == Kind::edges_free;
@@ -219,6 +256,8 @@ const char* kindName(Kind k) {
       return "edges_free";
     case Kind::single:
       return "single";
+    case Kind::states_long:
+      return "states_long";
   }
   return "?";
 }
@@ -230,7 +269,9 @@ struct Setup {
   double typical = 1, half = 1;
   std::unique_ptr<cube::CubeCollisionManager<S>> world;
   std::unique_ptr<Robot> robot;
+  std::unique_ptr<Robot> long_robot;  // links 8 typical sizes long: states_long's
   Poses free_mix, hit_mix, self_mix;  // kStates states each
+  Poses long_states;                  // kStates random states of long_robot, as they come
   std::vector<Poses> singles;         // the states of free_mix, one vector each
   Poses edge_poses, free_edge_poses;
   std::vector<std::size_t> edge_starts, free_edge_starts;
@@ -238,7 +279,8 @@ struct Setup {
     return k == Kind::edges_free ? free_edge_starts : edge_starts;
   }
   std::map<std::string, std::unique_ptr<Manager>> fcl;
-  std::map<std::string, double> best_fcl;  // per kind: the best FCL manager's seconds per call
+  std::map<std::string, double> best_fcl;      // per kind: the best FCL manager's seconds per call
+  std::map<std::string, double> loop_seconds;  // per kind and thread count: cube_loop's
 
   Manager& fclWorld(const std::string& name) {
     auto& m = fcl[name];
@@ -364,6 +406,12 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
     std::fprintf(stderr, "bench_batch: %s/%zu: no free edge found\n", scene.c_str(), n);
     g_extra_failed = true;
   }
+  // Long links: random states as they come (nearly all in contact among meshes), from a
+  // generator of their own (the other kinds' states stay as they were).
+  s.long_robot = std::make_unique<Robot>(8.0 * s.typical);
+  std::mt19937 long_rng(11);
+  for (std::size_t k = 0; k < kStates; ++k)
+    poseOf(*s.long_robot, randomConfig(long_rng, s.half), s.long_states);
   return s;
 }
 
@@ -377,23 +425,29 @@ const Poses& posesOf(const Setup& s, Kind k) {
       return s.edge_poses;
     case Kind::edges_free:
       return s.free_edge_poses;
+    case Kind::states_long:
+      return s.long_states;
     default:
       return s.free_mix;
   }
+}
+
+const Robot& robotOf(const Setup& s, Kind k) {
+  return k == Kind::states_long ? *s.long_robot : *s.robot;
 }
 
 std::size_t statesIn(const Setup& s, Kind k) {
   return posesOf(s, k).size() / kLinks;
 }
 
-// FCL's answers: per state (colliding or not), or per edge (first colliding state, or none).
-std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Setup& s, Kind k,
-                                    bool via_manager) {
+// A single-state checker's answers: per state (colliding or not), or per edge (first colliding
+// state, or none). check(poses, self) answers one state.
+template <class Check>
+std::vector<std::size_t> stateAnswers(const Setup& s, Kind k, Check&& check_state) {
   const Poses& poses = posesOf(s, k);
   const bool self = k == Kind::states_self;
   const auto check = [&](std::size_t state) {
-    const fcl::Transform3<S>* p = poses.data() + state * kLinks;
-    return via_manager ? r.viaManager(world, p, self) : r.perLink(world, p, self);
+    return check_state(poses.data() + state * kLinks, self);
   };
   std::vector<std::size_t> out;
   if (isEdges(k)) {
@@ -411,6 +465,19 @@ std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Set
   return out;
 }
 
+// FCL's answers, per state or per edge.
+std::vector<std::size_t> fclAnswers(FclRobot& r, const Manager& world, const Setup& s, Kind k,
+                                    bool via_manager) {
+  return stateAnswers(s, k, [&](const fcl::Transform3<S>* p, bool self) {
+    return via_manager ? r.viaManager(world, p, self) : r.perLink(world, p, self);
+  });
+}
+
+std::vector<std::size_t> loopAnswers(CubeLoop& loop, const Setup& s, Kind k) {
+  return stateAnswers(
+      s, k, [&](const fcl::Transform3<S>* p, bool self) { return loop.check(*s.world, p, self); });
+}
+
 std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
   cube::BatchOptions o;
   o.threads = threads;
@@ -425,7 +492,7 @@ std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
       out.push_back(cube::checkStates(*s.world, s.robot->body, one, o)[0].colliding);
     return out;
   }
-  for (const auto& r : cube::checkStates(*s.world, s.robot->body, poses, o))
+  for (const auto& r : cube::checkStates(*s.world, robotOf(s, k).body, poses, o))
     out.push_back(r.colliding);
   return out;
 }
@@ -434,12 +501,13 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
          const std::string& manager) {
   Setup& s = setupFor(scene, n);
   const bool is_cube = manager == "cube" || manager == "cube_t2";
+  const bool is_loop = manager == "cube_loop" || manager == "cube_loop_t2";
   const std::string key = std::string(kindName(kind));
   // The reference: FCL's dynamic tree, link by link.
   static std::map<std::string, std::vector<std::size_t>> reference;
   const std::string ref_key = key + "/" + scene + "/" + std::to_string(n);
   if (!reference.count(ref_key)) {
-    FclRobot ref(*s.robot, "DynamicAABBTree", s.half);
+    FclRobot ref(robotOf(s, kind), "DynamicAABBTree", s.half);
     reference[ref_key] = fclAnswers(ref, s.fclWorld("DynamicAABBTree"), s, kind, false);
   }
   const std::vector<std::size_t>& want = reference[ref_key];
@@ -461,9 +529,25 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
       state.SetIterationTime(
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
+  } else if (is_loop) {
+    CubeLoop loop(robotOf(s, kind), manager == "cube_loop" ? 1 : 2);
+    if (loopAnswers(loop, s, kind) != want) {
+      state.SkipWithError("the single-state path's answers differ from FCL's");
+      g_extra_failed = true;
+      return;
+    }
+    for (auto _ : state) {
+      const auto t0 = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(loopAnswers(loop, s, kind));
+      const double dt =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      seconds += dt;
+      ++calls;
+      state.SetIterationTime(dt);
+    }
   } else {
     const Manager& world = s.fclWorld(manager);
-    FclRobot r(*s.robot, manager, s.half);
+    FclRobot r(robotOf(s, kind), manager, s.half);
     // FCL 0.7's SaP and IntervalTree do not return from update() after the robot's motions
     // between states: for them, only (b).
     const bool can_a = manager != "SaP" && manager != "IntervalTree";
@@ -491,15 +575,22 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
   const double per_call = seconds / double(std::max<std::size_t>(calls, 1));
   state.counters["us_per_state"] = 1e6 * per_call / double(states);
   auto& best = s.best_fcl[key];
-  if (!is_cube && (best == 0 || per_call < best)) best = per_call;
+  if (!is_cube && !is_loop && (best == 0 || per_call < best)) best = per_call;
   if (is_cube && best > 0) state.counters["vs_best_fcl"] = best / per_call;
+  // The single-state path of the same thread count, when it ran before in this process.
+  const bool two = manager == "cube_t2" || manager == "cube_loop_t2";
+  const std::string loop_key = key + (two ? "/t2" : "/t1");
+  if (is_loop) s.loop_seconds[loop_key] = per_call;
+  if (is_cube && s.loop_seconds.count(loop_key))
+    state.counters["vs_loop"] = s.loop_seconds[loop_key] / per_call;
 }
 
 bool runsFcl(const std::string& m, const std::string& scene, std::size_t n, Kind k) {
   if (m == "Naive" && n > 2000) return false;
   if (n >= 100000 && m != "DynamicAABBTree" && m != "DynamicAABBTree_Array") return false;
   // Edges and single states: the two tree managers (the fastest FCL ones on every other kind).
-  if ((isEdges(k) || k == Kind::single) && m != "DynamicAABBTree" && m != "DynamicAABBTree_Array")
+  if ((isEdges(k) || k == Kind::single || k == Kind::states_long) && m != "DynamicAABBTree" &&
+      m != "DynamicAABBTree_Array")
     return false;
   (void)scene;
   return true;
@@ -507,13 +598,22 @@ bool runsFcl(const std::string& m, const std::string& scene, std::size_t n, Kind
 
 void registerBatch() {
   for (const char* scene : {"uniform", "clustered", "meshes"})
-    for (std::size_t n : {std::size_t(1000), std::size_t(10000), std::size_t(100000)}) {
+    for (std::size_t n :
+         {std::size_t(1000), std::size_t(2000), std::size_t(10000), std::size_t(100000)}) {
+      // 2,000: meshes only (where the single-state path was the batch's closest rival).
+      if (n == 2000 && std::string(scene) != "meshes") continue;
       if (n >= 100000 && std::string(scene) == "meshes") continue;
       for (Kind k : {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges,
-                     Kind::edges_free, Kind::single}) {
+                     Kind::edges_free, Kind::single, Kind::states_long}) {
+        // Long links: meshes only, where a state meets many objects FCL must answer.
+        if (k == Kind::states_long && std::string(scene) != "meshes") continue;
         std::vector<std::string> managers;
         for (const char* m : kFcl)
           if (runsFcl(m, scene, n, k)) managers.push_back(m);
+        if (k != Kind::single) {
+          managers.push_back("cube_loop");
+          managers.push_back("cube_loop_t2");
+        }
         managers.push_back("cube");
         if (k != Kind::single) managers.push_back("cube_t2");
         for (const std::string& m : managers) {

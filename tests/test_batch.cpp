@@ -451,6 +451,84 @@ TEST(Batch, MotionsGiveTheSerialScansAnswer) {
   EXPECT_LT(edges_hit, starts.size());
 }
 
+// Poses written on demand (PoseFunction): checkStates' answers are brute force's and
+// checkMotions' the serial scan's, on every thread count, each state's poses asked for at most
+// once (every state by checkStates).
+TEST_P(BatchWorlds, PosesWrittenOnDemandGiveTheArrayFormsAnswers) {
+  const auto [n, meshes] = GetParam();
+  World w;
+  fillWorld(w, n, 19, meshes, n < 100);
+  const cube::BodySet<S> body = randomBody(6, 21, meshes);
+  const auto poses = randomStates(150, body.size(), 23);
+  const std::size_t states = poses.size() / body.size();
+  std::vector<std::atomic<int>> asked(states);
+  const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* out) {
+    ++asked[k];
+    for (std::size_t l = 0; l < body.size(); ++l) out[l] = poses[k * body.size() + l];
+  };
+  const auto reset = [&] {
+    for (auto& a : asked) a = 0;
+  };
+  const std::vector<std::size_t> starts{0, 1, 9, 40, 41, 100};
+  cube::BatchOptions o;
+  o.self_collision = true;
+  o.threads = 1;
+  const auto serial = cube::checkStates(w.manager, body, poses, o);
+  std::size_t hits = 0;
+  for (const int t : {1, 2, 3, 8}) {
+    o.threads = t;
+    o.first_pair = t % 2 == 1;
+    o.clearance = !o.first_pair;
+    reset();
+    expectSame(cube::checkStates<S>(w.manager, body, states, pose_of, o), w, body, poses, o, &hits);
+    for (std::size_t k = 0; k < states; ++k) ASSERT_EQ(asked[k].load(), 1) << "state " << k;
+    for (const auto order : {cube::MotionOrder::path, cube::MotionOrder::bisection}) {
+      reset();
+      const auto first = cube::checkMotions<S>(w.manager, body, states, starts, pose_of, order, o);
+      ASSERT_EQ(first.size(), starts.size());
+      for (std::size_t e = 0; e < starts.size(); ++e) {
+        const std::size_t end = e + 1 < starts.size() ? starts[e + 1] : states;
+        EXPECT_EQ(first[e], serialScan(serial, starts[e], end, order)) << "edge " << e;
+      }
+      for (std::size_t k = 0; k < states; ++k) ASSERT_LE(asked[k].load(), 1) << "state " << k;
+    }
+  }
+  // The scene must exercise both answers.
+  EXPECT_GT(hits, 5u);
+  EXPECT_LT(hits, states - 5);
+  // States that lie close together (a sweep of one rigid shape in small steps: placed and
+  // walked as groups) give the array form's answers too.
+  std::mt19937 rng(29);
+  std::vector<fcl::Transform3d> shape, sweep;
+  for (std::size_t l = 0; l < body.size(); ++l) shape.push_back(randomPose(rng, 1.5));
+  const fcl::Vector3d from = randomPose(rng, 9).translation(),
+                      to = randomPose(rng, 9).translation();
+  const std::size_t steps = 120;
+  for (std::size_t k = 0; k < steps; ++k)
+    for (const auto& p : shape) {
+      fcl::Transform3d tf = p;
+      tf.translation() += from + (double(k) / double(steps - 1)) * (to - from);
+      sweep.push_back(tf);
+    }
+  const cube::PoseFunction<S> sweep_of = [&](std::size_t k, fcl::Transform3d* out) {
+    for (std::size_t l = 0; l < body.size(); ++l) out[l] = sweep[k * body.size() + l];
+  };
+  o.first_pair = true;
+  o.clearance = false;
+  for (const int t : {1, 2}) {
+    o.threads = t;
+    const auto want = cube::checkStates(w.manager, body, sweep, o);
+    const auto got = cube::checkStates<S>(w.manager, body, steps, sweep_of, o);
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t k = 0; k < steps; ++k) {
+      EXPECT_EQ(got[k].colliding, want[k].colliding) << "state " << k;
+      EXPECT_EQ(got[k].link, want[k].link) << "state " << k;
+      EXPECT_EQ(got[k].object, want[k].object) << "state " << k;
+      EXPECT_EQ(got[k].other_link, want[k].other_link) << "state " << k;
+    }
+  }
+}
+
 // The posed boxes of the links (AVX2 where the CPU has it) equal the portable version bit for
 // bit, and the exact box: c = R mid + t, h = |R| half.
 TEST(Batch, PoseBoxesKernelsAgree) {
@@ -553,6 +631,51 @@ TEST(Batch, BadInputChangesNothing) {
     EXPECT_THROW(
         cube::checkMotion(w.manager, cube::BodySet<S>(), 3, [](std::size_t, fcl::Transform3d*) {}),
         std::invalid_argument);
+  }
+  // Poses written on demand: the same refusals; a NaN pose throws as from the array, and an
+  // exception from the function is passed on, the lowest state's for checkStates.
+  {
+    const auto from = [&](const std::vector<fcl::Transform3d>& p) {
+      return [&p](std::size_t k, fcl::Transform3d* out) {
+        for (std::size_t l = 0; l < 3; ++l) out[l] = p[k * 3 + l];
+      };
+    };
+    EXPECT_THROW(cube::checkStates<S>(w.manager, body, 4, cube::PoseFunction<S>()),
+                 std::invalid_argument);
+    EXPECT_THROW(cube::checkStates<S>(w.manager, cube::BodySet<S>(), 4, from(poses)),
+                 std::invalid_argument);
+    EXPECT_THROW(cube::checkMotions<S>(w.manager, body, 4, {0, 2}, cube::PoseFunction<S>()),
+                 std::invalid_argument);
+    EXPECT_THROW(cube::checkMotions<S>(w.manager, body, 4, {1, 2}, from(poses)),
+                 std::invalid_argument);
+    EXPECT_THROW(cube::checkMotions<S>(w.manager, body, 4, {}, from(poses)), std::invalid_argument);
+    auto nan = poses;
+    nan[7].translation()[2] = std::nan("");
+    try {
+      cube::checkStates<S>(w.manager, body, 4, from(nan));
+      ADD_FAILURE() << "a NaN pose was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("pose 7 "), std::string::npos) << e.what();
+    }
+    const auto more = randomStates(200, 3, 4);
+    for (const int t : {1, 2}) {
+      cube::BatchOptions o;
+      o.threads = t;
+      try {
+        cube::checkStates<S>(
+            w.manager, body, 200,
+            [&](std::size_t k, fcl::Transform3d* out) {
+              if (k % 50 == 13) throw std::runtime_error("state " + std::to_string(k));
+              for (std::size_t l = 0; l < 3; ++l) out[l] = more[k * 3 + l];
+            },
+            o);
+        ADD_FAILURE() << "the function's exception was dropped";
+      } catch (const std::runtime_error& e) {
+        EXPECT_EQ(std::string(e.what()), "state 13");
+      }
+    }
+    EXPECT_TRUE(cube::checkStates<S>(w.manager, body, 0, from(poses)).empty());
+    EXPECT_TRUE(cube::checkMotions<S>(w.manager, body, 0, {}, from(poses)).empty());
   }
   // Still usable, same answers as before the errors.
   cube::BatchOptions o;

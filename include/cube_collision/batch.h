@@ -210,4 +210,30 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 
+/// checkStates over `states` states whose poses `pose_of` writes on demand (each state's once,
+/// into one thread's room for a few consecutive states: no pose array is made, and a caller
+/// whose poses are in another layout converts them on the checking threads). The same answers
+/// as checkStates over all the poses, whatever the thread count. Throws std::invalid_argument
+/// for an empty body set or a null function (before any work), and as checkStates for a NaN or
+/// infinite pose; an exception from pose_of is passed on, the lowest state's if several threw.
+template <typename S>
+std::vector<StateResult<S>> checkStates(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
+    const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+    const BatchOptions& options = BatchOptions());
+
+/// checkMotions over `states` states whose poses `pose_of` writes on demand: only the states a
+/// check reads are written, as checkMotion with a pose function says (with `threads` > 1, a few
+/// after an edge's answer may be, and their answers dropped). The same answers as checkMotions
+/// over all the poses, whatever the thread count. Throws std::invalid_argument as checkMotions
+/// and for a null function (before any work); an exception from pose_of is passed on (with
+/// `threads` > 1, possibly one from a state after its edge's answer): a caller that wants the
+/// array form's rule for a bad pose writes a NaN entry into it instead of throwing.
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
+    const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+    MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
+
 }  // namespace cube

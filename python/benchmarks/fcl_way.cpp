@@ -1,7 +1,8 @@
 // cube_collision_bench: the benchmark's stand-ins for python-fcl's compiled fcl.collide and
 // fcl.distance (Cython there, C++ here), on the handles that CollisionManager._collide_python /
 // _distance_python hand to a callback. Built beside the package for python/benchmarks, never
-// installed: the package itself answers every query in C++ without them.
+// installed: the package itself answers every query in C++ without them. batch_way.cpp adds the
+// library's batched checks timed in C++, for bench_check_states.py.
 
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
@@ -31,10 +32,15 @@ py::object owner(const Handle& h, const py::object& owners) {
 
 }  // namespace
 
+namespace cubepy {
+void bindBatchWay(py::module_& m);  // batch_way.cpp
+}
+
 PYBIND11_MODULE(cube_collision_bench, m) {
   m.doc() = "Benchmark-only stand-ins for python-fcl's fcl.collide / fcl.distance.";
   // Handles are cube_collision._core's type: imported so that pybind11 knows it here.
   py::module_::import("cube_collision._core");
+  cubepy::bindBatchWay(m);
   // The request read from the Python request's attributes on every call, a fresh FCL result,
   // and each contact made a Python object (numpy normal and position) appended to the result.
   m.def(

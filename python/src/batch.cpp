@@ -2,11 +2,18 @@
 // in as one (states, links, 4, 4) array, answers out as arrays, on the library's threads with the
 // GIL released.
 
+#include "batch.h"
+
 #include <cube_collision/batch.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 
 #include "manager.h"
 
@@ -14,60 +21,61 @@ namespace cubepy {
 
 namespace {
 
-/// What the BodySet does not answer of a link: the Python geometry it was made from and its
-/// filter bits (pickling). Its margin and the excluded pairs are read from the BodySet.
-struct Link {
-  GeometryPtr geometry;
-  std::uint64_t category, mask;
-};
+// transformFrom's checks on a pose that passes them by a margin rounding cannot close (the
+// rotation's columns orthonormal within half its tolerance, determinant near +1), with the
+// transform into `out`; false leaves the pose to transformFrom, which throws its error or
+// returns it.
+inline bool rigidFast(const double* m, fcl::Transform3d& out) {
+  // Independent tests joined by &, no branch per test. A NaN or infinite rotation entry fails
+  // the column norms; x - x is 0 for a finite translation entry, NaN otherwise.
+  constexpr double kTol = 0.5e-6;
+  const double t = (m[3] - m[3]) + (m[7] - m[7]) + (m[11] - m[11]);
+  bool ok = (t == 0) & (m[12] == 0) & (m[13] == 0) & (m[14] == 0) & (m[15] == 1);
+  const double a0 = m[0], a1 = m[4], a2 = m[8];  // the rotation's columns a, b, c
+  const double b0 = m[1], b1 = m[5], b2 = m[9];
+  const double c0 = m[2], c1 = m[6], c2 = m[10];
+  const double aa = a0 * a0 + a1 * a1 + a2 * a2, bb = b0 * b0 + b1 * b1 + b2 * b2,
+               cc = c0 * c0 + c1 * c1 + c2 * c2;
+  const double ab = a0 * b0 + a1 * b1 + a2 * b2, ac = a0 * c0 + a1 * c1 + a2 * c2,
+               bc = b0 * c0 + b1 * c1 + b2 * c2;
+  const double det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0);
+  ok &= (std::fabs(aa - 1) <= kTol) & (std::fabs(bb - 1) <= kTol) & (std::fabs(cc - 1) <= kTol) &
+        (std::fabs(ab) <= kTol) & (std::fabs(ac) <= kTol) & (std::fabs(bc) <= kTol) & (det > 0.5);
+  if (!ok) return false;
+  double* o = out.matrix().data();  // column-major
+  for (int col = 0; col < 4; ++col)
+    for (int row = 0; row < 4; ++row) o[4 * col + row] = m[4 * row + col];
+  return true;
+}
 
-/// The moving bodies: cube::BodySet plus what rebuilds it (pickling).
-struct Body {
-  cube::BodySet<double> set;
-  std::vector<Link> links;
-
-  std::size_t addLink(GeometryPtr g, double margin, std::uint64_t category, std::uint64_t mask) {
-    if (g->kind == "plane" || g->kind == "halfspace")
-      throw py::value_error("add_link: a link must be bounded (no plane or halfspace)");
-    if (!std::isfinite(margin) || margin < 0)
-      throw py::value_error("add_link: margin must be finite and >= 0");
-    const std::size_t i = set.addLink(g->fcl, margin, category, mask);
-    links.push_back({g, category, mask});
-    return i;
-  }
-  std::vector<std::string> kinds() const {
-    std::vector<std::string> out;
-    for (const auto& l : links) out.push_back(l.geometry->kind);
-    return out;
-  }
-  /// `where`: the Python call named in errors.
-  void excludePair(std::size_t i, std::size_t j, const char* where) {
-    if (i >= links.size() || j >= links.size() || i == j)
-      throw py::value_error(std::string(where) + ": two different link indices below " +
-                            std::to_string(links.size()) + " expected");
-    set.excludePair(i, j);
-  }
-  /// The pairs of links never checked, (i, j) with i < j, sorted.
-  std::vector<std::pair<std::size_t, std::size_t>> excluded() const {
-    std::vector<std::pair<std::size_t, std::size_t>> out;
-    for (std::size_t i = 0; i < links.size(); ++i)
-      for (std::size_t j = i + 1; j < links.size(); ++j)
-        if (!set.checked(i, j)) out.emplace_back(i, j);
-    return out;
-  }
-};
-
-// poses (states, links, 4, 4) -> transforms, each checked finite and rigid.
-std::vector<fcl::Transform3d> posesOf(py::handle poses, std::size_t links, std::size_t* states) {
+// poses (states, links, 4, 4) as float64, its state count into *states.
+Array posesArray(py::handle poses, std::size_t links, std::size_t* states) {
   if (links == 0) throw py::value_error("the body has no link");
   Array a = floats(poses, "poses", {-1, static_cast<py::ssize_t>(links), 4, 4}, false);
   *states = static_cast<std::size_t>(a.shape(0));
-  std::vector<fcl::Transform3d> out(*states * links);
-  for (std::size_t i = 0; i < out.size(); ++i)
-    out[i] = transformFrom(a.data() + 16 * i, "poses[" + std::to_string(i / links) + ", " +
-                                                  std::to_string(i % links) + "]");
-  return out;
+  return a;
 }
+
+// The name transformFrom's error gives pose `at` of the array.
+std::string poseName(std::size_t at, std::size_t links) {
+  return "poses[" + std::to_string(at / links) + ", " + std::to_string(at % links) + "]";
+}
+
+// Writes state k's links' transforms from the (states, links, 4, 4) array, each checked finite
+// and rigid (transformFrom's checks): the library calls it for the states it reads, on its
+// checking threads, so that the array is neither converted whole first nor on one thread.
+struct PoseReader {
+  const double* data;
+  std::size_t links;
+  /// Throws transformFrom's ValueError for a pose that fails its checks.
+  void operator()(std::size_t state, fcl::Transform3d* out) const {
+    for (std::size_t l = 0; l < links; ++l) {
+      const std::size_t at = state * links + l;
+      if (!rigidFast(data + 16 * at, out[l]))
+        out[l] = transformFrom(data + 16 * at, poseName(at, links));
+    }
+  }
+};
 
 void needCube(const Manager& m, const char* what) {
   if (!m.isCube())
@@ -85,7 +93,7 @@ void bindManagerBatch(ManagerClass& cls) {
             bool first_pair, bool clearance, py::object threads) {
            needCube(m, "check_states");
            std::size_t states = 0;
-           auto tfs = posesOf(poses, body.links.size(), &states);
+           const Array a = posesArray(poses, body.links.size(), &states);
            cube::BatchOptions opt;
            opt.self_collision = self_collision;
            opt.first_pair = first_pair;
@@ -97,7 +105,9 @@ void bindManagerBatch(ManagerClass& cls) {
              py::gil_scoped_release nogil;
              std::shared_lock lock(m.mutex);
              refuseFclCrashes(&m, nullptr, body.kinds(), false, "check_states");
-             res = cube::checkStates(*m.cube(), body.set, tfs, opt);
+             // A bad pose: the first state's error, as the library passes it on.
+             res = cube::checkStates<double>(*m.cube(), body.set, states,
+                                             PoseReader{a.data(), body.links.size()}, opt);
              objects.resize(res.size());
              for (std::size_t i = 0; i < res.size(); ++i)
                if (res[i].object) objects[i] = Manager::entryOf(res[i].object)->name;
@@ -145,7 +155,7 @@ TypeError (non-numeric poses).)doc")
              const std::string& order, bool self_collision, py::object threads) {
             needCube(m, "check_motions");
             std::size_t states = 0;
-            auto tfs = posesOf(poses, body.links.size(), &states);
+            const Array a = posesArray(poses, body.links.size(), &states);
             IndexArray starts = indices(edge_starts, "edge_starts", {-1});
             std::vector<std::size_t> s;
             for (py::ssize_t i = 0; i < starts.size(); ++i) {
@@ -172,7 +182,38 @@ TypeError (non-numeric poses).)doc")
               py::gil_scoped_release nogil;
               std::shared_lock lock(m.mutex);
               refuseFclCrashes(&m, nullptr, body.kinds(), false, "check_motions");
-              if (!s.empty()) res = cube::checkMotions(*m.cube(), body.set, tfs, s, mo, opt);
+              // A pose that fails the checks is handed to the library as a NaN one, so that
+              // its rule decides whether the call throws (the pose's state is read before its
+              // edge's first contact), whatever the thread count; the error then names it as
+              // transformFrom does.
+              const PoseReader read{a.data(), body.links.size()};
+              std::mutex bad_mutex;
+              std::map<std::size_t, std::string> bad;  // pose index -> its error
+              const auto pose_of = [&](std::size_t state, fcl::Transform3d* out) {
+                for (std::size_t l = 0; l < read.links; ++l) {
+                  const std::size_t at = state * read.links + l;
+                  if (rigidFast(read.data + 16 * at, out[l])) continue;
+                  try {
+                    out[l] = transformFrom(read.data + 16 * at, poseName(at, read.links));
+                  } catch (const py::value_error& e) {
+                    const std::lock_guard<std::mutex> guard(bad_mutex);
+                    bad.emplace(at, e.what());
+                    out[l].setIdentity();
+                    out[l].translation()[0] = std::numeric_limits<double>::quiet_NaN();
+                  }
+                }
+              };
+              try {
+                if (!s.empty())
+                  res =
+                      cube::checkMotions<double>(*m.cube(), body.set, states, s, pose_of, mo, opt);
+              } catch (const std::invalid_argument& e) {
+                const std::string what = e.what();
+                for (const auto& [at, error] : bad)
+                  if (what.find("pose " + std::to_string(at) + " ") != std::string::npos)
+                    throw py::value_error(error);
+                throw;
+              }
             }
             py::array_t<std::int64_t> out(static_cast<py::ssize_t>(res.size()));
             for (std::size_t i = 0; i < res.size(); ++i)
@@ -186,7 +227,8 @@ Checks edges (motions): edge e is states edge_starts[e] .. edge_starts[e + 1] - 
 (states, links, 4, 4). Returns (edges,) int64: the index within the edge of its first colliding
 state in `order` ('path': 0, 1, 2...; 'bisection': OMPL's DiscreteMotionValidator order), -1 if
 the edge is free. ValueError for edge_starts not starting at 0 or not increasing, or as
-check_states.)doc");
+check_states; a pose not finite or rigid only where its state is checked (before its edge's
+first colliding state in `order`: the states after it are not read, on any thread count).)doc");
 }
 
 void bindBatch(py::module_& m) {

@@ -48,6 +48,18 @@ def brute_state(world, geoms, pose, allowed, self_collision):
     return first is not None, first, clearance
 
 
+def brute_colliding(world, geoms, pose, allowed, self_collision):
+    """Whether any link meets a world object (or, self_collision, a link not excluded)."""
+    for l, g in enumerate(geoms):
+        if any(cc.pair_in_collision(g, pose[l], wg, wt) for _, wg, wt in world):
+            return True
+        if self_collision and any(
+                cc.pair_in_collision(g, pose[l], geoms[j], pose[j])
+                for j in range(l + 1, len(geoms)) if (l, j) not in allowed):
+            return True
+    return False
+
+
 @pytest.mark.parametrize("exclude", ["exclude_pair", "allow_pair"])
 @pytest.mark.parametrize("self_collision", [False, True])
 def test_check_states_equals_brute_force(self_collision, exclude):
@@ -91,6 +103,110 @@ def test_check_motions_equal_the_first_colliding_state():
         assert (bis[e] == -1) == (len(hits) == 0)
         if len(hits):
             assert colliding[s + bis[e]]
+
+
+def bisection_order(n):
+    """OMPL's DiscreteMotionValidator order, as the docstring of check_motions names it: the last
+    state, then the middles of the intervals left, breadth first."""
+    if n < 2:
+        return list(range(n))
+    out, open_ = [n - 1], [(0, n - 2)]
+    while open_:
+        lo, hi = open_.pop(0)
+        mid = lo + (hi - lo) // 2
+        out.append(mid)
+        if mid > lo:
+            open_.append((lo, mid - 1))
+        if mid < hi:
+            open_.append((mid + 1, hi))
+    return out
+
+
+def edge_poses(rng, edges, links, spread=6.0):
+    """Straight sweeps of a random rigid shape of links: (poses, edge starts)."""
+    shape = [scenes.pose(scenes.random_rotation(rng), rng.normal(0, 0.6, 3)) for _ in range(links)]
+    out, starts = [], []
+    for e in range(edges):
+        starts.append(len(out))
+        a, b = rng.uniform(0, spread, 3), rng.uniform(0, spread, 3)
+        n = 1 + (e * 13) % 40
+        for k in range(n):
+            t = k / (n - 1) if n > 1 else 0.0
+            state = np.array(shape)
+            state[:, :3, 3] += a + t * (b - a)
+            out.append(state)
+    return np.array(out), np.array(starts)
+
+
+@pytest.mark.parametrize("self_collision", [False, True])
+def test_check_motions_equal_brute_force(self_collision):
+    """Each edge's answer is the first state in its order that brute force finds colliding, on
+    one and two threads (batches above the 64 states from which the threads run)."""
+    world = mixed_scene(40, 16)
+    m = build(world)
+    body, geoms = robot()
+    allowed = {(i, i + 1) for i in range(len(geoms) - 1)}
+    p, starts = edge_poses(np.random.default_rng(8), 20, len(geoms))
+    assert len(p) > 128
+    hit = [brute_colliding(world, geoms, p[k], allowed, self_collision) for k in range(len(p))]
+    ends = list(starts[1:]) + [len(p)]
+    free_edges = 0
+    for order in ("path", "bisection"):
+        for threads in (1, 2):
+            got = m.check_motions(body, p, starts, order=order, self_collision=self_collision,
+                                  threads=threads)
+            free_edges = 0
+            for e, (s, t) in enumerate(zip(starts, ends)):
+                visit = list(range(t - s)) if order == "path" else bisection_order(t - s)
+                want = next((i for i in visit if hit[s + i]), -1)
+                assert got[e] == want, (order, threads, e)
+                free_edges += want == -1
+    # The scene must exercise both answers.
+    assert 0 < free_edges < len(starts)
+
+
+def test_check_states_on_threads_equal_brute_force():
+    """A batch above the threads' 64 states: every thread count gives brute force's answers."""
+    world = mixed_scene(40, 17)
+    m = build(world)
+    body, geoms = robot()
+    allowed = {(i, i + 1) for i in range(len(geoms) - 1)}
+    p = poses(np.random.default_rng(9), 150, len(geoms))
+    want = [brute_colliding(world, geoms, p[k], allowed, True) for k in range(len(p))]
+    assert 5 < sum(want) < len(p) - 5
+    for threads in (1, 2, 3):
+        got = m.check_states(body, p, self_collision=True, threads=threads)["colliding"]
+        assert list(got) == want
+
+
+def test_a_pose_that_is_not_rigid_is_named():
+    """check_states names the first pose that is not rigid, on any thread count; check_motions
+    does where its state is checked (before its edge's first colliding state), and reads no
+    state after it, as the library's checkMotions."""
+    world = mixed_scene(40, 18)
+    m = build(world)
+    body, geoms = robot()
+    p = poses(np.random.default_rng(10), 150, len(geoms))
+    bad = p.copy()
+    bad[120, 3, :3, :3] *= 1.01  # scaled: not rigid
+    bad[130, 1, 0, 3] = np.nan
+    for threads in (1, 2):
+        with pytest.raises(ValueError, match=r"poses\[120, 3\].*rigid"):
+            m.check_states(body, bad, threads=threads)
+    colliding = m.check_states(body, p)["colliding"]
+    hit = int(np.flatnonzero(colliding)[0])
+    free = int(np.flatnonzero(~colliding)[0])
+    for threads in (1, 2):
+        # A colliding state, then the bad one: the edge's answer is its first state.
+        edge = np.stack([p[hit], bad[120]])
+        assert list(m.check_motions(body, edge, [0], threads=threads)) == [0]
+        # A free state, then the bad one: read, and named.
+        edge = np.stack([p[free], bad[120]])
+        with pytest.raises(ValueError, match=r"poses\[1, 3\].*rigid"):
+            m.check_motions(body, edge, [0], threads=threads)
+        edge = np.stack([p[free], bad[130]])
+        with pytest.raises(ValueError, match=r"poses\[1, 1\]"):
+            m.check_motions(body, edge, [0], threads=threads)
 
 
 @pytest.mark.parametrize("call, error", [

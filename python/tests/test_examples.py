@@ -3,6 +3,7 @@
 
 import dask_states
 
+import bench_check_states
 import bench_fcl_compat
 import bench_trimesh
 
@@ -26,3 +27,12 @@ def test_fcl_compat_benchmark_runs(capsys):
                            "--repeat", "1"])
     out = capsys.readouterr().out
     assert "trimesh clash" in out and "poses clash" in out and "targets" in out
+
+
+def test_check_states_benchmark_runs(capsys):
+    # the Python calls give the C++ calls' answers on the same world and body (the script
+    # returns 1 otherwise)
+    assert bench_check_states.main(["--objects", "300", "--states", "200", "--repeat", "1",
+                                    "--threads", "1", "2"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("check_states ") == 4 and out.count("check_motions ") == 2

@@ -310,6 +310,75 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                                  })[0];
 }
 
+template <typename S>
+std::vector<StateResult<S>> checkStates(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
+    const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of, const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  if (links.size() == 0) batchError("checkStates", "the body set has no link");
+  if (!pose_of) batchError("checkStates", "null pose function");
+  std::vector<StateResult<S>> out(states);
+  const detail::Broadphase<S>& core = detail::coreOf(world);
+  core.table().wantVolumes();
+  const int threads = detail::batchThreads(states, options.threads);
+  const std::size_t n = links.size();
+  // As the array form: runs of consecutive states, each run's poses written into the thread's
+  // room for a run, then placed together where they lie close.
+  constexpr std::size_t kRun = detail::StateChecker<S>::kGroupStates;
+  const auto check_run = [&](auto& scratch, std::size_t run) {
+    const std::size_t first = run * kRun;
+    const std::size_t count = std::min(kRun, states - first);
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j) {
+      fcl::Transform3<S>* room = scratch->poses.data() + j * n;
+      pose_of(first + j, room);
+      at[j] = room;
+    }
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took =
+          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t k = first + done + j;
+        const int answer = scratch->checker.checkPlaced(
+            j, options.self_collision, options.first_pair, options.clearance, &out[k]);
+        if (answer == detail::StateChecker<S>::kBadPose)
+          detail::badPose("checkStates", k * n + scratch->checker.badLink());
+        out[k].colliding = answer != 0;
+        if (out[k].colliding && options.clearance) out[k].clearance = S(0);
+      }
+      done += took;
+    }
+  };
+  detail::parallelForWith(
+      (states + kRun - 1) / kRun, threads, 1,
+      [&] { return std::make_unique<detail::MotionScratch<S>>(core, links, true); }, check_run);
+  return out;
+}
+
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
+    const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of, MotionOrder order,
+    const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  if (links.size() == 0) batchError("checkMotions", "the body set has no link");
+  if (!pose_of) batchError("checkMotions", "null pose function");
+  if (edge_starts.empty() && states > 0)
+    batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
+  for (std::size_t e = 0; e < edge_starts.size(); ++e)
+    if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
+        edge_starts[e] >= states)
+      batchError("checkMotions",
+                 "edge_starts must start at 0 and increase strictly within the states");
+  return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
+                                 true, [&](auto& scratch, std::size_t state, std::size_t j) {
+                                   fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+                                   pose_of(state, at);
+                                   return at;
+                                 });
+}
+
 #define CUBE_INSTANTIATE_BATCH(S)                                                                \
   template std::vector<StateResult<S>> checkStates<S>(                                           \
       const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
@@ -322,7 +391,13 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                                       const BatchOptions&);                                      \
   template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
                                       std::size_t, const PoseFunction<S>&, MotionOrder,          \
-                                      const BatchOptions&);
+                                      const BatchOptions&);                                      \
+  template std::vector<StateResult<S>> checkStates<S>(                                           \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t, const PoseFunction<S>&,    \
+      const BatchOptions&);                                                                      \
+  template std::vector<std::size_t> checkMotions<S>(                                             \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                            \
+      const std::vector<std::size_t>&, const PoseFunction<S>&, MotionOrder, const BatchOptions&);
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)
 #undef CUBE_INSTANTIATE_BATCH

@@ -504,10 +504,28 @@ class StateChecker {
       case Verdict::kTouching:
         return hits.add(c);
       case Verdict::kUnknown:
+        // A pair with a mesh (its records prove no contact) for a check that takes any hit:
+        // FCL at once, as the single-state path's stream does, so that a state in contact
+        // stops at its first mesh contact instead of culling the rest of the group first.
+        if constexpr (!C::kOrdered)
+          if (((ha.flags | hb.flags) & kVolumeHeavy) != 0)
+            return decide(hits, c) && hits.complete();
         pending_.push_back(c);
         return false;
     }
     return false;
+  }
+
+  // FCL on a pair the records left open; a contact is handed to the collector. Whether it is one.
+  template <class C>
+  bool decide(C& hits, const Candidate& c) {
+    const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
+                          : links_.margin[c.link] + world_.marginOf(c.other);
+    const Object& b =
+        c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
+    if (!narrow(object(c.link), b, m)) return false;
+    hits.add(c);
+    return true;
   }
 
   template <class C>
@@ -542,14 +560,7 @@ class StateChecker {
     if (C::kOrdered) std::sort(pending_.begin(), pending_.end());
     for (const Candidate& c : pending_) {
       if (!hits.mayBeat(c)) break;  // sorted (first pair), or found (any)
-      const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
-                            : links_.margin[c.link] + world_.marginOf(c.other);
-      const Object& b =
-          c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
-      if (narrow(object(c.link), b, m)) {
-        hits.add(c);
-        break;
-      }
+      if (decide(hits, c)) break;
     }
     return hits.complete();
   }

@@ -1,0 +1,207 @@
+#!/usr/bin/env python3
+"""The Python batched checks against the C++ calls they wrap, same run, same world and body.
+
+CollisionManager.check_states / check_motions on a (states, links, 4, 4) array against
+cube::checkStates / checkMotions on the same manager's world and the same Body, called from C++
+(cube_collision_bench.check_states_cpp / check_motions_cpp, python/benchmarks/batch_way.cpp)
+with the poses converted before the clock starts. The robot is bench_batch.cpp's: a chain of 30
+links (boxes, capsules, cylinders, each --link times the world's typical object size), joints about
+alternating axes, adjacent links excluded; random configurations across the world sorted into
+free and colliding ones, 70% free in the batch (bench_batch.cpp's states_free), and edges of 20
+to 100 states from free configurations. The world:
+boxes, spheres and cylinders at uniform random poses, about one overlap per object. Answers are
+compared before any time is printed; each time is the best of --repeat calls, the Python and
+the C++ call in turn; ratio = Python / C++.
+
+  PYTHONPATH=build/python python3 python/benchmarks/bench_check_states.py [--objects 10000]
+      [--states 10000] [--repeat 5] [--threads 1 0]
+"""
+
+import argparse
+import math
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import cube_collision as cc  # noqa: E402
+import cube_collision_bench as cb  # noqa: E402
+import scenes  # noqa: E402
+from bench_trimesh import load_average  # noqa: E402
+
+LINKS = 30
+HALF = 2000.0
+
+
+def world(n, rng):
+    """n boxes, spheres and cylinders uniform in a cube of half-side HALF; the typical size."""
+    a = (8 * HALF ** 3 / n) ** (1 / 3)
+    out = []
+    for i in range(n):
+        s = a * rng.uniform(0.5, 1.0)
+        g = [cc.box(s, s, s), cc.sphere(s / 2), cc.cylinder(s / 2, s)][i % 3]
+        out.append((f"o{i}", g, scenes.pose(scenes.random_rotation(rng),
+                                            rng.uniform(-HALF, HALF, 3))))
+    return out, a
+
+
+def robot(length):
+    body = cc.Body()
+    for i in range(LINKS):
+        body.add_link([cc.box(0.3 * length, 0.3 * length, length),
+                       cc.capsule(0.15 * length, 0.7 * length),
+                       cc.cylinder(0.15 * length, length)][i % 3])
+    for i in range(LINKS - 1):
+        body.exclude_pair(i, i + 1)
+    return body
+
+
+def rotation(axis, q):
+    """(n, 4, 4) rotations by angles q about the x (axis 0) or y (axis 1) axis."""
+    c, s = np.cos(q), np.sin(q)
+    out = np.zeros((len(q), 4, 4))
+    out[:, 3, 3] = 1
+    if axis == 0:
+        out[:, 0, 0] = 1
+        out[:, 1, 1], out[:, 1, 2], out[:, 2, 1], out[:, 2, 2] = c, -s, s, c
+    else:
+        out[:, 1, 1] = 1
+        out[:, 0, 0], out[:, 0, 2], out[:, 2, 0], out[:, 2, 2] = c, s, -s, c
+    return out
+
+
+def chain(base, q, length):
+    """Forward kinematics: bases (n, 3) and angles (n, LINKS) -> poses (n, LINKS, 4, 4)."""
+    n = len(base)
+    t = np.tile(np.eye(4), (n, 1, 1))
+    t[:, :3, 3] = base
+    half, full = np.eye(4), np.eye(4)
+    half[2, 3], full[2, 3] = length / 2, length
+    out = np.empty((n, LINKS, 4, 4))
+    for i in range(LINKS):
+        t = t @ rotation(1 if i % 2 == 0 else 0, q[:, i])
+        out[:, i] = t @ half
+        t = t @ full
+    return out
+
+
+def configurations(rng, n):
+    return rng.uniform(-0.9 * HALF, 0.9 * HALF, (n, 3)), rng.uniform(-0.6, 0.6, (n, LINKS))
+
+
+def pools(m, body, rng, length, want):
+    """Random configurations sorted by check_states into free and colliding ones (bases, angles)
+    each, until `want` free ones or 40 rounds."""
+    free, hit = [], []
+    for _ in range(40):
+        b, q = configurations(rng, 1000)
+        c = m.check_states(body, chain(b, q, length))["colliding"]
+        free.append((b[~c], q[~c]))
+        hit.append((b[c], q[c]))
+        if sum(len(f[0]) for f in free) >= want:
+            break
+    return [tuple(np.concatenate(x) for x in zip(*p)) for p in (free, hit)]
+
+
+def mix(free, hit, states, free_share):
+    """`states` configurations, free_share of them free, interleaved (pools reused cyclically,
+    as bench_batch.cpp does)."""
+    nf = int(free_share * states)
+    k = np.arange(states)
+    is_free = (k * nf) // states != ((k + 1) * nf) // states
+    fi = np.cumsum(is_free) - 1
+    hi = np.cumsum(~is_free) - 1
+    b = np.where(is_free[:, None], free[0][fi % len(free[0])], hit[0][hi % len(hit[0])])
+    q = np.where(is_free[:, None], free[1][fi % len(free[1])], hit[1][hi % len(hit[1])])
+    return b, q
+
+
+def edges(rng, free, count, length):
+    """`count` straight edges of 20 to 100 states in configuration space from free
+    configurations; (poses, starts)."""
+    bases, qs, starts = [], [], []
+    total = 0
+    for e in range(count):
+        b0, q0 = free[0][e % len(free[0])][None], free[1][e % len(free[1])][None]
+        b1 = b0 + rng.uniform(-0.05 * HALF, 0.05 * HALF, (1, 3))
+        q1 = rng.uniform(-0.6, 0.6, (1, LINKS))
+        k = 20 + (e * 4) % 81
+        t = np.linspace(0, 1, k)[:, None]
+        bases.append(b0 + t * (b1 - b0))
+        qs.append(q0 + t * (q1 - q0))
+        starts.append(total)
+        total += k
+    return chain(np.concatenate(bases), np.concatenate(qs), length), np.array(starts)
+
+
+def timed(repeat, py, cpp):
+    """The least time of `repeat` calls of each, the two called in turn (so that a change of
+    the machine's load meets both alike): (python seconds, C++ seconds)."""
+    t_py = t_cpp = math.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        py()
+        t_py = min(t_py, time.perf_counter() - t0)
+        t_cpp = min(t_cpp, cpp())
+    return t_py, t_cpp
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--objects", type=int, default=10000)
+    ap.add_argument("--states", type=int, default=10000)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 0])
+    ap.add_argument("--link", type=float, default=1.0,
+                    help="link length in the world's typical object sizes")
+    args = ap.parse_args(argv)
+    rng = np.random.default_rng(7)
+    scene, typical = world(args.objects, rng)
+    m = scenes.build(scene)
+    length = args.link * typical
+    body = robot(length)
+    free, hit = pools(m, body, rng, length, 200)
+    if len(free[0]) == 0 or len(hit[0]) == 0:
+        print("no free or no colliding configuration found", file=sys.stderr)
+        return 1
+    poses = chain(*mix(free, hit, args.states, 0.7), length)
+    edge_poses, starts = edges(rng, free, max(1, args.states // 60), length)
+    print(f"world: {args.objects} objects; {args.states} states of {LINKS} links; "
+          f"{len(starts)} edges of {len(edge_poses)} states; load {load_average()}")
+    failed = False
+    for threads in args.threads:
+        for self_collision in (False, True):
+            py = m.check_states(body, poses, self_collision=self_collision, threads=threads)
+            _, cpp = cb.check_states_cpp(m, body, poses, threads, 1, self_collision)
+            if not np.array_equal(py["colliding"], cpp):
+                print("check_states: answers differ", file=sys.stderr)
+                failed = True
+                continue
+            t_py, t_cpp = timed(
+                args.repeat,
+                lambda: m.check_states(body, poses, self_collision=self_collision,
+                                       threads=threads),
+                lambda: cb.check_states_cpp(m, body, poses, threads, 1, self_collision)[0])
+            print(f"check_states  threads={threads} self={int(self_collision)} "
+                  f"colliding={int(cpp.sum())}/{len(cpp)}: python {1e3 * t_py:8.2f} ms, "
+                  f"C++ {1e3 * t_cpp:8.2f} ms, ratio {t_py / t_cpp:.3f}")
+        py = m.check_motions(body, edge_poses, starts, threads=threads)
+        _, cpp = cb.check_motions_cpp(m, body, edge_poses, list(starts), threads, 1)
+        if not np.array_equal(py, cpp):
+            print("check_motions: answers differ", file=sys.stderr)
+            failed = True
+            continue
+        t_py, t_cpp = timed(
+            args.repeat, lambda: m.check_motions(body, edge_poses, starts, threads=threads),
+            lambda: cb.check_motions_cpp(m, body, edge_poses, list(starts), threads, 1)[0])
+        print(f"check_motions threads={threads} free={int((cpp < 0).sum())}/{len(cpp)}: "
+              f"python {1e3 * t_py:8.2f} ms, C++ {1e3 * t_cpp:8.2f} ms, "
+              f"ratio {t_py / t_cpp:.3f}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
