@@ -12,13 +12,13 @@
 // of the objects moved, update(), 10 steps), distance (10 object distances, FCL's narrow phase),
 // contacts (collideAll self-collide, FCL's narrow phase), states (checkStates of 50 states of a
 // 30-link robot, one thread), edges (checkMotions of 20 collision-free edges of 32 states of that
-// robot, one thread), first (the first pipeline query of a manager: collideAll with FCL's
-// default request, which builds the per-object volumes), still (update() with nothing moved, then
-// a self-collide, counting callback, 10 steps), keep (the same with Config::keep_pairs and 1% of
-// the objects moved before each step, the motion not counted), keepstill (keep_pairs, nothing
-// moved). distance, contacts and states count
-// steady queries: one pipeline query runs before the count, as it would have in a program that
-// queries the world repeatedly.
+// robot, one thread), single (the states of states, one call each), first (the first pipeline query
+// of a manager: collideAll with FCL's default request, which builds the per-object volumes), still
+// (update() with nothing moved, then a self-collide, counting callback, 10 steps), keep (the same
+// with Config::keep_pairs and 1% of the objects moved before each step, the motion not counted),
+// keepstill (keep_pairs, nothing moved). distance, contacts and states count steady queries: one
+// pipeline query runs before the count, as it would have in a program that queries the world
+// repeatedly.
 
 #include <fcl/broadphase/default_broadphase_callbacks.h>
 #include <fcl/geometry/shape/box.h>
@@ -91,7 +91,8 @@ int main(int argc, char** argv) {
   world.registerObjects(scene.pointers());
   world.setup();
   Run run;
-  if (which == "distance" || which == "contacts" || which == "states" || which == "edges")
+  if (which == "distance" || which == "contacts" || which == "states" || which == "edges" ||
+      which == "single")
     cube::collideAll<S>(world);  // the volumes the first pipeline query builds ("first")
 
   if (which == "self") {
@@ -182,7 +183,7 @@ int main(int argc, char** argv) {
     run.checksum = cube::collideAll<S>(world, all, one).numContacts();
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = 1;
-  } else if (which == "states" || which == "edges") {
+  } else if (which == "states" || which == "edges" || which == "single") {
     // states: 50 random states; edges: 20 edges of 32 states each, joints interpolated between
     // a random state and one near it (a planner's edges), checked in path order.
     cube::BodySet<S> body;
@@ -245,6 +246,12 @@ int main(int argc, char** argv) {
       for (const std::size_t f :
            cube::checkMotions(world, body, poses, starts, cube::MotionOrder::path, one))
         run.checksum += f == cube::kNoIndex ? 0 : f + 1;
+    } else if (which == "single") {  // each state a call of its own
+      for (std::size_t k = 0; k < poses.size(); k += 30) {
+        const std::vector<fcl::Transform3d> state(poses.begin() + long(k),
+                                                  poses.begin() + long(k) + 30);
+        run.checksum += cube::checkStates(world, body, state, one)[0].colliding;
+      }
     } else {
       for (const auto& r : cube::checkStates(world, body, poses, one)) run.checksum += r.colliding;
     }

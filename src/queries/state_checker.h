@@ -86,29 +86,33 @@ class StateChecker {
         body_(links.view),
         judge_(request_),
         distance_judge_(distance_request_) {
-    slots_.resize(links.size());
+    slots_.reset(new Slot[links.size()]);  // default-initialized: the records written before read
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
     self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
     self_gate_.excluded_n = links.size();
-    objects_ = std::make_unique<ObjectStorage[]>(links.size());
+    objects_.reset(new ObjectStorage[links.size()]);  // raw room: constructed on first use
     close_.resize(body_.leafCount());
+    // The per-link numbers in one block (a batch of one state makes a checker for itself).
     const std::size_t n = links.size();
+    numbers_.reset(new S[20 * n]);  // written before read
+    S* next = numbers_.get();
     for (int d = 0; d < 3; ++d) {
-      c_[d].resize(n);
-      h_[d].resize(n);
-      lo_[d].resize(n);
-      hi_[d].resize(n);
+      c_[d] = next;
+      h_[d] = next + n;
+      lo_[d] = next + 2 * n;
+      hi_[d] = next + 3 * n;
+      at_lo_[d] = next + 4 * n;
+      at_hi_[d] = next + 5 * n;
+      next += 6 * n;
     }
-    grow_.resize(n);
+    grow_ = next;
+    far_ = next + n;
     need_.resize(n);
-    at_lo_.resize(n);
-    at_hi_.resize(n);
-    far_.resize(n);
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
     eager_objects_ = bool(world.predicate());
   }
   ~StateChecker() {
-    for (std::size_t l = 0; l < slots_.size(); ++l)
+    for (std::size_t l = 0; l < links_.size(); ++l)
       if (slots_[l].made) objectAt(std::uint32_t(l))->~LinkObject<S>();
   }
   StateChecker(const StateChecker&) = delete;
@@ -158,7 +162,9 @@ class StateChecker {
       for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l) {
         Box<S>& u = body_.box(l);
         if (close_[k]) {
-          u = sweptBox(at_lo_[l], at_hi_[l], far_[l], links_.reach[l], rate, links_.margin[l]);
+          u = sweptBox(fcl::Vector3<S>(at_lo_[0][l], at_lo_[1][l], at_lo_[2][l]),
+                       fcl::Vector3<S>(at_hi_[0][l], at_hi_[1][l], at_hi_[2][l]), far_[l],
+                       links_.reach[l], rate, links_.margin[l]);
         } else {
           for (int d = 0; d < 3; ++d) {
             u.lo[d] = std::numeric_limits<S>::max();
@@ -398,8 +404,10 @@ class StateChecker {
       }
       spread += (hi - lo).sum();
       if (!(spread <= limit)) return false;  // NaN: no either
-      at_lo_[l] = lo;
-      at_hi_[l] = hi;
+      for (int d = 0; d < 3; ++d) {
+        at_lo_[d][l] = lo[d];
+        at_hi_[d][l] = hi[d];
+      }
       far_[l] = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
     }
     return true;
@@ -419,16 +427,15 @@ class StateChecker {
                             links_.mid_of[2].data() + f},
                            {links_.half_of[0].data() + f, links_.half_of[1].data() + f,
                             links_.half_of[2].data() + f},
-                           {c_[0].data() + f, c_[1].data() + f, c_[2].data() + f},
-                           {h_[0].data() + f, h_[1].data() + f, h_[2].data() + f}});
-    const bool finite =
-        walkBoxes(count, WalkBoxes<S>{{c_[0].data() + f, c_[1].data() + f, c_[2].data() + f},
-                                      {h_[0].data() + f, h_[1].data() + f, h_[2].data() + f},
-                                      links_.margin.data() + f,
-                                      S(judge_.rate()),
-                                      grow_.data() + f,
-                                      {lo_[0].data() + f, lo_[1].data() + f, lo_[2].data() + f},
-                                      {hi_[0].data() + f, hi_[1].data() + f, hi_[2].data() + f}});
+                           {c_[0] + f, c_[1] + f, c_[2] + f},
+                           {h_[0] + f, h_[1] + f, h_[2] + f}});
+    const bool finite = walkBoxes(count, WalkBoxes<S>{{c_[0] + f, c_[1] + f, c_[2] + f},
+                                                      {h_[0] + f, h_[1] + f, h_[2] + f},
+                                                      links_.margin.data() + f,
+                                                      S(judge_.rate()),
+                                                      grow_ + f,
+                                                      {lo_[0] + f, lo_[1] + f, lo_[2] + f},
+                                                      {hi_[0] + f, hi_[1] + f, hi_[2] + f}});
     if (!finite) {  // every entry of R and t reaches c or h
       for (std::size_t l = first; l < first + count; ++l)
         if (!poses[l].linear().allFinite() || !poses[l].translation().allFinite()) {
@@ -664,21 +671,27 @@ class StateChecker {
   const PairJudge<S> judge_;           // a pair's contact, or within its margins
   const PairJudge<S> distance_judge_;  // whether a pair can lower the clearance
   std::uint64_t state_ = 0;
-  std::vector<Slot> slots_;
+  std::unique_ptr<Slot[]> slots_;
   // Per link, in the state at hand: the posed local AABB per coordinate (centre, half
   // extents), the cull's rate times its scale, the walked box.
-  std::vector<S> c_[3], h_[3], grow_, lo_[3], hi_[3];
+  std::unique_ptr<S[]> numbers_;  // the room of the arrays below, n numbers each
+  S* c_[3];
+  S* h_[3];
+  S* lo_[3];
+  S* hi_[3];
+  S* grow_;
   const fcl::Transform3<S>* poses_ = nullptr;  // the state's
   const fcl::Transform3<S>* state_poses_[kGroupStates] = {};
   // A walk shared by the run placeGroup took: per link l its world objects
   // world_pairs_[world_at_[l] .. world_at_[l + 1]), the pairs of links whose boxes may meet, and
   // the links a state places (runs_, ranges of links), from the links' positions over the run.
   bool shared_ = false;
-  bool self_shared_ = false;                    // every leaf took part: the self pairs too
-  std::vector<std::uint8_t> close_;             // per leaf of the links' tree: its links took part
-  std::vector<std::uint8_t> need_;              // per link: placed in each state
-  std::vector<fcl::Vector3<S>> at_lo_, at_hi_;  // per link: its positions' box over the run
-  std::vector<S> far_;                          // per link: its positions' largest coordinate
+  bool self_shared_ = false;         // every leaf took part: the self pairs too
+  std::vector<std::uint8_t> close_;  // per leaf of the links' tree: its links took part
+  std::vector<std::uint8_t> need_;   // per link: placed in each state
+  S* at_lo_[3];                      // per link and coordinate: its positions' box over the run
+  S* at_hi_[3];
+  S* far_;  // per link: its positions' largest coordinate
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;
   std::vector<std::pair<std::uint32_t, ObjectId>> gather_;  // (link, world id) in walk order
   std::vector<std::uint32_t> world_at_, bucket_fill_;
