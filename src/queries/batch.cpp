@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <deque>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -55,10 +54,13 @@ void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visi
     return;
   }
   visit.push_back(n - 1);
-  std::deque<std::pair<std::size_t, std::size_t>> open{{0, n - 2}};  // closed intervals
-  while (!open.empty()) {
-    const auto [lo, hi] = open.front();
-    open.pop_front();
+  // The closed intervals left, breadth first: each is taken once, so a list with a head serves
+  // as the queue (no allocation per interval).
+  std::vector<std::pair<std::size_t, std::size_t>> open;
+  open.reserve(n);
+  open.emplace_back(0, n - 2);
+  for (std::size_t head = 0; head < open.size(); ++head) {
+    const auto [lo, hi] = open[head];
     const std::size_t mid = lo + (hi - lo) / 2;
     visit.push_back(mid);
     if (mid > lo) open.emplace_back(lo, mid - 1);
@@ -117,9 +119,9 @@ template <typename S>
 struct MotionScratch {
   StateChecker<S> checker;
   std::vector<fcl::Transform3<S>> poses;
-  MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand)
-      : checker(world, links),
-        poses(on_demand ? StateChecker<S>::kGroupStates * links.size() : 0) {}
+  // `run_states`: the most states of a run (0: poses are not written here).
+  MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states)
+      : checker(world, links), poses(run_states * links.size()) {}
 };
 
 // checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
@@ -176,7 +178,11 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
   std::vector<std::pair<std::size_t, std::size_t>> bad;  // (item, pose index): rare
   const std::size_t n = links.size();
-  const auto make = [&] { return std::make_unique<MotionScratch<S>>(core, links, on_demand); };
+  std::size_t longest = 0;  // the most states of an edge
+  for (std::size_t e = 0; e < edges; ++e)
+    longest = std::max(longest, (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e]);
+  const std::size_t run_states = on_demand ? std::min(longest, StateChecker<S>::kGroupStates) : 0;
+  const auto make = [&] { return std::make_unique<MotionScratch<S>>(core, links, run_states); };
   // The states of run r in rank order, up to the edge's first collision; the number checked.
   const auto check = [&](auto& scratch, std::size_t r) -> std::size_t {
     const Run& run = runs[r];
@@ -349,9 +355,12 @@ std::vector<StateResult<S>> checkStates(
       done += took;
     }
   };
-  detail::parallelForWith(
-      (states + kRun - 1) / kRun, threads, 1,
-      [&] { return std::make_unique<detail::MotionScratch<S>>(core, links, true); }, check_run);
+  detail::parallelForWith((states + kRun - 1) / kRun, threads, 1,
+                          [&] {
+                            return std::make_unique<detail::MotionScratch<S>>(
+                                core, links, std::min(kRun, states));
+                          },
+                          check_run);
   return out;
 }
 
