@@ -132,14 +132,16 @@ def spatial_table(raw):
 
 def batch_tables(raw):
     kinds = ["batch_states_free", "batch_states_hit", "batch_states_self", "batch_edges",
-             "batch_single"]
+             "batch_edges_free", "batch_single", "batch_states_long"]
     scenes = ["uniform", "clustered", "meshes"]
     keys = [tuple(k.split("/")) for k in raw if k.startswith("batch_")]
     if not keys:
         return []
     out = ["### Batched state and motion checks (`batch_`)", "",
            "A 30-link robot; per cell: best FCL manager's time / cube's on one thread / on two "
-           "threads, then microseconds per state, cube on one thread against that FCL manager.",
+           "threads, then microseconds per state, cube on one thread against that FCL manager, "
+           "and the library's single-state path (`cube_loop`: a robot manager moved per state and "
+           "`collideAll`, one thread)'s time / cube's on one thread.",
            ""]
     for n in sorted({int(k[2]) for k in keys}):
         out += [f"**{n:,} world objects**", "", "| case | " + " | ".join(scenes) + " |",
@@ -159,8 +161,10 @@ def batch_tables(raw):
                 t, m = min(fcl)
                 fu = get(raw, f"{kind}/{sc}/{n}/{m}", "us_per_state")
                 cu = get(raw, f"{kind}/{sc}/{n}/cube", "us_per_state")
+                loop = get(raw, f"{kind}/{sc}/{n}/cube_loop")
                 row.append(f"{t / c1:.2f}x" + (f" / {t / c2:.2f}x" if c2 else "") +
-                           f" ({cu:.2f} vs {fu:.2f} µs)")
+                           f" ({cu:.2f} vs {fu:.2f} µs" +
+                           (f"; loop {loop / c1:.2f}x)" if loop else ")"))
             out.append(f"| {kind[6:]} | " + " | ".join(row) + " |")
         out.append("")
     return out
