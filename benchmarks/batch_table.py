@@ -18,8 +18,9 @@ for b in d["benchmarks"]:
     t[key].append(b["real_time"]); ups[key].append(b["us_per_state"])
 med = {k: statistics.median(v) for k, v in t.items()}
 mups = {k: statistics.median(v) for k, v in ups.items()}
-kinds = ["batch_states_free", "batch_states_hit", "batch_states_self", "batch_edges", "batch_single"]
-for n in (1000, 10000, 100000):
+kinds = ["batch_states_free", "batch_states_hit", "batch_states_self", "batch_edges",
+         "batch_edges_free", "batch_single", "batch_states_long"]
+for n in (1000, 2000, 10000, 100000):
   print(f"\n### {n}")
   print("| case | " + " | ".join(f"{sc}" for sc in ("uniform","clustered","meshes")) + " |")
   print("|---|---|---|---|")
