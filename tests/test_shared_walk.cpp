@@ -130,7 +130,7 @@ TEST(SharedWalk, MarginsFilterBitsAndThePredicate) {
 // brute force, for every thread count, from the array and from poses written on demand.
 TEST(SharedWalk, EdgesOfSmallStepsGiveTheSerialScansAnswer) {
   World w;
-  fillWorld(w, 150, 17, true, true);
+  fillWorld(w, 100, 17, true, true);
   const cube::BodySet<S> body = randomBody(8, 12, true);
   const std::size_t per = 45;
   const auto poses = bundles(12, per, body.size(), 21, 12, 3, 0.3);
