@@ -94,6 +94,12 @@ struct BatchOptions {
   /// them from 64 states of undecided edges. A region then takes the count less the other threads
   /// runnable on the machine at that moment, at least one.
   int threads = 0;
+  /// checkMotion(s) over a pose array: check the motion between consecutive states of an edge
+  /// too, with each link's motion bounds computed from its two poses as for motion interpolated
+  /// in SE(3) (see "Continuous edges" below). Ignored by checkStates; the overloads that take
+  /// motion bounds check continuously whatever its value; checkMotion with a PoseFunction and
+  /// no bounds throws std::invalid_argument with it set.
+  bool continuous = false;
 };
 
 /// One state's answer.
@@ -200,6 +206,70 @@ template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
                         const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+                        MotionOrder order = MotionOrder::path,
+                        const BatchOptions& options = BatchOptions());
+
+// Continuous edges. A discrete edge check can step over an obstacle thinner than the motion
+// between two states. With continuous checking, an edge is reported free only if no link can
+// touch a world object (or, with self_collision, another checked link) anywhere between
+// consecutive states, given a bound on each link's motion per interval:
+//  - motion bound b of link l over the interval from state k to k + 1 of an edge: an upper bound
+//    on the length of the path of every point of link l between the two states. Every point of
+//    the link then lies, all along the interval, within b / 2 of where it is at state k or at
+//    state k + 1.
+//  - so each state k of the edge is checked as checkMotions checks it, with link l's margin
+//    raised by max(b of interval k - 1, b of interval k) / 2 (the intervals of the edge that
+//    state k ends and starts; an edge's first and last states have one, a lone state none):
+//    a state "collides" when fcl::collide reports a contact, or fcl::distance is at most the
+//    raised margins (link margin + raise + the object's margin; for two links both margins and
+//    both raises). A contact anywhere inside an interval makes at least one of its two states
+//    collide in this sense. The guarantee is exact up to FCL's own accuracy of fcl::distance,
+//    and holds for margins too: a link within its margins of an object anywhere inside an
+//    interval makes an end state collide.
+//  - it is conservative: a state may be reported colliding though no contact happens on the
+//    motion (the check sees a link grown by up to half its motion in every direction).
+// The answer per edge is then the index within the edge of its first state, in the visiting
+// order, whose raised check fails (kNoIndex: the whole edge is free, motion included).
+// Bounds computed for motion interpolated in SE(3) (BatchOptions::continuous): the translation
+// linear and the rotation along the geodesic between the two orientations, b = |t1 - t0| +
+// theta * rho, theta the rotation angle of R0^T R1 and rho the largest distance from the link
+// frame's origin to a corner of the link's local AABB. Only valid if the caller's states move
+// that way between each other; a robot interpolated in joint space needs bounds from its
+// kinematics (given by the overloads that take them). Cost: each state's check with larger
+// margins meets more candidate pairs, and a pair within the raised margin but apart costs
+// fcl::distance instead of fcl::collide; computing SE(3) bounds adds two poses' reading per
+// state.
+
+/// checkMotions with continuous checking (see above) and the caller's bounds: motion_bounds[k *
+/// body.size() + l] bounds link l's motion from state k to state k + 1 of the same edge, one
+/// value per pose of `poses` (those of each edge's last state are not used). Throws
+/// std::invalid_argument as checkMotions, and for motion bounds whose size is not poses.size() or
+/// with a negative, NaN or infinite value (naming the first), before any work.
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body,
+    const std::vector<fcl::Transform3<S>>& poses, const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+    MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
+
+/// checkMotions with the caller's motion bounds for one edge made of all the states of `poses`.
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        const std::vector<fcl::Transform3<S>>& poses,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order = MotionOrder::path,
+                        const BatchOptions& options = BatchOptions());
+
+/// checkMotion over a PoseFunction with continuous checking and the caller's motion bounds:
+/// motion_bounds[k * body.size() + l] for link l from state k to k + 1, states * body.size()
+/// values (the last state's not used). Throws std::invalid_argument as the overload without
+/// bounds, and for bounds of another size or with a negative, NaN or infinite value, naming the
+/// first, before any work.
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        std::size_t states,
+                        const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 

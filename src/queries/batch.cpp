@@ -11,11 +11,13 @@
 #include <deque>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "adapter/manager_access.h"
 #include "core/parallel_for.h"
 #include "cube_collision/narrow_phase.h"
+#include "queries/motion_bounds.h"
 #include "queries/state_checker.h"
 
 namespace cube {
@@ -98,23 +100,38 @@ namespace detail {
 namespace {
 
 // One thread's scratch of a motion check: the checker and, for poses written on demand, room
-// for one state's.
+// for one state's; for a continuous check, room for a state's margin raises.
 template <typename S>
 struct MotionScratch {
   StateChecker<S> checker;
   std::vector<fcl::Transform3<S>> poses;
-  MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand)
-      : checker(world, links), poses(on_demand ? links.size() : 0) {}
+  std::vector<S> raise;
+  MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand, bool continuous)
+      : checker(world, links),
+        poses(on_demand ? links.size() : 0),
+        raise(continuous ? links.size() : 0) {}
+};
+
+// A discrete check: no state's margins raised.
+struct NoRaise {
+  template <class Scratch>
+  std::nullptr_t operator()(Scratch&, std::size_t, std::size_t, std::size_t, std::size_t&) const {
+    return nullptr;
+  }
 };
 
 // checkMotions over `states` states whose poses pose_at(scratch, state) gives (a pointer to the
-// links' poses), edges as edge_starts says (checked by the caller).
-template <typename S, class PoseAt>
+// links' poses), edges as edge_starts says (checked by the caller). raise_at(scratch, state,
+// edge begin, edge end, bad) gives the links' margin raises of a state of a continuous check
+// (null: none), or sets `bad` to the index of a pose it read with a NaN or infinite entry.
+template <typename S, class PoseAt, class RaiseAt = NoRaise>
 std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
                                          std::size_t states,
                                          const std::vector<std::size_t>& edge_starts,
                                          MotionOrder order, const BatchOptions& options,
-                                         bool on_demand, const PoseAt& pose_at) {
+                                         bool on_demand, const PoseAt& pose_at,
+                                         const RaiseAt& raise_at = RaiseAt()) {
+  constexpr bool continuous = !std::is_same<RaiseAt, NoRaise>::value;
   const std::size_t edges = edge_starts.size();
   std::vector<std::size_t> first(edges, kNoIndex);
   if (edges == 0) return first;
@@ -140,19 +157,33 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
   std::vector<std::pair<std::size_t, std::size_t>> bad;  // (item, pose index): rare
   const std::size_t n = links.size();
-  const auto make = [&] { return std::make_unique<MotionScratch<S>>(core, links, on_demand); };
+  const auto make = [&] {
+    return std::make_unique<MotionScratch<S>>(core, links, on_demand, continuous);
+  };
   const auto check = [&](auto& scratch, std::size_t i) {
     const Item& item = items[i];
     std::atomic<std::size_t>& b = best[item.edge];
     if (item.rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
-    const int answer = scratch->checker.check(pose_at(*scratch, item.state), options.self_collision,
-                                              false, false, nullptr);
-    if (answer == 0) return;
-    if (answer == StateChecker<S>::kBadPose) {
+    std::size_t bad_pose = kNoIndex;
+    int answer = 0;
+    const S* raise = nullptr;
+    if constexpr (continuous) {
+      const std::size_t begin = edge_starts[item.edge];
+      const std::size_t end = item.edge + 1 < edges ? edge_starts[item.edge + 1] : states;
+      raise = raise_at(*scratch, item.state, begin, end, bad_pose);
+    }
+    if (bad_pose == kNoIndex) {
+      answer = scratch->checker.check(pose_at(*scratch, item.state), options.self_collision, false,
+                                      false, nullptr, raise);
+      if (answer == 0) return;
+      if (answer == StateChecker<S>::kBadPose)
+        bad_pose = item.state * n + scratch->checker.badLink();
+    }
+    if (bad_pose != kNoIndex) {
       // As a contact: no state after it in the order is started, and the serial scan's
       // first event decides (a pose error before any contact throws).
 #pragma omp critical(cube_batch_bad_pose)
-      bad.emplace_back(i, item.state * n + scratch->checker.badLink());
+      bad.emplace_back(i, bad_pose);
     }
     std::size_t seen = b.load(std::memory_order_relaxed);
     while (item.rank < seen &&
@@ -209,13 +240,14 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
 }  // namespace
 }  // namespace detail
 
+namespace detail {
+namespace {
+
+// checkMotions' checks of its arguments; the number of states.
 template <typename S>
-std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
-                                      const std::vector<fcl::Transform3<S>>& poses,
-                                      const std::vector<std::size_t>& edge_starts,
-                                      MotionOrder order, const BatchOptions& options) {
-  const auto& links = detail::BodyAccess::links(body);
-  const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
+std::size_t checkedEdges(const Links<S>& links, const std::vector<fcl::Transform3<S>>& poses,
+                         const std::vector<std::size_t>& edge_starts) {
+  const std::size_t states = checkedStates(links, poses, "checkMotions");
   if (edge_starts.empty() && states > 0)
     batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
   for (std::size_t e = 0; e < edge_starts.size(); ++e)
@@ -223,10 +255,98 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
         edge_starts[e] >= states)
       batchError("checkMotions",
                  "edge_starts must start at 0 and increase strictly within the states");
+  return states;
+}
+
+// Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
+template <typename S>
+struct GivenRaise {
+  const std::vector<S>& bounds;
+  std::size_t n;
+  template <class Scratch>
+  const S* operator()(Scratch& scratch, std::size_t state, std::size_t begin, std::size_t end,
+                      std::size_t&) const {
+    raiseAt<S>(
+        n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
+        scratch.raise.data());
+    return scratch.raise.data();
+  }
+};
+
+// Raises from the poses of the state and its neighbours, moving in SE(3) between them.
+template <typename S>
+struct Se3Raise {
+  const std::vector<fcl::Transform3<S>>& poses;
+  const std::vector<S> reach;
+  template <class Scratch>
+  const S* operator()(Scratch& scratch, std::size_t state, std::size_t begin, std::size_t end,
+                      std::size_t& bad) const {
+    const std::size_t n = reach.size();
+    const fcl::Transform3<S>* p = poses.data();
+    if (raiseAt<S>(
+            n, state, begin, end,
+            [&](std::size_t k, std::size_t l) {
+              return se3MotionBound(p[k * n + l], p[(k + 1) * n + l], reach[l]);
+            },
+            scratch.raise.data()))
+      return scratch.raise.data();
+    // A pose read is NaN or infinite: the first such in pose order.
+    for (std::size_t k = state > begin ? state - 1 : state; k <= state + 1 && k < end; ++k)
+      for (std::size_t l = 0; l < n; ++l)
+        if (!p[k * n + l].linear().allFinite() || !p[k * n + l].translation().allFinite()) {
+          bad = k * n + l;
+          return nullptr;
+        }
+    return scratch.raise.data();  // unreachable: a NaN bound comes from a pose
+  }
+};
+
+}  // namespace
+}  // namespace detail
+
+template <typename S>
+std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                                      const std::vector<fcl::Transform3<S>>& poses,
+                                      const std::vector<std::size_t>& edge_starts,
+                                      MotionOrder order, const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
+  const std::size_t n = links.size();
+  const auto pose_at = [&](auto&, std::size_t state) { return poses.data() + state * n; };
+  if (options.continuous)
+    return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
+                                   options, false, pose_at,
+                                   detail::Se3Raise<S>{poses, detail::linkReach<S>(links)});
+  return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
+                                 false, pose_at);
+}
+
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body,
+    const std::vector<fcl::Transform3<S>>& poses, const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds, MotionOrder order,
+    const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
+  detail::checkMotionBounds(motion_bounds, poses.size(), "checkMotions");
   const std::size_t n = links.size();
   return detail::firstCollisions(
       detail::coreOf(world), links, states, edge_starts, order, options, false,
-      [&](auto&, std::size_t state) { return poses.data() + state * n; });
+      [&](auto&, std::size_t state) { return poses.data() + state * n; },
+      detail::GivenRaise<S>{motion_bounds, n});
+}
+
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        const std::vector<fcl::Transform3<S>>& poses,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order, const BatchOptions& options) {
+  const std::vector<std::size_t> starts =
+      poses.empty() ? std::vector<std::size_t>{} : std::vector<std::size_t>{0};
+  const std::vector<std::size_t> first =
+      checkMotions(world, body, poses, starts, motion_bounds, order, options);
+  return first.empty() ? kNoIndex : first[0];
 }
 
 template <typename S>
@@ -247,6 +367,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const auto& links = detail::BodyAccess::links(body);
   if (links.size() == 0) batchError("checkMotion", "the body set has no link");
   if (!pose_of) batchError("checkMotion", "null pose function");
+  if (options.continuous)
+    batchError("checkMotion",
+               "continuous checking with a pose function needs the motion bounds (the overload "
+               "that takes them)");
   if (states == 0) return kNoIndex;
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
@@ -256,19 +380,49 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                                  })[0];
 }
 
-#define CUBE_INSTANTIATE_BATCH(S)                                                                \
-  template std::vector<StateResult<S>> checkStates<S>(                                           \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
-      const BatchOptions&);                                                                      \
-  template std::vector<std::size_t> checkMotions<S>(                                             \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
-      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                        \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
-                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,       \
-                                      const BatchOptions&);                                      \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
-                                      std::size_t, const PoseFunction<S>&, MotionOrder,          \
-                                      const BatchOptions&);
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        std::size_t states,
+                        const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order, const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  if (links.size() == 0) batchError("checkMotion", "the body set has no link");
+  if (!pose_of) batchError("checkMotion", "null pose function");
+  detail::checkMotionBounds(motion_bounds, states * links.size(), "checkMotion");
+  if (states == 0) return kNoIndex;
+  const std::vector<std::size_t> starts{0};
+  return detail::firstCollisions(
+      detail::coreOf(world), links, states, starts, order, options, true,
+      [&](auto& scratch, std::size_t state) {
+        pose_of(state, scratch.poses.data());
+        return scratch.poses.data();
+      },
+      detail::GivenRaise<S>{motion_bounds, links.size()})[0];
+}
+
+#define CUBE_INSTANTIATE_BATCH(S)                                                                 \
+  template std::vector<StateResult<S>> checkStates<S>(                                            \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+      const BatchOptions&);                                                                       \
+  template std::vector<std::size_t> checkMotions<S>(                                              \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                         \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,        \
+                                      const BatchOptions&);                                       \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      std::size_t, const PoseFunction<S>&, MotionOrder,           \
+                                      const BatchOptions&);                                       \
+  template std::vector<std::size_t> checkMotions<S>(                                              \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+      const std::vector<std::size_t>&, const std::vector<S>&, MotionOrder, const BatchOptions&);  \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      const std::vector<fcl::Transform3<S>>&,                     \
+                                      const std::vector<S>&, MotionOrder, const BatchOptions&);   \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      std::size_t, const PoseFunction<S>&, const std::vector<S>&, \
+                                      MotionOrder, const BatchOptions&);
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)
 #undef CUBE_INSTANTIATE_BATCH

@@ -77,6 +77,7 @@ class StateChecker {
       h_[d].resize(links.size());
     }
     grow_.resize(links.size());
+    margin_ = links.margin;
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
     eager_objects_ = bool(world.predicate());
@@ -94,9 +95,18 @@ class StateChecker {
   /// proved on the records makes no FCL call.
   /// kBadPose (and the link in badLink()) if a pose has a NaN or infinite entry, found while
   /// placing the links: the state's poses are read once.
+  /// `extra` (null, or one value >= 0 per link): each link's margin raised by its value for this
+  /// state alone (a continuous edge's motion bounds).
   static constexpr int kBadPose = -1;
   int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
-            StateResult<S>* out) {
+            StateResult<S>* out, const S* extra = nullptr) {
+    if (extra != nullptr) {
+      for (std::size_t l = 0; l < margin_.size(); ++l) margin_[l] = links_.margin[l] + extra[l];
+      raised_ = true;
+    } else if (raised_) {
+      margin_ = links_.margin;
+      raised_ = false;
+    }
     if (!place(poses)) return kBadPose;
     // What the check keeps: the first pair in Candidate's order, or any pair.
     if (first_pair ? search<FirstInOrder<Candidate>>(self) : search<AnyHit<Candidate>>(self)) {
@@ -178,7 +188,7 @@ class StateChecker {
   }
 
   typename Broadphase<S>::Probe probe(std::size_t l) {
-    return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), links_.margin[l],
+    return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), margin_[l],
                                          links_.bits[l]};
   }
 
@@ -212,7 +222,7 @@ class StateChecker {
                       std::max({h[0], h[1], h[2]});
       const S grow = rate * (S(1) + reach);
       grow_[l] = grow;
-      const S g = grow + links_.margin[l];
+      const S g = grow + margin_[l];
       Box<S>& walked = body_.box(std::uint32_t(l));
       walked.lo[0] = c[0] - h[0] - g;
       walked.lo[1] = c[1] - h[1] - g;
@@ -301,7 +311,7 @@ class StateChecker {
     c.worldRecords(*w, iw, s, h);
     const Slot& slot = c.linkRecords(link);
     return c.offer(hits, cand, slot.sphere, slot.shape, *s, *h,
-                   c.links_.margin[link] + c.world_.marginOf(iw));
+                   c.margin_[link] + c.world_.marginOf(iw));
   }
 
   template <class C>
@@ -311,7 +321,7 @@ class StateChecker {
     const Slot& a = c.linkRecords(i);
     const Slot& b = c.linkRecords(j);
     return c.offer(c.hits<C>(), Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
-                   c.links_.margin[i] + c.links_.margin[j]);
+                   c.margin_[i] + c.margin_[j]);
   }
 
   // FCL on the pairs kept, in walk order (a collector that keeps the first in Candidate's
@@ -322,8 +332,8 @@ class StateChecker {
     if (C::kOrdered) std::sort(pending_.begin(), pending_.end());
     for (const Candidate& c : pending_) {
       if (!hits.mayBeat(c)) break;  // sorted (first pair), or found (any)
-      const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
-                            : links_.margin[c.link] + world_.marginOf(c.other);
+      const S m = c.is_link ? margin_[c.link] + margin_[c.other]
+                            : margin_[c.link] + world_.marginOf(c.other);
       const Object& b =
           c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
       if (narrow(object(c.link), b, m)) {
@@ -436,6 +446,8 @@ class StateChecker {
   std::vector<Slot> slots_;
   std::vector<S> c_[3], h_[3];  // the state's posed local AABBs, per coordinate
   std::vector<S> grow_;         // per link: the cull's rate times its scale
+  std::vector<S> margin_;       // per link: its margin, raised for the state by check()'s extra
+  bool raised_ = false;         // margin_ holds a raised state's margins
   struct alignas(LinkObject<S>) ObjectStorage {
     unsigned char bytes[sizeof(LinkObject<S>)];
   };
