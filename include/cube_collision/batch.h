@@ -164,14 +164,15 @@ enum class MotionOrder {
 /// edge, the index within the edge of its first colliding state in `order`, or kNoIndex if all
 /// are free: what checking the edge's states one by one in that order and stopping at the first
 /// collision gives, whatever the thread count. Once an edge's colliding state is known, its
-/// states after it in that order are not started, nor read. Only self_collision and threads of
-/// `options` apply. No poses and no edges: an empty answer. Throws std::invalid_argument as
-/// checkStates, and for edge_starts that do not start at 0 or do not increase strictly within
-/// the states, states with no edge_starts included (before any work); a pose with a NaN
-/// or infinite entry throws if its state comes before its edge's first colliding state in the
-/// order (where the serial scan would meet it): states after that are not read. Validating every
-/// pose first would read the whole batch, which for edges that collide early cost more than
-/// their checks.
+/// states after it in that order are not started, nor read. Only self_collision, threads and
+/// continuous of `options` apply (continuous: see "Continuous edges" below; a state's check then
+/// reads its neighbours' poses in the edge too, and a NaN or infinite one throws there). No poses
+/// and no edges: an empty answer. Throws std::invalid_argument as checkStates, and for edge_starts
+/// that do not start at 0 or do not increase strictly within the states, states with no edge_starts
+/// included (before any work); a pose with a NaN or infinite entry throws if its state comes before
+/// its edge's first colliding state in the order (where the serial scan would meet it): states
+/// after that are not read. Validating every pose first would read the whole batch, which for edges
+/// that collide early cost more than their checks.
 template <typename S>
 std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                                       const std::vector<fcl::Transform3<S>>& poses,
@@ -199,9 +200,10 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
 /// pose array is made: the call's memory is the visiting order, 16 bytes a state (up to 32 while it
 /// is made), and one state's poses per thread. Throws
-/// std::invalid_argument for an empty body set or a null function (before any work), and as
-/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on (with
-/// `threads` > 1, possibly one from a state after the answer).
+/// std::invalid_argument for an empty body set, a null function or BatchOptions::continuous set
+/// (SE(3) bounds need every state's poses: the overload with motion bounds checks continuously)
+/// (before any work), and as checkMotion for a NaN or infinite pose; an exception from pose_of is
+/// passed on (with `threads` > 1, possibly one from a state after the answer).
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
@@ -214,31 +216,35 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 // touch a world object (or, with self_collision, another checked link) anywhere between
 // consecutive states, given a bound on each link's motion per interval:
 //  - motion bound b of link l over the interval from state k to k + 1 of an edge: an upper bound
-//    on the length of the path of every point of link l between the two states. Every point of
-//    the link then lies, all along the interval, within b / 2 of where it is at state k or at
-//    state k + 1.
+//    on the length of the path of every point of link l between the two states. A point that
+//    has moved a length L1 since state k has L2 <= b - L1 left to state k + 1, so it lies within
+//    b / 2 of its place at state k or at state k + 1; two links' points at one instant, within
+//    (b_i + b_j) / 2 of each other's at one of the two states (L1_i + L1_j + L2_i + L2_j <=
+//    b_i + b_j).
 //  - so each state k of the edge is checked as checkMotions checks it, with link l's margin
 //    raised by max(b of interval k - 1, b of interval k) / 2 (the intervals of the edge that
 //    state k ends and starts; an edge's first and last states have one, a lone state none):
-//    a state "collides" when fcl::collide reports a contact, or fcl::distance is at most the
-//    raised margins (link margin + raise + the object's margin; for two links both margins and
-//    both raises). A contact anywhere inside an interval makes at least one of its two states
-//    collide in this sense. The guarantee is exact up to FCL's own accuracy of fcl::distance,
-//    and holds for margins too: a link within its margins of an object anywhere inside an
-//    interval makes an end state collide.
-//  - it is conservative: a state may be reported colliding though no contact happens on the
-//    motion (the check sees a link grown by up to half its motion in every direction).
-// The answer per edge is then the index within the edge of its first state, in the visiting
-// order, whose raised check fails (kNoIndex: the whole edge is free, motion included).
-// Bounds computed for motion interpolated in SE(3) (BatchOptions::continuous): the translation
-// linear and the rotation along the geodesic between the two orientations, b = |t1 - t0| +
-// theta * rho, theta the rotation angle of R0^T R1 and rho the largest distance from the link
-// frame's origin to a corner of the link's local AABB. Only valid if the caller's states move
-// that way between each other; a robot interpolated in joint space needs bounds from its
-// kinematics (given by the overloads that take them). Cost: each state's check with larger
-// margins meets more candidate pairs, and a pair within the raised margin but apart costs
-// fcl::distance instead of fcl::collide; computing SE(3) bounds adds two poses' reading per
-// state.
+//    a state fails when fcl::collide reports a contact, or fcl::distance is at most the raised
+//    margins (link margin + raise + the object's margin; for two links both margins and both
+//    raises). A contact anywhere inside an interval makes at least one of its two states fail,
+//    and so does a link within its margins of an object anywhere inside an interval: exactly,
+//    up to the accuracy of FCL's own fcl::collide and fcl::distance on the states.
+//  - it is conservative: a state may fail though nothing is touched on the motion (the check
+//    sees each link grown by half its larger bound in every direction).
+// The answer per edge is the index within the edge of its first state, in the visiting order,
+// whose raised check fails (kNoIndex: the whole edge is free, the motion between its states
+// included); the thread count does not change it. Nothing is said of the motion before the
+// edge's first state or after its last.
+// Bounds computed for motion interpolated in SE(3) (BatchOptions::continuous): each link's
+// translation linear and its rotation along the geodesic between its two orientations, b =
+// |t1 - t0| + theta * rho, theta the rotation angle of R0^T R1 and rho the largest distance from
+// the link frame's origin to a corner of the link's local AABB. They hold only if the caller's
+// links move that way between states; a robot interpolated in joint space needs bounds from its
+// kinematics (the overloads that take them). Cost: a state's check with raised margins meets
+// more candidate pairs, and a pair within the raised margins but apart costs fcl::distance on
+// top of fcl::collide (on meshes, a walk of their BVH): per state, from about the discrete
+// check's cost where the raises are small against the gaps between links and objects, to many
+// times it where they are not; computing SE(3) bounds reads the neighbours' poses.
 
 /// checkMotions with continuous checking (see above) and the caller's bounds: motion_bounds[k *
 /// body.size() + l] bounds link l's motion from state k to state k + 1 of the same edge, one
