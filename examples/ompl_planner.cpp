@@ -60,7 +60,7 @@ constexpr double kLength = 1.0;  // each link
 // The continuous run's states per state of OMPL's resolution: its motion bounds shrink with the
 // states' spacing, and with OMPL's own spacing they raise the links so much that links two apart
 // (always within one link length of each other) count as touching.
-constexpr int kRefine = 8;
+constexpr int kRefine = 32;
 
 // ---- The arm ----------------------------------------------------------------------------------
 
