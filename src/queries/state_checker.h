@@ -336,7 +336,8 @@ class StateChecker {
                             : margin_[c.link] + world_.marginOf(c.other);
       const Object& b =
           c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
-      if (narrow(object(c.link), b, m)) {
+      if (narrow(object(c.link), b, m,
+                 c.is_link ? grow_[c.link] + grow_[c.other] : grow_[c.link])) {
         hits.add(c);
         break;
       }
@@ -366,11 +367,18 @@ class StateChecker {
     return slot;
   }
 
-  // FCL's answer: contact, or (margin m > 0) a distance of at most m.
-  bool narrow(const Object& a, const Object& b, S m) {
+  // FCL's answer: contact, or (margin m > 0) a distance of at most m. With raised margins (a
+  // continuous edge's), FCL's distance starts from a cap above m (an eighth more, plus the pair's
+  // tolerance `slack`, beyond rounding): its BVH and octree walks skip what lies beyond the cap,
+  // and a distance of at most m is found as without it.
+  bool narrow(const Object& a, const Object& b, S m, S slack) {
     fcl::CollisionResult<S> result;
     if (fclCollide(&a, &b, request_, result) > 0) return true;
-    return m > S(0) && pairDistance(a, b) <= m;
+    if (!(m > S(0))) return false;
+    if (!raised_) return pairDistance(a, b) <= m;
+    fcl::DistanceResult<S> capped;
+    capped.min_distance = m + m / S(8) + slack;
+    return fclDistance(&a, &b, distance_request_, capped) <= m;
   }
 
   S pairDistance(const Object& a, const Object& b) {
