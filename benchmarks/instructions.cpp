@@ -11,7 +11,8 @@
 // counting callback), robot (a 30-object robot manager against the world, 16 poses), update (1%
 // of the objects moved, update(), 10 steps), distance (10 object distances, FCL's narrow phase),
 // contacts (collideAll self-collide, FCL's narrow phase), states (checkStates of 50 states of a
-// 30-link robot, one thread), first (the first pipeline query of a manager: collideAll with FCL's
+// 30-link robot, one thread), edges (checkMotions of 20 collision-free edges of 32 states of that
+// robot, one thread), first (the first pipeline query of a manager: collideAll with FCL's
 // default request, which builds the per-object volumes), still (update() with nothing moved, then
 // a self-collide, counting callback, 10 steps), keep (the same with Config::keep_pairs and 1% of
 // the objects moved before each step, the motion not counted), keepstill (keep_pairs, nothing
@@ -90,7 +91,7 @@ int main(int argc, char** argv) {
   world.registerObjects(scene.pointers());
   world.setup();
   Run run;
-  if (which == "distance" || which == "contacts" || which == "states")
+  if (which == "distance" || which == "contacts" || which == "states" || which == "edges")
     cube::collideAll<S>(world);  // the volumes the first pipeline query builds ("first")
 
   if (which == "self") {
@@ -181,7 +182,9 @@ int main(int argc, char** argv) {
     run.checksum = cube::collideAll<S>(world, all, one).numContacts();
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = 1;
-  } else if (which == "states") {
+  } else if (which == "states" || which == "edges") {
+    // states: 50 random states; edges: 20 edges of 32 states each, joints interpolated between
+    // a random state and one near it (a planner's edges), checked in path order.
     cube::BodySet<S> body;
     const double len = scenes::typicalSize(o);
     for (int i = 0; i < 30; ++i)
@@ -190,25 +193,63 @@ int main(int argc, char** argv) {
                          : std::make_shared<fcl::Boxd>(0.3 * len, 0.3 * len, len));
     std::mt19937 rng(13);
     std::uniform_real_distribution<double> p(-0.9 * o.half_extent, 0.9 * o.half_extent),
-        a(-0.6, 0.6);
+        a(-0.6, 0.6), step(-0.05, 0.05);
     std::vector<fcl::Transform3d> poses;
-    for (int k = 0; k < 50; ++k) {
+    const auto chain = [&](const fcl::Vector3d& base, const double* q) {
       fcl::Transform3d t = fcl::Transform3d::Identity();
-      t.translation() = fcl::Vector3d(p(rng), p(rng), p(rng));
+      t.translation() = base;
       for (int i = 0; i < 30; ++i) {
-        t = t * fcl::AngleAxisd(a(rng), i % 2 ? fcl::Vector3d::UnitX() : fcl::Vector3d::UnitY());
+        t = t * fcl::AngleAxisd(q[i], i % 2 ? fcl::Vector3d::UnitX() : fcl::Vector3d::UnitY());
         fcl::Transform3d mid = t;
         mid.translate(fcl::Vector3d(0, 0, len / 2));
         poses.push_back(mid);
         t.translate(fcl::Vector3d(0, 0, len));
       }
+    };
+    const bool edges = which == "edges";
+    const int count = edges ? 20 : 50, per_edge = edges ? 32 : 1;
+    std::vector<std::size_t> starts;
+    cube::BatchOptions probe;
+    probe.threads = 1;
+    for (int k = 0, tries = 0; k < count; ++tries) {
+      const std::size_t at = poses.size();
+      const fcl::Vector3d base(p(rng), p(rng), p(rng));
+      double q0[30], q1[30], q[30];
+      for (int i = 0; i < 30; ++i) q0[i] = a(rng);
+      fcl::Vector3d move = fcl::Vector3d::Zero();
+      for (int i = 0; i < 30; ++i) q1[i] = q0[i] + (edges ? step(rng) : 0.0);
+      if (edges) move = 10 * len * fcl::Vector3d(step(rng), step(rng), step(rng));
+      for (int s = 0; s < per_edge; ++s) {
+        const double f = per_edge > 1 ? double(s) / (per_edge - 1) : 0.0;
+        for (int i = 0; i < 30; ++i) q[i] = q0[i] + f * (q1[i] - q0[i]);
+        chain(base + f * move, q);
+      }
+      if (edges && tries < 100000) {
+        // A planner's free edge: every state free (found outside the counted part).
+        const std::vector<fcl::Transform3d> mine(poses.begin() + long(at), poses.end());
+        bool free = true;
+        for (const auto& r : cube::checkStates(world, body, mine, probe))
+          free = free && !r.colliding;
+        if (!free) {
+          poses.resize(at);
+          continue;
+        }
+      }
+      starts.push_back(at / 30);
+      ++k;
     }
     cube::BatchOptions one;
     one.threads = 1;
     CALLGRIND_START_INSTRUMENTATION;
-    for (const auto& r : cube::checkStates(world, body, poses, one)) run.checksum += r.colliding;
+    if (edges) {
+      for (const std::size_t f :
+           cube::checkMotions(world, body, poses, starts, cube::MotionOrder::path, one))
+        run.checksum += f == cube::kNoIndex ? 0 : f + 1;
+    } else {
+      for (const auto& r : cube::checkStates(world, body, poses, one)) run.checksum += r.colliding;
+    }
     CALLGRIND_STOP_INSTRUMENTATION;
-    run.calls = 50;
+    run.calls = std::size_t(count) * std::size_t(per_edge);
   } else {
     std::fprintf(stderr, "cube_instructions: unknown case %s\n", which.c_str());
     return 2;

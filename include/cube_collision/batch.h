@@ -7,6 +7,8 @@
 // narrow phase (fcl::collide, and fcl::distance for margins and clearance), after the broadphase
 // of the world's cubes and the cull of the pipeline (callbacks.h): the answers are those of
 // checking every link against every world object and every pair of links not excluded with FCL.
+// States that lie close together (an edge's, a batch of neighbours) share one walk of the world:
+// each link's candidates over the group, then each state's own boxes against those few.
 
 #include <fcl/common/types.h>
 #include <fcl/geometry/collision_geometry.h>
@@ -163,16 +165,20 @@ enum class MotionOrder {
 /// (the last edge up to the last state) of `poses` (laid out as for checkStates). Returns, per
 /// edge, the index within the edge of its first colliding state in `order`, or kNoIndex if all
 /// are free: what checking the edge's states one by one in that order and stopping at the first
-/// collision gives, whatever the thread count. Once an edge's colliding state is known, its
-/// states after it in that order are not started, nor read. Only self_collision, threads and
-/// continuous of `options` apply (continuous: see "Continuous edges" below; a state's check then
-/// reads its neighbours' poses in the edge too, and a NaN or infinite one throws there). No poses
-/// and no edges: an empty answer. Throws std::invalid_argument as checkStates, and for edge_starts
-/// that do not start at 0 or do not increase strictly within the states, states with no edge_starts
-/// included (before any work); a pose with a NaN or infinite entry throws if its state comes before
-/// its edge's first colliding state in the order (where the serial scan would meet it): states
-/// after that are not read. Validating every pose first would read the whole batch, which for edges
-/// that collide early cost more than their checks.
+/// collision gives, whatever the thread count. An edge's states are read in runs of consecutive
+/// places in the order, of 1, 4, 8, 16 and then 32 states (states of a run that lie close
+/// together share one walk of the world); once an edge's colliding state is known, no state
+/// after it in the order is started, and no later run is read: on one thread, for an answer at
+/// place r of the order, at most max(5, 2 r + 3) of the edge's states are read. Only
+/// self_collision, threads and continuous of `options` apply (continuous: see "Continuous edges"
+/// below; a state's check then also reads its neighbours' poses in the edge, and a NaN or
+/// infinite one throws there). No poses and no edges: an empty answer. Throws
+/// std::invalid_argument as checkStates, and for edge_starts that do not start at 0 or do not
+/// increase strictly within the states, states with no edge_starts included (before any work);
+/// a pose with a NaN or infinite entry throws if its state comes before its edge's first
+/// colliding state in the order (where the serial scan would meet it). Validating every pose
+/// first would read the whole batch, which for edges that collide early cost more than their
+/// checks.
 template <typename S>
 std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                                       const std::vector<fcl::Transform3<S>>& poses,
@@ -195,15 +201,18 @@ template <typename S>
 using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* poses)>;
 
 /// checkMotion for one edge of `states` states whose poses `pose_of` writes on demand, for a
-/// planner that interpolates an edge and runs its kinematics per state: the states after the
-/// answer in `order` are never computed (with `threads` > 1, a few may be, and their answers
+/// planner that interpolates an edge and runs its kinematics per state: pose_of is called for the
+/// states of a run (checkMotions) before any of them is checked, and no later run is computed
+/// once the answer is known: on one thread, for an answer at place r of `order`, at most
+/// max(5, 2 r + 3) states are computed (with `threads` > 1, a few more may be, and their answers
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
-/// pose array is made: the call's memory is the visiting order, 16 bytes a state (up to 32 while it
-/// is made), and one state's poses per thread. Throws
+/// pose array is made: the call's memory is the visiting order, 16 bytes a state (up to 32
+/// while it is made), and the poses of one run (32 states) per thread. Throws
 /// std::invalid_argument for an empty body set, a null function or BatchOptions::continuous set
 /// (SE(3) bounds need every state's poses: the overload with motion bounds checks continuously)
-/// (before any work), and as checkMotion for a NaN or infinite pose; an exception from pose_of is
-/// passed on (with `threads` > 1, possibly one from a state after the answer).
+/// (before any work), and as checkMotion for a NaN or infinite pose; an exception from pose_of
+/// is passed on (possibly one from a state after the answer in its run, or with `threads` > 1 in
+/// a later one).
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,

@@ -74,17 +74,7 @@ class BodyView {
     for (std::size_t k = nodes_.size(); k-- > 0;) {
       Node& node = nodes_[k];
       if (node.isLeaf()) {
-        Box<S> u = items_[node.first].box;
-        for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) {
-          const Box<S>& b = items_[i].box;
-          u.lo[0] = std::min(u.lo[0], b.lo[0]);
-          u.lo[1] = std::min(u.lo[1], b.lo[1]);
-          u.lo[2] = std::min(u.lo[2], b.lo[2]);
-          u.hi[0] = std::max(u.hi[0], b.hi[0]);
-          u.hi[1] = std::max(u.hi[1], b.hi[1]);
-          u.hi[2] = std::max(u.hi[2], b.hi[2]);
-        }
-        roundOut(u, node.lo, node.hi);
+        leafBounds(node.first, node.count, node);
       } else {
         const Node& x = nodes_[node.first];
         const Node& y = nodes_[node.first + 1];
@@ -102,6 +92,15 @@ class BodyView {
       std::copy(leaf.hi, leaf.hi + 3, leaf_alone_[k].hi);
     }
   }
+  /// Leaf k's bounds as leafView(k) walks them, from its objects' boxes alone: the rest of the
+  /// tree keeps its bounds (view() is stale until the next refit()).
+  void refitLeaf(std::size_t k) {
+    const Node& leaf = nodes_[leaves_[k]];
+    leafBounds(leaf.first, leaf.count, leaf_alone_[k]);
+  }
+  /// Leaf k's ids: leafFirst(k) .. leafFirst(k) + leafSize(k) - 1.
+  std::uint32_t leafFirst(std::size_t k) const { return nodes_[leaves_[k]].first; }
+  std::uint32_t leafSize(std::size_t k) const { return nodes_[leaves_[k]].count; }
   View<S> view() const {
     return View<S>{nodes_.data(), items_.data(), nodes_.empty() ? kNone : 0u,
                    std::uint32_t(items_.size())};
@@ -116,6 +115,21 @@ class BodyView {
   }
 
  private:
+  // The union of items first .. first + count - 1's boxes, rounded out, into node's bounds.
+  void leafBounds(std::uint32_t first, std::uint32_t count, Node& node) const {
+    Box<S> u = items_[first].box;
+    for (std::uint32_t i = first + 1; i < first + count; ++i) {
+      const Box<S>& b = items_[i].box;
+      u.lo[0] = std::min(u.lo[0], b.lo[0]);
+      u.lo[1] = std::min(u.lo[1], b.lo[1]);
+      u.lo[2] = std::min(u.lo[2], b.lo[2]);
+      u.hi[0] = std::max(u.hi[0], b.hi[0]);
+      u.hi[1] = std::max(u.hi[1], b.hi[1]);
+      u.hi[2] = std::max(u.hi[2], b.hi[2]);
+    }
+    roundOut(u, node.lo, node.hi);
+  }
+
   NodeArray nodes_;
   std::vector<Item<S>> items_;
   std::vector<std::uint32_t> leaves_;  // leaf nodes in id order

@@ -83,16 +83,30 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
   core.table().wantVolumes();
   const int threads = detail::batchThreads(states, options.threads);
   const std::size_t n = links.size();
-  detail::parallelForWith(
-      states, threads, 4, [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
-      [&](auto& checker, std::size_t k) {
-        const int answer = checker->check(poses.data() + k * n, options.self_collision,
-                                          options.first_pair, options.clearance, &out[k]);
+  // Runs of consecutive states, placed together where they lie close (StateChecker::placeGroup).
+  constexpr std::size_t kRun = detail::StateChecker<S>::kGroupStates;
+  const auto check_run = [&](auto& checker, std::size_t run) {
+    const std::size_t first = run * kRun;
+    const std::size_t count = std::min(kRun, states - first);
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j) at[j] = poses.data() + (first + j) * n;
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took = checker->placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t k = first + done + j;
+        const int answer = checker->checkPlaced(j, options.self_collision, options.first_pair,
+                                                options.clearance, &out[k]);
         if (answer == detail::StateChecker<S>::kBadPose)
           detail::badPose("checkStates", k * n + checker->badLink());
         out[k].colliding = answer != 0;
         if (out[k].colliding && options.clearance) out[k].clearance = S(0);
-      });
+      }
+      done += took;
+    }
+  };
+  detail::parallelForWith((states + kRun - 1) / kRun, threads, 1,
+                          [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
+                          check_run);
   return out;
 }
 
@@ -100,7 +114,7 @@ namespace detail {
 namespace {
 
 // One thread's scratch of a motion check: the checker and, for poses written on demand, room
-// for one state's; for a continuous check, room for a state's margin raises.
+// for the states of one run; for a continuous check, room for a state's margin raises.
 template <typename S>
 struct MotionScratch {
   StateChecker<S> checker;
@@ -108,22 +122,18 @@ struct MotionScratch {
   std::vector<S> raise;
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand, bool continuous)
       : checker(world, links),
-        poses(on_demand ? links.size() : 0),
+        poses(on_demand ? StateChecker<S>::kGroupStates * links.size() : 0),
         raise(continuous ? links.size() : 0) {}
 };
 
 // A discrete check: no state's margins raised.
-struct NoRaise {
-  template <class Scratch>
-  std::nullptr_t operator()(Scratch&, std::size_t, std::size_t, std::size_t, std::size_t&) const {
-    return nullptr;
-  }
-};
+struct NoRaise {};
 
-// checkMotions over `states` states whose poses pose_at(scratch, state) gives (a pointer to the
-// links' poses), edges as edge_starts says (checked by the caller). raise_at(scratch, state,
-// edge begin, edge end, bad) gives the links' margin raises of a state of a continuous check
-// (null: none), or sets `bad` to the index of a pose it read with a NaN or infinite entry.
+// checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
+// the links' poses, the j-th state of a run placed together), edges as edge_starts says (checked
+// by the caller). A continuous check: raise_at(scratch, state, edge begin, edge end, bad) gives
+// the links' margin raises of a state, or sets `bad` to the index of a pose it read with a NaN
+// or infinite entry; its states are checked one by one (their margins differ).
 template <typename S, class PoseAt, class RaiseAt = NoRaise>
 std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
                                          std::size_t states,
@@ -152,6 +162,26 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     for (std::size_t r = 0; r < visit.size(); ++r, ++item)
       items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + visit[r]};
   }
+  // Runs of items placed together (StateChecker::placeGroup): per edge its first state in the
+  // order alone, then runs of consecutive ranks of 4, 8, 16 states and then kGroupStates (states
+  // consecutive along an edge lie close together and share a walk). A run's states are placed
+  // before any is checked: the doubling keeps the states placed beyond an edge's answer fewer
+  // than those before it.
+  constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
+  struct Run {
+    std::size_t first;  // item
+    std::size_t count;
+  };
+  std::vector<Run> runs;
+  for (std::size_t e = 0; e < edges; ++e) {
+    const std::size_t begin = edge_starts[e];
+    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+    for (std::size_t i = begin, size = 1; i < end;) {
+      runs.push_back(Run{i, std::min(size, end - i)});
+      i += size;
+      size = size == 1 ? 4 : std::min(kRun, 2 * size);
+    }
+  }
   // Per edge: the lowest rank known to collide (or to hold a bad pose).
   std::vector<std::atomic<std::size_t>> best(edges);
   for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
@@ -160,40 +190,76 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   const auto make = [&] {
     return std::make_unique<MotionScratch<S>>(core, links, on_demand, continuous);
   };
-  const auto check = [&](auto& scratch, std::size_t i) {
-    const Item& item = items[i];
-    std::atomic<std::size_t>& b = best[item.edge];
-    if (item.rank > b.load(std::memory_order_relaxed)) return;  // an earlier one collides
-    std::size_t bad_pose = kNoIndex;
-    int answer = 0;
-    const S* raise = nullptr;
-    if constexpr (continuous) {
-      const std::size_t begin = edge_starts[item.edge];
-      const std::size_t end = item.edge + 1 < edges ? edge_starts[item.edge + 1] : states;
-      raise = raise_at(*scratch, item.state, begin, end, bad_pose);
-    }
-    if (bad_pose == kNoIndex) {
-      answer = scratch->checker.check(pose_at(*scratch, item.state), options.self_collision, false,
-                                      false, nullptr, raise);
-      if (answer == 0) return;
-      if (answer == StateChecker<S>::kBadPose)
-        bad_pose = item.state * n + scratch->checker.badLink();
-    }
-    if (bad_pose != kNoIndex) {
-      // As a contact: no state after it in the order is started, and the serial scan's
-      // first event decides (a pose error before any contact throws).
+  // The states of run r in rank order, up to the edge's first collision; the number checked.
+  const auto check = [&](auto& scratch, std::size_t r) -> std::size_t {
+    const Run& run = runs[r];
+    std::atomic<std::size_t>& b = best[items[run.first].edge];
+    const std::size_t seen = b.load(std::memory_order_relaxed);
+    std::size_t count = 0;  // an earlier rank collides: the states after it are not read
+    while (count < run.count && items[run.first + count].rank <= seen) ++count;
+    if (count == 0) return 0;
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j)
+      at[j] = pose_at(*scratch, items[run.first + j].state, j);
+    // Item i's event (a contact, or a pose error: bad_pose) at its rank.
+    const auto event = [&](std::size_t i, std::size_t bad_pose) {
+      const Item& item = items[i];
+      if (bad_pose != kNoIndex) {
+        // As a contact: no state after it in the order is started, and the serial scan's
+        // first event decides (a pose error before any contact throws).
 #pragma omp critical(cube_batch_bad_pose)
-      bad.emplace_back(i, bad_pose);
+        bad.emplace_back(i, bad_pose);
+      }
+      std::size_t known = b.load(std::memory_order_relaxed);
+      while (item.rank < known &&
+             !b.compare_exchange_weak(known, item.rank, std::memory_order_relaxed)) {
+      }
+    };
+    if constexpr (continuous) {
+      const std::uint32_t e = items[run.first].edge;
+      const std::size_t begin = edge_starts[e];
+      const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+      for (std::size_t j = 0; j < count; ++j) {
+        const std::size_t i = run.first + j;
+        const Item& item = items[i];
+        if (item.rank > b.load(std::memory_order_relaxed)) return j;  // an earlier one
+        std::size_t bad_pose = kNoIndex;
+        const S* raise = raise_at(*scratch, item.state, begin, end, bad_pose);
+        if (bad_pose == kNoIndex) {
+          const int answer =
+              scratch->checker.check(at[j], options.self_collision, false, false, nullptr, raise);
+          if (answer == 0) continue;
+          if (answer == StateChecker<S>::kBadPose)
+            bad_pose = item.state * n + scratch->checker.badLink();
+        }
+        event(i, bad_pose);
+        return j + 1;
+      }
+      return count;
     }
-    std::size_t seen = b.load(std::memory_order_relaxed);
-    while (item.rank < seen &&
-           !b.compare_exchange_weak(seen, item.rank, std::memory_order_relaxed)) {
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took =
+          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t i = run.first + done + j;
+        const Item& item = items[i];
+        if (item.rank > b.load(std::memory_order_relaxed)) return done + j;  // an earlier one
+        const int answer =
+            scratch->checker.checkPlaced(j, options.self_collision, false, false, nullptr);
+        if (answer == 0) continue;
+        event(i, answer == StateChecker<S>::kBadPose ? item.state * n + scratch->checker.badLink()
+                                                     : kNoIndex);
+        return done + j + 1;
+      }
+      done += took;
     }
+    return count;
   };
+
   // An edge stops at its first colliding state (thread_policy.h): a lone edge's first
-  // kMotionSerialStates states checked run on this thread, and the items left go to the threads
-  // only if at least kMotionParallelMinStates of them are still undecided. Several edges are
-  // independent scans: their items go to the threads from kParallelMinStates undecided on.
+  // kMotionSerialStates states checked run on this thread, and the runs left go to the threads
+  // only if at least kMotionParallelMinStates of their states are still undecided. Several edges
+  // are independent scans: their runs go to the threads from kParallelMinStates undecided on.
   std::size_t next = 0;
   int team = 1;
   // The calling thread's checker: made once, kept for its share of a region (a checker costs
@@ -203,23 +269,20 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     auto& scratch = mine;
     const std::size_t prefix = edges == 1 ? kMotionSerialStates : 0;
     const std::size_t min_left = edges == 1 ? kMotionParallelMinStates : kParallelMinStates;
-    for (std::size_t checked = 0; next < states && checked < prefix; ++next) {
-      const Item& item = items[next];
-      if (item.rank > best[item.edge].load(std::memory_order_relaxed)) continue;
-      check(scratch, next);
-      ++checked;
-    }
+    for (std::size_t checked = 0; next < runs.size() && checked < prefix; ++next)
+      checked += check(scratch, next);
     std::size_t undecided = 0;
-    if (next < states && resolveThreads(options.threads) > 1)
-      for (std::size_t i = next; i < states; ++i)
-        undecided += best[items[i].edge].load(std::memory_order_relaxed) == kNoIndex;
+    if (next < runs.size() && resolveThreads(options.threads) > 1)
+      for (std::size_t r = next; r < runs.size(); ++r)
+        if (best[items[runs[r].first].edge].load(std::memory_order_relaxed) == kNoIndex)
+          undecided += runs[r].count;
     if (undecided >= min_left) team = regionTeam(resolveThreads(options.threads));
     if (team <= 1)
-      for (; next < states; ++next) check(scratch, next);
+      for (; next < runs.size(); ++next) check(scratch, next);
   }
-  if (next < states)
+  if (next < runs.size())
     parallelForWith(
-        states - next, team, 4,
+        runs.size() - next, team, 1,
         [&]() -> std::unique_ptr<MotionScratch<S>> {
           if (omp_get_thread_num() == 0 && mine) return std::move(mine);
           return make();
@@ -312,7 +375,9 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
   const auto& links = detail::BodyAccess::links(body);
   const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
   const std::size_t n = links.size();
-  const auto pose_at = [&](auto&, std::size_t state) { return poses.data() + state * n; };
+  const auto pose_at = [&](auto&, std::size_t state, std::size_t) {
+    return poses.data() + state * n;
+  };
   if (options.continuous)
     return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
                                    options, false, pose_at,
@@ -333,7 +398,7 @@ std::vector<std::size_t> checkMotions(
   const std::size_t n = links.size();
   return detail::firstCollisions(
       detail::coreOf(world), links, states, edge_starts, order, options, false,
-      [&](auto&, std::size_t state) { return poses.data() + state * n; },
+      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; },
       detail::GivenRaise<S>{motion_bounds, n});
 }
 
@@ -374,9 +439,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (states == 0) return kNoIndex;
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
-                                 [&](auto& scratch, std::size_t state) {
-                                   pose_of(state, scratch.poses.data());
-                                   return scratch.poses.data();
+                                 [&](auto& scratch, std::size_t state, std::size_t j) {
+                                   fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+                                   pose_of(state, at);
+                                   return at;
                                  })[0];
 }
 
@@ -394,9 +460,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(
       detail::coreOf(world), links, states, starts, order, options, true,
-      [&](auto& scratch, std::size_t state) {
-        pose_of(state, scratch.poses.data());
-        return scratch.poses.data();
+      [&](auto& scratch, std::size_t state, std::size_t j) {
+        fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+        pose_of(state, at);
+        return at;
       },
       detail::GivenRaise<S>{motion_bounds, links.size()})[0];
 }

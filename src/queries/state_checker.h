@@ -16,6 +16,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <utility>
 #include <vector>
 
 #include "adapter/query_guard.h"
@@ -72,13 +73,9 @@ class StateChecker {
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
     self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
     self_gate_.excluded_n = links.size();
-    for (int d = 0; d < 3; ++d) {
-      c_[d].resize(links.size());
-      h_[d].resize(links.size());
-    }
-    grow_.resize(links.size());
     margin_ = links.margin;
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
+    close_.resize(body_.leafCount());
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
     eager_objects_ = bool(world.predicate());
   }
@@ -90,13 +87,11 @@ class StateChecker {
   StateChecker& operator=(const StateChecker&) = delete;
 
   /// Whether the state collides; the first pair and the clearance into `out` as asked.
-  /// Two passes: the walks and the records settle what they can (most pairs apart, many in
-  /// contact proved by inscribed balls), then FCL answers the rest, so that a colliding state
-  /// proved on the records makes no FCL call.
   /// kBadPose (and the link in badLink()) if a pose has a NaN or infinite entry, found while
   /// placing the links: the state's poses are read once.
   /// `extra` (null, or one value >= 0 per link): each link's margin raised by its value for this
-  /// state alone (a continuous edge's motion bounds).
+  /// state alone (a continuous edge's motion bounds); a checker that raised margins checks
+  /// states one by one (check), not in groups.
   static constexpr int kBadPose = -1;
   int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
             StateResult<S>* out, const S* extra = nullptr) {
@@ -107,7 +102,105 @@ class StateChecker {
       margin_ = links_.margin;
       raised_ = false;
     }
-    if (!place(poses)) return kBadPose;
+    placeGroup(&poses, 1, self);
+    return checkPlaced(0, self, first_pair, clearance, out);
+  }
+
+  /// Takes the links' poses of the first states of `count` (1 <= count <= kGroupStates),
+  /// states[j] those of state j, and returns how many it took (1 or more), each then checked by
+  /// checkPlaced(j). Where states lie close together (an edge's, leaf by leaf of the links'
+  /// tree), it takes the largest such run of count, count / 2, ... states (kGroupMinStates or
+  /// more), places them here, and those links share one walk of the world over the union of
+  /// their boxes, whose pairs each state then filters by its own boxes; the other links walk the
+  /// world state by state. Otherwise it takes all `count`, each placed and walking as it is
+  /// checked. With a pair predicate (which sees each state's link objects) every state walks.
+  /// The poses must stay until the last checkPlaced of the run.
+  std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self) {
+    const std::size_t n = links_.size();
+    first_bad_ = count;
+    gathered_ = false;
+    stored_ = false;
+    for (std::size_t j = 0; j < count; ++j) state_poses_[j] = states[j];
+    if (eager_objects_) return count;
+    const std::size_t all_count = count;
+    bool any = false, all = true;
+    for (; count >= kGroupMinStates && !any; count /= 2) {
+      all = true;
+      for (std::size_t k = 0; k < body_.leafCount(); ++k) {
+        close_[k] = closeTogether(states, count, body_.leafFirst(k), body_.leafSize(k));
+        any = any || close_[k];
+        all = all && close_[k];
+      }
+      if (any) break;
+    }
+    if (!any) return all_count;
+    first_bad_ = count;
+    stored_ = true;
+    reserve(count * n);
+    for (std::size_t j = 0; j < count; ++j)
+      if (!placeBoxes(states[j], j * n)) {
+        first_bad_ = j;  // checked one by one up to it; the states after it are never checked
+        return count;
+      }
+    // The union of each link's boxes over the states; an empty box for the links that walk
+    // state by state.
+    for (std::size_t k = 0; k < body_.leafCount(); ++k)
+      for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l) {
+        Box<S> u = stateBox(l);
+        if (close_[k]) {
+          for (std::size_t j = 1; j < count; ++j)
+            for (int d = 0; d < 3; ++d) {
+              u.lo[d] = std::min(u.lo[d], state_lo_[d][j * n + l]);
+              u.hi[d] = std::max(u.hi[d], state_hi_[d][j * n + l]);
+            }
+        } else {
+          for (int d = 0; d < 3; ++d) {
+            u.lo[d] = std::numeric_limits<S>::max();
+            u.hi[d] = std::numeric_limits<S>::lowest();
+          }
+        }
+        body_.box(l) = u;
+      }
+    body_.refit();
+    gathered_ = true;
+    self_gathered_ = all;
+    gather_.clear();
+    if (world_.size() != 0)
+      world_.collide(body_.view(), links_.any_bits ? links_.bits.data() : nullptr, this,
+                     CollideFn<S>(&StateChecker::onGather), nullptr);
+    // Bucketed by link, in walk order within a link.
+    world_at_.assign(n + 1, 0);
+    for (const auto& g : gather_) ++world_at_[g.first + 1];
+    for (std::size_t l = 0; l < n; ++l) world_at_[l + 1] += world_at_[l];
+    world_pairs_.resize(gather_.size());
+    bucket_fill_.assign(world_at_.begin(), world_at_.end() - 1);
+    const Scene<S> scene = world_.scene();
+    for (const auto& g : gather_)
+      world_pairs_[bucket_fill_[g.first]++] = WorldPair{scene.item(g.second).box, g.second};
+    self_pairs_.clear();
+    if (self && self_gathered_)
+      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onGatherSelf), this,
+                   true, 0, nullptr, &self_gate_);
+    return count;
+  }
+
+  /// State j of the group placed last: as check() for its poses.
+  int checkPlaced(std::size_t j, bool self, bool first_pair, bool clearance, StateResult<S>* out) {
+    const std::size_t n = links_.size();
+    if (!stored_) {  // placed now, into the walk's boxes
+      reserve(n);
+      if (!placeBoxes(state_poses_[j], 0)) return kBadPose;
+      select(0, state_poses_[j]);
+      for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(l);
+      body_.refit();
+    } else {
+      if (j >= first_bad_) return kBadPose;
+      select(j * n, state_poses_[j]);
+      if (!gathered_) {
+        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(j * n + l);
+        body_.refit();
+      }
+    }
     // What the check keeps: the first pair in Candidate's order, or any pair.
     if (first_pair ? search<FirstInOrder<Candidate>>(self) : search<AnyHit<Candidate>>(self)) {
       if (out != nullptr && first_pair) {
@@ -124,10 +217,17 @@ class StateChecker {
     return false;
   }
 
+  /// The most states placeGroup takes.
+  static constexpr std::size_t kGroupStates = 32;
+
  private:
-  // Per link: the state's pose, the cull's records (placed on first use), its object's state.
+  // Fewer states than this never share a walk; a walk shared by states whose boxes span more
+  // than kGroupSpread times one state's (extents summed over the links) is not tried.
+  static constexpr std::size_t kGroupMinStates = 4;
+  static constexpr S kGroupSpread = S(2);
+
+  // Per link: the cull's records (placed on first use), its object's state.
   struct Slot {
-    const fcl::Transform3<S>* pose = nullptr;
     VolumeSource source;
     VolumeSphere sphere;
     VolumeShape shape;
@@ -153,6 +253,20 @@ class StateChecker {
     std::uint32_t link;
     Closest<S>* closest;
   };
+  // A world object a group's walk met for a link: its box as the walks test it.
+  struct WorldPair {
+    Box<S> box;
+    ObjectId id;
+  };
+
+  static bool onGather(Object*, ObjectId iw, Object*, ObjectId link, void* data) {
+    static_cast<StateChecker*>(data)->gather_.emplace_back(link, iw);
+    return false;
+  }
+  static bool onGatherSelf(Object*, ObjectId x, Object*, ObjectId y, void* data) {
+    static_cast<StateChecker*>(data)->self_pairs_.emplace_back(std::min(x, y), std::max(x, y));
+    return false;
+  }
 
   // The collector of a search: C names it by type, so the walks' callbacks find it statically.
   template <class C>
@@ -163,11 +277,12 @@ class StateChecker {
       return any_;
   }
 
-  // The walks of the placed state into collector C; whether it holds a hit.
+  // The selected state's pairs into collector C; whether it holds a hit.
   template <class C>
   bool search(bool self) {
     C& hits = this->hits<C>();
     hits.reset();
+    if (gathered_) return searchGathered<C>(self);
     // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
     // the first group of links that touches (as a link-by-link check does), and a free one
     // walks little more than the whole tree at once would.
@@ -187,62 +302,158 @@ class StateChecker {
     return hits.found();
   }
 
+  // search() on the pairs the group's walk found, each kept if the state's boxes overlap, for
+  // the leaves of links that took part in it; the other leaves walk the world as search() does.
+  template <class C>
+  bool searchGathered(bool self) {
+    C& hits = this->hits<C>();
+    const std::size_t n = links_.size();
+    const std::size_t at = state_at_;
+    for (std::size_t k = 0; k < body_.leafCount() && !hits.found(); ++k) {
+      pending_.clear();
+      const std::uint32_t first = body_.leafFirst(k), end = first + body_.leafSize(k);
+      if (close_[k]) {
+        for (std::uint32_t l = first; l < end; ++l) {
+          if (world_at_[l] == world_at_[l + 1]) continue;
+          const Box<S> box = stateBox(at + l);
+          for (std::uint32_t i = world_at_[l]; i < world_at_[l + 1]; ++i) {
+            const WorldPair& w = world_pairs_[i];
+            if (!overlap(box, w.box)) continue;
+            if (onWorld<C>(world_.table().object(w.id), w.id, nullptr, l, this)) return true;
+          }
+        }
+      } else if (world_.size() != 0) {
+        for (std::uint32_t l = first; l < end; ++l) body_.box(l) = stateBox(at + l);
+        body_.refitLeaf(k);
+        world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
+                       CollideFn<S>(&StateChecker::onWorld<C>), nullptr);
+        if (hits.complete()) return true;
+      }
+      if (decidePending(hits)) return true;
+    }
+    if (self) {
+      pending_.clear();
+      if (self_gathered_) {
+        for (const auto& [i, j] : self_pairs_)
+          if (overlap(stateBox(at + i), stateBox(at + j)) &&
+              onLinks<C>(nullptr, i, nullptr, j, this))
+            return true;
+      } else {
+        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(at + l);
+        body_.refit();
+        collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this,
+                     true, 0, nullptr, &self_gate_);
+        if (hits.complete()) return true;
+      }
+      decidePending(hits);
+    }
+    return hits.found();
+  }
+
   typename Broadphase<S>::Probe probe(std::size_t l) {
     return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), margin_[l],
                                          links_.bits[l]};
   }
 
-  // Poses the links: the boxes the walks test (the exact box of each posed local AABB grown by
-  // the cull's rate, so that pairs FCL counts as touching within its tolerance are met, and by
-  // the link's margin). Objects and records follow on first use.
-  bool place(const fcl::Transform3<S>* poses) {
-    ++state_;
+  // Whether links first .. first + size - 1 lie close enough together over the states to share
+  // a walk: each link's positions over the states span (extents summed over the links) less
+  // than kGroupSpread - 1 times the links' own extents (the union of a link's boxes is then
+  // within about kGroupSpread times one state's). Stops at the first link that says no.
+  bool closeTogether(const fcl::Transform3<S>* const* states, std::size_t count,
+                     std::uint32_t first, std::uint32_t size) const {
+    S extent = 0;
+    for (std::uint32_t l = first; l < first + size; ++l)
+      extent += S(2) * (links_.half_of[0][l] + links_.half_of[1][l] + links_.half_of[2][l]) +
+                S(6) * margin_[l];
+    const S limit = (kGroupSpread - S(1)) * extent;
+    S spread = 0;
+    for (std::uint32_t l = first; l < first + size; ++l) {
+      fcl::Vector3<S> lo = states[0][l].translation(), hi = lo;
+      for (std::size_t j = 1; j < count; ++j) {
+        lo = lo.cwiseMin(states[j][l].translation());
+        hi = hi.cwiseMax(states[j][l].translation());
+      }
+      spread += (hi - lo).sum();
+      if (!(spread <= limit)) return false;  // NaN: no either
+    }
+    return true;
+  }
+
+  // Room for `entries` links' states.
+  void reserve(std::size_t entries) {
+    if (room_ >= entries) return;  // grown to the largest group seen, and kept
+    room_ = entries;
+    for (int d = 0; d < 3; ++d) {
+      state_c_[d].reset(new S[room_]);
+      state_h_[d].reset(new S[room_]);
+    }
+    state_grow_.reset(new S[room_]);
+    for (int d = 0; d < 3; ++d) {
+      state_lo_[d].reset(new S[room_]);
+      state_hi_[d].reset(new S[room_]);
+    }
+  }
+
+  // A state's boxes from its poses, into its links' entries from `at`: the boxes the walks test
+  // (the exact box of each posed local AABB grown by the cull's rate, so that pairs FCL counts as
+  // touching within its tolerance are met, and by the link's margin). False for a pose with a
+  // NaN or infinite entry (its link in bad_link_).
+  bool placeBoxes(const fcl::Transform3<S>* poses, std::size_t at) {
     const std::size_t n = links_.size();
+    S* c[3] = {state_c_[0].get() + at, state_c_[1].get() + at, state_c_[2].get() + at};
+    S* h[3] = {state_h_[0].get() + at, state_h_[1].get() + at, state_h_[2].get() + at};
     static_assert(sizeof(fcl::Transform3<S>) == 16 * sizeof(S), "a pose is 16 numbers");
-    // Centres and half extents of all links at once (four per instruction with AVX2): placing
-    // the links is most of a free state's check in a clustered world.
+    // All links at once, in the kernels (four per instruction with AVX2): placing the links is
+    // most of a free state's check in a clustered world.
     poseBoxes(
         poses->data(), n,
         PoseBoxes<S>{{links_.mid_of[0].data(), links_.mid_of[1].data(), links_.mid_of[2].data()},
                      {links_.half_of[0].data(), links_.half_of[1].data(), links_.half_of[2].data()},
-                     {c_[0].data(), c_[1].data(), c_[2].data()},
-                     {h_[0].data(), h_[1].data(), h_[2].data()}});
-    // x - x is 0 for a finite x and NaN otherwise: summed over the links and tested once (every
-    // entry of R and t reaches c or h; an infinite one times a zero extent is NaN).
-    S finite = 0;
-    const S rate = S(judge_.rate());
-    for (std::size_t l = 0; l < n; ++l) {
-      Slot& slot = slots_[l];
-      const S c[3] = {c_[0][l], c_[1][l], c_[2][l]};
-      const S h[3] = {h_[0][l], h_[1][l], h_[2][l]};
-      finite += (c[0] - c[0]) + (c[1] - c[1]) + (c[2] - c[2]) + (h[0] - h[0]) + (h[1] - h[1]) +
-                (h[2] - h[2]);
-      slot.pose = poses + l;
-      const S reach = std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2])}) +
-                      std::max({h[0], h[1], h[2]});
-      const S grow = rate * (S(1) + reach);
-      grow_[l] = grow;
-      const S g = grow + margin_[l];
-      Box<S>& walked = body_.box(std::uint32_t(l));
-      walked.lo[0] = c[0] - h[0] - g;
-      walked.lo[1] = c[1] - h[1] - g;
-      walked.lo[2] = c[2] - h[2] - g;
-      walked.hi[0] = c[0] + h[0] + g;
-      walked.hi[1] = c[1] + h[1] + g;
-      walked.hi[2] = c[2] + h[2] + g;
-    }
-    if (!(finite == S(0))) {
-      for (std::size_t l = 0; l < links_.size(); ++l)
+                     {c[0], c[1], c[2]},
+                     {h[0], h[1], h[2]}});
+    const bool finite = walkBoxes(
+        n,
+        WalkBoxes<S>{{c[0], c[1], c[2]},
+                     {h[0], h[1], h[2]},
+                     margin_.data(),
+                     S(judge_.rate()),
+                     state_grow_.get() + at,
+                     {state_lo_[0].get() + at, state_lo_[1].get() + at, state_lo_[2].get() + at},
+                     {state_hi_[0].get() + at, state_hi_[1].get() + at, state_hi_[2].get() + at}});
+    if (!finite) {  // every entry of R and t reaches c or h
+      for (std::size_t l = 0; l < n; ++l)
         if (!poses[l].linear().allFinite() || !poses[l].translation().allFinite()) {
           bad_link_ = l;
           return false;
         }
     }
+    return true;
+  }
+
+  // The walked box of entry e (a link in a state).
+  Box<S> stateBox(std::size_t e) const {
+    Box<S> b;
+    for (int d = 0; d < 3; ++d) {
+      b.lo[d] = state_lo_[d][e];
+      b.hi[d] = state_hi_[d][e];
+    }
+    return b;
+  }
+
+  // Makes the state whose entries start at `at`, posed by `poses`, the one the records,
+  // objects and probes read.
+  void select(std::size_t at, const fcl::Transform3<S>* poses) {
+    ++state_;
+    state_at_ = at;
+    for (int d = 0; d < 3; ++d) {
+      c_[d] = state_c_[d].get() + at;
+      h_[d] = state_h_[d].get() + at;
+    }
+    grow_ = state_grow_.get() + at;
+    poses_ = poses;
     // A predicate sees every link object the walk offers: placed now. Otherwise on first use.
     if (eager_objects_)
       for (std::uint32_t l = 0; l < links_.size(); ++l) object(l);
-    body_.refit();
-    return true;
   }
 
  public:
@@ -276,7 +487,7 @@ class StateChecker {
         lo[k] = c_[k][l] - h_[k][l];
         hi[k] = c_[k][l] + h_[k][l];
       }
-      objectAt(l)->place(*slot.pose, lo, hi);
+      objectAt(l)->place(poses_[l], lo, hi);
       slot.posed = state_;
     }
     return *objectAt(l);
@@ -452,10 +663,30 @@ class StateChecker {
   const PairJudge<S> distance_judge_;  // whether a pair can lower the clearance
   std::uint64_t state_ = 0;
   std::vector<Slot> slots_;
-  std::vector<S> c_[3], h_[3];  // the state's posed local AABBs, per coordinate
-  std::vector<S> grow_;         // per link: the cull's rate times its scale
-  std::vector<S> margin_;       // per link: its margin, raised for the state by check()'s extra
-  bool raised_ = false;         // margin_ holds a raised state's margins
+  // Per state of the group and link (state j's from j * size()): the posed local AABB per
+  // coordinate (centre, half extents), the cull's rate times its scale, the box walked.
+  std::unique_ptr<S[]> state_c_[3], state_h_[3], state_grow_, state_lo_[3], state_hi_[3];
+  std::size_t room_ = 0;  // the entries of each
+  const fcl::Transform3<S>* state_poses_[kGroupStates] = {};
+  bool stored_ = false;        // the group's states are placed (else each as it is checked)
+  std::size_t first_bad_ = 0;  // the group's first state with a bad pose, or its size
+  // The selected state: its slices of the above, and its poses.
+  std::size_t state_at_ = 0;
+  const S* c_[3] = {};
+  const S* h_[3] = {};
+  const S* grow_ = nullptr;
+  std::vector<S> margin_;  // per link: its margin, raised for the state by check()'s extra
+  bool raised_ = false;    // margin_ holds a raised state's margins
+  const fcl::Transform3<S>* poses_ = nullptr;
+  // A walk shared by the group: per link l its world objects world_pairs_[world_at_[l] ..
+  // world_at_[l + 1]), and the pairs of links whose boxes may meet.
+  bool gathered_ = false;
+  bool self_gathered_ = false;       // every leaf took part: the self pairs too
+  std::vector<std::uint8_t> close_;  // per leaf of the links' tree: its links took part
+  std::vector<std::pair<std::uint32_t, ObjectId>> gather_;  // (link, world id) in walk order
+  std::vector<std::uint32_t> world_at_, bucket_fill_;
+  std::vector<WorldPair> world_pairs_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> self_pairs_;
   struct alignas(LinkObject<S>) ObjectStorage {
     unsigned char bytes[sizeof(LinkObject<S>)];
   };

@@ -2,6 +2,7 @@
 
 #include "core/kernels/pose_boxes.h"
 
+#include <algorithm>
 #include <cmath>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -28,7 +29,65 @@ void portable(const S* poses, std::size_t begin, std::size_t n, const PoseBoxes<
   }
 }
 
+// The walk's boxes of objects begin .. n-1; whether their c and h are finite.
+template <typename S>
+bool walkPortable(std::size_t begin, std::size_t n, const WalkBoxes<S>& io) {
+  bool ok = true;
+  for (std::size_t k = begin; k < n; ++k) {
+    const S c[3] = {io.c[0][k], io.c[1][k], io.c[2][k]};
+    const S h[3] = {io.h[0][k], io.h[1][k], io.h[2][k]};
+    // x - x is 0 for a finite x and NaN otherwise.
+    const S zero = ((c[0] - c[0]) + (c[1] - c[1])) + ((c[2] - c[2]) + (h[0] - h[0])) +
+                   ((h[1] - h[1]) + (h[2] - h[2]));
+    ok = ok && zero == S(0);
+    const S far = std::max(std::max(std::fabs(c[0]), std::fabs(c[1])), std::fabs(c[2]));
+    const S wide = std::max(std::max(h[0], h[1]), h[2]);
+    const S g = io.rate * (S(1) + (far + wide));
+    io.grow[k] = g;
+    const S w = g + io.margin[k];
+    for (int d = 0; d < 3; ++d) {
+      io.lo[d][k] = (c[d] - h[d]) - w;
+      io.hi[d][k] = (c[d] + h[d]) + w;
+    }
+  }
+  return ok;
+}
+
 #if defined(CUBE_POSE_AVX2)
+
+// walkPortable four objects at a time, the same operations per lane in the same order; the
+// objects done (a multiple of four).
+[[gnu::target("avx2")]] std::size_t walkAvx2(std::size_t n, const WalkBoxes<double>& io, bool& ok) {
+  const __m256d sign = _mm256_set1_pd(-0.0), one = _mm256_set1_pd(1.0);
+  const __m256d rate = _mm256_set1_pd(io.rate), zero = _mm256_setzero_pd();
+  __m256d bad = zero;
+  std::size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    __m256d c[3], h[3];
+    for (int d = 0; d < 3; ++d) {
+      c[d] = _mm256_loadu_pd(io.c[d] + k);
+      h[d] = _mm256_loadu_pd(io.h[d] + k);
+    }
+    const __m256d z = _mm256_add_pd(
+        _mm256_add_pd(_mm256_add_pd(_mm256_sub_pd(c[0], c[0]), _mm256_sub_pd(c[1], c[1])),
+                      _mm256_add_pd(_mm256_sub_pd(c[2], c[2]), _mm256_sub_pd(h[0], h[0]))),
+        _mm256_add_pd(_mm256_sub_pd(h[1], h[1]), _mm256_sub_pd(h[2], h[2])));
+    bad = _mm256_or_pd(bad, _mm256_cmp_pd(z, zero, _CMP_NEQ_UQ));
+    const __m256d far =
+        _mm256_max_pd(_mm256_max_pd(_mm256_andnot_pd(sign, c[0]), _mm256_andnot_pd(sign, c[1])),
+                      _mm256_andnot_pd(sign, c[2]));
+    const __m256d wide = _mm256_max_pd(_mm256_max_pd(h[0], h[1]), h[2]);
+    const __m256d g = _mm256_mul_pd(rate, _mm256_add_pd(one, _mm256_add_pd(far, wide)));
+    _mm256_storeu_pd(io.grow + k, g);
+    const __m256d w = _mm256_add_pd(g, _mm256_loadu_pd(io.margin + k));
+    for (int d = 0; d < 3; ++d) {
+      _mm256_storeu_pd(io.lo[d] + k, _mm256_sub_pd(_mm256_sub_pd(c[d], h[d]), w));
+      _mm256_storeu_pd(io.hi[d] + k, _mm256_add_pd(_mm256_add_pd(c[d], h[d]), w));
+    }
+  }
+  ok = _mm256_movemask_pd(bad) == 0;
+  return k;
+}
 
 // Entry e of four consecutive poses, one per lane.
 [[gnu::target("avx2")]] inline __m256d lanes(const double* p, int e) {
@@ -87,6 +146,23 @@ void poseBoxes(const float* poses, std::size_t n, const PoseBoxes<float>& io) {
 
 void poseBoxesPortable(const double* poses, std::size_t n, const PoseBoxes<double>& io) {
   portable(poses, 0, n, io);
+}
+
+bool walkBoxes(std::size_t n, const WalkBoxes<double>& io) {
+  std::size_t done = 0;
+  bool ok = true;
+#if defined(CUBE_POSE_AVX2)
+  if (hasAvx2()) done = walkAvx2(n, io, ok);
+#endif
+  return walkPortable(done, n, io) && ok;
+}
+
+bool walkBoxes(std::size_t n, const WalkBoxes<float>& io) {
+  return walkPortable(0, n, io);
+}
+
+bool walkBoxesPortable(std::size_t n, const WalkBoxes<double>& io) {
+  return walkPortable(0, n, io);
 }
 
 }  // namespace detail

@@ -20,11 +20,32 @@ struct PoseBoxes {
   S* h[3];
 };
 
+/// The boxes a walk tests for objects posed by poseBoxes: per object k, grown by a rate relative
+/// to its scale (grow = rate (1 + max |c| + max h), the cull's tolerance) and by margin[k]:
+/// lo = c - h - (grow + margin), hi = c + h + (grow + margin), per coordinate.
+template <typename S>
+struct WalkBoxes {
+  const S* c[3];
+  const S* h[3];
+  const S* margin;
+  S rate;
+  S* grow;
+  S* lo[3];
+  S* hi[3];
+};
+
 /// Writes c and h of objects 0 .. n-1, whose poses are poses[16 k .. 16 k + 15].
 void poseBoxes(const double* poses, std::size_t n, const PoseBoxes<double>& io);
 void poseBoxes(const float* poses, std::size_t n, const PoseBoxes<float>& io);
 /// The portable version, for the tests, which compare the two.
 void poseBoxesPortable(const double* poses, std::size_t n, const PoseBoxes<double>& io);
+
+/// Writes grow, lo and hi of objects 0 .. n-1 (WalkBoxes). Returns whether every c and h is
+/// finite. Every version gives the same results, bit for bit.
+bool walkBoxes(std::size_t n, const WalkBoxes<double>& io);
+bool walkBoxes(std::size_t n, const WalkBoxes<float>& io);
+/// The version without AVX2, for the tests.
+bool walkBoxesPortable(std::size_t n, const WalkBoxes<double>& io);
 
 }  // namespace detail
 }  // namespace cube
