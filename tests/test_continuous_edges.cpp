@@ -133,11 +133,12 @@ struct Edge {
   }
 };
 
-std::vector<Edge> randomEdges(std::size_t count, std::size_t links, std::uint32_t seed) {
+std::vector<Edge> randomEdges(std::size_t count, std::size_t links, std::uint32_t seed,
+                              std::size_t min_states = 2, std::size_t max_states = 8) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> p(-3.5, 3.5), step(-2.5, 2.5);
   std::uniform_real_distribution<double> turn(-0.75, 0.75);
-  std::uniform_int_distribution<std::size_t> states(2, 8);
+  std::uniform_int_distribution<std::size_t> states(min_states, max_states);
   std::vector<Edge> edges(count);
   for (Edge& e : edges) {
     e.states = states(rng);
@@ -342,6 +343,36 @@ TEST(ContinuousEdges, SelfPairsAndBisectionOrderNeverMissAContact) {
     checkScene(seed, true, cube::MotionOrder::bisection, tally);
   print("world and self pairs", tally);
   EXPECT_GT(tally.discrete_misses, 0u);
+}
+
+// Edges of many close states (checked in runs that share the world's walk): the documented rule,
+// and nothing the fine subdivision finds is reported free.
+TEST(ContinuousEdges, LongEdgesAnswerAsTheRule) {
+  World w;
+  fillWorld(w, 40, 61);
+  const cube::BodySet<S> body = randomBody(5, 62);
+  const std::size_t n = body.size();
+  std::size_t colliding = 0;
+  const std::vector<Edge> edges = randomEdges(24, n, 63, 30, 60);
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const Edge& e = edges[i];
+    const auto poses = e.poses(n);
+    const std::vector<S> bounds = se3Bounds(body, poses, {0}, 1);
+    for (const cube::MotionOrder order : {cube::MotionOrder::path, cube::MotionOrder::bisection})
+      for (const bool self : {false, true}) {
+        cube::BatchOptions o;
+        o.self_collision = self;
+        o.continuous = true;
+        const std::size_t got = cube::checkMotion(w.manager, body, poses, order, o);
+        EXPECT_EQ(got, ruleAnswer(w, body, poses.data(), bounds.data(), e.states, order, self))
+            << "edge " << i;
+        colliding += got != cube::kNoIndex;
+        if (order == cube::MotionOrder::path && got == cube::kNoIndex)
+          EXPECT_FALSE(fineContact(w, body, e, self)) << "edge " << i;
+      }
+  }
+  EXPECT_GT(colliding, 0u);
+  EXPECT_LT(colliding, 4 * edges.size());
 }
 
 // Many edges in one call: the same answers on one thread and two, and as edge by edge.

@@ -123,7 +123,7 @@ struct MotionScratch {
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, bool on_demand, bool continuous)
       : checker(world, links),
         poses(on_demand ? StateChecker<S>::kGroupStates * links.size() : 0),
-        raise(continuous ? links.size() : 0) {}
+        raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {}
 };
 
 // A discrete check: no state's margins raised.
@@ -131,9 +131,9 @@ struct NoRaise {};
 
 // checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
 // the links' poses, the j-th state of a run placed together), edges as edge_starts says (checked
-// by the caller). A continuous check: raise_at(scratch, state, edge begin, edge end, bad) gives
-// the links' margin raises of a state, or sets `bad` to the index of a pose it read with a NaN
-// or infinite entry; its states are checked one by one (their margins differ).
+// by the caller). A continuous check: raise_at(state, edge begin, edge end, raise, bad) writes
+// the links' margin raises of a state to raise[0 .. links), or sets `bad` to the index of a pose
+// it read with a NaN or infinite entry.
 template <typename S, class PoseAt, class RaiseAt = NoRaise>
 std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
                                          std::size_t states,
@@ -215,31 +215,27 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
              !b.compare_exchange_weak(known, item.rank, std::memory_order_relaxed)) {
       }
     };
+    // A continuous check: each state's raised margins, up to the first whose bounds read a bad
+    // pose (checked as the event at its place once the states before it are free).
+    const S* raises[kRun];
+    std::size_t raised = count, raise_bad = kNoIndex;
     if constexpr (continuous) {
       const std::uint32_t e = items[run.first].edge;
       const std::size_t begin = edge_starts[e];
       const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
       for (std::size_t j = 0; j < count; ++j) {
-        const std::size_t i = run.first + j;
-        const Item& item = items[i];
-        if (item.rank > b.load(std::memory_order_relaxed)) return j;  // an earlier one
-        std::size_t bad_pose = kNoIndex;
-        const S* raise = raise_at(*scratch, item.state, begin, end, bad_pose);
-        if (bad_pose == kNoIndex) {
-          const int answer =
-              scratch->checker.check(at[j], options.self_collision, false, false, nullptr, raise);
-          if (answer == 0) continue;
-          if (answer == StateChecker<S>::kBadPose)
-            bad_pose = item.state * n + scratch->checker.badLink();
+        S* raise = scratch->raise.data() + j * n;
+        raise_at(items[run.first + j].state, begin, end, raise, raise_bad);
+        if (raise_bad != kNoIndex) {
+          raised = j;
+          break;
         }
-        event(i, bad_pose);
-        return j + 1;
+        raises[j] = raise;
       }
-      return count;
     }
-    for (std::size_t done = 0; done < count;) {
-      const std::size_t took =
-          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
+    for (std::size_t done = 0; done < raised;) {
+      const std::size_t took = scratch->checker.placeGroup(
+          at + done, raised - done, options.self_collision, continuous ? raises + done : nullptr);
       for (std::size_t j = 0; j < took; ++j) {
         const std::size_t i = run.first + done + j;
         const Item& item = items[i];
@@ -252,6 +248,11 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
         return done + j + 1;
       }
       done += took;
+    }
+    if (raised < count) {
+      if (items[run.first + raised].rank > b.load(std::memory_order_relaxed)) return raised;
+      event(run.first + raised, raise_bad);
+      return raised + 1;
     }
     return count;
   };
@@ -326,13 +327,11 @@ template <typename S>
 struct GivenRaise {
   const std::vector<S>& bounds;
   std::size_t n;
-  template <class Scratch>
-  const S* operator()(Scratch& scratch, std::size_t state, std::size_t begin, std::size_t end,
-                      std::size_t&) const {
+  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
+                  std::size_t&) const {
     raiseAt<S>(
         n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
-        scratch.raise.data());
-    return scratch.raise.data();
+        raise);
   }
 };
 
@@ -341,9 +340,8 @@ template <typename S>
 struct Se3Raise {
   const std::vector<fcl::Transform3<S>>& poses;
   const std::vector<S> reach;
-  template <class Scratch>
-  const S* operator()(Scratch& scratch, std::size_t state, std::size_t begin, std::size_t end,
-                      std::size_t& bad) const {
+  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
+                  std::size_t& bad) const {
     const std::size_t n = reach.size();
     const fcl::Transform3<S>* p = poses.data();
     if (raiseAt<S>(
@@ -351,16 +349,15 @@ struct Se3Raise {
             [&](std::size_t k, std::size_t l) {
               return se3MotionBound(p[k * n + l], p[(k + 1) * n + l], reach[l]);
             },
-            scratch.raise.data()))
-      return scratch.raise.data();
-    // A pose read is NaN or infinite: the first such in pose order.
+            raise))
+      return;
+    // A pose read is NaN or infinite: the first such in pose order (a NaN bound comes from one).
     for (std::size_t k = state > begin ? state - 1 : state; k <= state + 1 && k < end; ++k)
       for (std::size_t l = 0; l < n; ++l)
         if (!p[k * n + l].linear().allFinite() || !p[k * n + l].translation().allFinite()) {
           bad = k * n + l;
-          return nullptr;
+          return;
         }
-    return scratch.raise.data();  // unreachable: a NaN bound comes from a pose
   }
 };
 

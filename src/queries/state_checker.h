@@ -73,7 +73,8 @@ class StateChecker {
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
     self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
     self_gate_.excluded_n = links.size();
-    margin_ = links.margin;
+    margin_ = links.margin.data();
+    raised_margins_.resize(kGroupStates * links.size());
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
     close_.resize(body_.leafCount());
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
@@ -90,19 +91,11 @@ class StateChecker {
   /// kBadPose (and the link in badLink()) if a pose has a NaN or infinite entry, found while
   /// placing the links: the state's poses are read once.
   /// `extra` (null, or one value >= 0 per link): each link's margin raised by its value for this
-  /// state alone (a continuous edge's motion bounds); a checker that raised margins checks
-  /// states one by one (check), not in groups.
+  /// state alone (a continuous edge's motion bounds).
   static constexpr int kBadPose = -1;
   int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
             StateResult<S>* out, const S* extra = nullptr) {
-    if (extra != nullptr) {
-      for (std::size_t l = 0; l < margin_.size(); ++l) margin_[l] = links_.margin[l] + extra[l];
-      raised_ = true;
-    } else if (raised_) {
-      margin_ = links_.margin;
-      raised_ = false;
-    }
-    placeGroup(&poses, 1, self);
+    placeGroup(&poses, 1, self, extra != nullptr ? &extra : nullptr);
     return checkPlaced(0, self, first_pair, clearance, out);
   }
 
@@ -114,9 +107,19 @@ class StateChecker {
   /// their boxes, whose pairs each state then filters by its own boxes; the other links walk the
   /// world state by state. Otherwise it takes all `count`, each placed and walking as it is
   /// checked. With a pair predicate (which sees each state's link objects) every state walks.
-  /// The poses must stay until the last checkPlaced of the run.
-  std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self) {
+  /// The poses must stay until the last checkPlaced of the run. `extras` (null, or extras[j] as
+  /// check()'s `extra` for state j): the states' raised margins.
+  std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self,
+                         const S* const* extras = nullptr) {
     const std::size_t n = links_.size();
+    raised_ = extras != nullptr;
+    margin_ = links_.margin.data();
+    if (raised_) {
+      for (std::size_t j = 0; j < count; ++j)
+        for (std::size_t l = 0; l < n; ++l)
+          raised_margins_[j * n + l] = links_.margin[l] + extras[j][l];
+      margin_ = raised_margins_.data();
+    }
     first_bad_ = count;
     gathered_ = false;
     stored_ = false;
@@ -138,7 +141,7 @@ class StateChecker {
     stored_ = true;
     reserve(count * n);
     for (std::size_t j = 0; j < count; ++j)
-      if (!placeBoxes(states[j], j * n)) {
+      if (!placeBoxes(states[j], j * n, j)) {
         first_bad_ = j;  // checked one by one up to it; the states after it are never checked
         return count;
       }
@@ -187,9 +190,10 @@ class StateChecker {
   /// State j of the group placed last: as check() for its poses.
   int checkPlaced(std::size_t j, bool self, bool first_pair, bool clearance, StateResult<S>* out) {
     const std::size_t n = links_.size();
+    if (raised_) margin_ = raised_margins_.data() + j * n;
     if (!stored_) {  // placed now, into the walk's boxes
       reserve(n);
-      if (!placeBoxes(state_poses_[j], 0)) return kBadPose;
+      if (!placeBoxes(state_poses_[j], 0, j)) return kBadPose;
       select(0, state_poses_[j]);
       for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = stateBox(l);
       body_.refit();
@@ -397,8 +401,9 @@ class StateChecker {
   // A state's boxes from its poses, into its links' entries from `at`: the boxes the walks test
   // (the exact box of each posed local AABB grown by the cull's rate, so that pairs FCL counts as
   // touching within its tolerance are met, and by the link's margin). False for a pose with a
-  // NaN or infinite entry (its link in bad_link_).
-  bool placeBoxes(const fcl::Transform3<S>* poses, std::size_t at) {
+  // NaN or infinite entry (its link in bad_link_). `j`: the state's place in its run (its raised
+  // margins).
+  bool placeBoxes(const fcl::Transform3<S>* poses, std::size_t at, std::size_t j) {
     const std::size_t n = links_.size();
     S* c[3] = {state_c_[0].get() + at, state_c_[1].get() + at, state_c_[2].get() + at};
     S* h[3] = {state_h_[0].get() + at, state_h_[1].get() + at, state_h_[2].get() + at};
@@ -415,7 +420,7 @@ class StateChecker {
         n,
         WalkBoxes<S>{{c[0], c[1], c[2]},
                      {h[0], h[1], h[2]},
-                     margin_.data(),
+                     raised_ ? raised_margins_.data() + j * n : links_.margin.data(),
                      S(judge_.rate()),
                      state_grow_.get() + at,
                      {state_lo_[0].get() + at, state_lo_[1].get() + at, state_lo_[2].get() + at},
@@ -675,8 +680,11 @@ class StateChecker {
   const S* c_[3] = {};
   const S* h_[3] = {};
   const S* grow_ = nullptr;
-  std::vector<S> margin_;  // per link: its margin, raised for the state by check()'s extra
-  bool raised_ = false;    // margin_ holds a raised state's margins
+  // Per link: the margins of the state checked (its links' margins, or raised_margins_' entries
+  // of the state in its run).
+  const S* margin_ = nullptr;
+  std::vector<S> raised_margins_;  // per state of the run and link: its raised margin
+  bool raised_ = false;            // the run's margins are raised
   const fcl::Transform3<S>* poses_ = nullptr;
   // A walk shared by the group: per link l its world objects world_pairs_[world_at_[l] ..
   // world_at_[l + 1]), and the pairs of links whose boxes may meet.
