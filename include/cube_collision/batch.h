@@ -249,12 +249,12 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 // |t1 - t0| + theta * rho, theta the rotation angle of R0^T R1 and rho the largest distance from
 // the link frame's origin to a corner of the link's local AABB. They hold only if the caller's
 // links move that way between states; a robot interpolated in joint space needs bounds from its
-// kinematics (the overloads that take them). Cost: a continuous edge's states are checked one
-// by one (their margins differ: no walk shared by a run); a state's check with raised margins meets
-// more candidate pairs, and a pair within the raised margins but apart costs fcl::distance on
-// top of fcl::collide (on meshes, a walk of their BVH): per state, from about the discrete
-// check's cost where the raises are small against the gaps between links and objects, to many
-// times it where they are not; computing SE(3) bounds reads the neighbours' poses.
+// kinematics (the overloads that take them). Cost: runs of an edge's states share the world's
+// walk as in checkMotions, each state with its own raised margins; a state's check with raised
+// margins meets more candidate pairs, and a pair within the raised margins but apart costs
+// fcl::distance on top of fcl::collide (on meshes, a walk of their BVH): per state, from about the
+// discrete check's cost where the raises are small against the gaps between links and objects, to
+// many times it where they are not; computing SE(3) bounds reads the neighbours' poses.
 
 /// checkMotions with continuous checking (see above) and the caller's bounds: motion_bounds[k *
 /// body.size() + l] bounds link l's motion from state k to state k + 1 of the same edge, one

@@ -74,7 +74,6 @@ class StateChecker {
     self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
     self_gate_.excluded_n = links.size();
     margin_ = links.margin.data();
-    raised_margins_.resize(kGroupStates * links.size());
     objects_ = std::make_unique<ObjectStorage[]>(links.size());
     close_.resize(body_.leafCount());
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
@@ -115,6 +114,7 @@ class StateChecker {
     raised_ = extras != nullptr;
     margin_ = links_.margin.data();
     if (raised_) {
+      if (raised_margins_.empty()) raised_margins_.resize(kGroupStates * n);  // once, if ever
       for (std::size_t j = 0; j < count; ++j)
         for (std::size_t l = 0; l < n; ++l)
           raised_margins_[j * n + l] = links_.margin[l] + extras[j][l];
@@ -552,8 +552,7 @@ class StateChecker {
                             : margin_[c.link] + world_.marginOf(c.other);
       const Object& b =
           c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
-      if (narrow(object(c.link), b, m,
-                 c.is_link ? grow_[c.link] + grow_[c.other] : grow_[c.link])) {
+      if (narrow(object(c.link), b, m, c)) {
         hits.add(c);
         break;
       }
@@ -583,15 +582,16 @@ class StateChecker {
     return slot;
   }
 
-  // FCL's answer: contact, or (margin m > 0) a distance of at most m. With raised margins (a
-  // continuous edge's), FCL's distance starts from a cap above m (an eighth more, plus the pair's
-  // tolerance `slack`, beyond rounding): its BVH and octree walks skip what lies beyond the cap,
-  // and a distance of at most m is found as without it.
-  bool narrow(const Object& a, const Object& b, S m, S slack) {
+  // FCL's answer for pair c: contact, or (margin m > 0) a distance of at most m. With raised
+  // margins (a continuous edge's), FCL's distance starts from a cap above m (an eighth more,
+  // plus the links' tolerance, beyond rounding): its BVH and octree walks skip what lies beyond
+  // the cap, and a distance of at most m is found as without it.
+  bool narrow(const Object& a, const Object& b, S m, const Candidate& c) {
     fcl::CollisionResult<S> result;
     if (fclCollide(&a, &b, request_, result) > 0) return true;
     if (!(m > S(0))) return false;
     if (!raised_) return pairDistance(a, b) <= m;
+    const S slack = c.is_link ? grow_[c.link] + grow_[c.other] : grow_[c.link];
     fcl::DistanceResult<S> capped;
     capped.min_distance = m + m / S(8) + slack;
     return fclDistance(&a, &b, distance_request_, capped) <= m;
