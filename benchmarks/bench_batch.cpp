@@ -9,18 +9,23 @@
 // Names: batch_<kind>/<scene>/<n>/<manager>; kind states_free (70% of the states free),
 // states_hit (70% colliding), states_self (70% free, self-collision on), edges (edges of 20 to
 // 100 states from a free state, self-collision off), edges_free (20 edges of 32 states, every
-// state free: short steps as a planner keeps), single (the states of states_free, one per
-// call: against FCL's per-state check, whose cost is the same as in states_free), states_long
-// (meshes only: random states as they come of the same chain with links 8 times as long, nearly
-// all in contact with several meshes). Managers: the FCL
-// managers first, then cube_loop and cube_loop_t2 (the library's single-state path on one and two
-// threads: a CubeCollisionManager of the 30 link objects moved per state, setTransform,
-// computeAABB and update(), then collideAll(world, robot), and with self-collision collideAll of
-// the robot manager, adjacent links excluded), then cube (one thread) and cube_t2 (two threads),
-// which report vs_best_fcl = the best FCL manager's time in this run / cube's, vs_loop = the
-// cube_loop case's time of the same thread count / cube's, and us_per_state. Each case first
-// checks, outside the timed part, that its answers equal the per-link check with FCL's dynamic tree
-// (state by state, edge by edge); a mismatch fails the binary.
+// state free: short steps as a planner keeps), edges_continuous (20 edges of 20 to 100 states
+// from a free state, with a tenth of the edges' joint motion, checked continuously with the
+// motion bounds of the chain's kinematics; its managers are cube, cube_t2 and cube_discrete, the
+// same edges checked without the bounds, with counters us_per_checked_state, the time over the
+// states the check visits, and, for cube, vs_discrete = cube_discrete's time per visited state /
+// cube's), single (the states of states_free, one per call: against FCL's per-state check,
+// whose cost is the same as in states_free), states_long (meshes only: random states as they
+// come of the same chain with links 8 times as long, nearly all in contact with several
+// meshes). Managers: the FCL managers first, then cube_loop and cube_loop_t2 (the library's
+// single-state path on one and two threads: a CubeCollisionManager of the 30 link objects moved
+// per state, setTransform, computeAABB and update(), then collideAll(world, robot), and with
+// self-collision collideAll of the robot manager, adjacent links excluded), then cube (one
+// thread) and cube_t2 (two threads), which report vs_best_fcl = the best FCL manager's time in
+// this run / cube's, vs_loop = the cube_loop case's time of the same thread count / cube's, and
+// us_per_state. Each case first checks, outside the timed part, that its answers equal the
+// per-link check with FCL's dynamic tree (state by state, edge by edge); a mismatch fails the
+// binary.
 
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_SSaP.h>
@@ -37,6 +42,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -236,7 +242,16 @@ struct CubeLoop {
   }
 };
 
-enum class Kind { states_free, states_hit, states_self, edges, edges_free, single, states_long };
+enum class Kind {
+  states_free,
+  states_hit,
+  states_self,
+  edges,
+  edges_free,
+  edges_continuous,
+  single,
+  states_long
+};
 
 bool isEdges(Kind k) {
   return k == Kind::edges || k == Kind::edges_free;
@@ -258,6 +273,8 @@ const char* kindName(Kind k) {
       return "single";
     case Kind::states_long:
       return "states_long";
+    case Kind::edges_continuous:
+      return "edges_continuous";
   }
   return "?";
 }
@@ -278,6 +295,10 @@ struct Setup {
   const std::vector<std::size_t>& startsOf(Kind k) const {
     return k == Kind::edges_free ? free_edge_starts : edge_starts;
   }
+  Poses short_poses;  // edges_continuous: the edges, their starts and motion bounds
+  std::vector<std::size_t> short_starts;
+  std::vector<S> short_bounds;
+  std::map<std::string, double> per_checked;  // per kind: cube_discrete's seconds per visited state
   std::map<std::string, std::unique_ptr<Manager>> fcl;
   std::map<std::string, double> best_fcl;      // per kind: the best FCL manager's seconds per call
   std::map<std::string, double> loop_seconds;  // per kind and thread count: cube_loop's
@@ -357,26 +378,46 @@ Setup& setupFor(const std::string& scene, std::size_t n) {
   // configuration (a planner extends its tree from states known to be free).
   cube::BatchOptions one;
   one.threads = 1;
-  for (std::size_t e = 0; e < 20; ++e) {
-    s.edge_starts.push_back(s.edge_poses.size() / kLinks);
-    Config a = randomConfig(rng, s.half);
-    for (int tries = 0; tries < 10000; ++tries) {
-      Poses p;
-      poseOf(*s.robot, a, p);
-      if (!cube::checkStates(*s.world, s.robot->body, p, one)[0].colliding) break;
-      a = randomConfig(rng, s.half);
-    }
-    Config b = a;
-    std::uniform_real_distribution<double> step(-0.05 * s.half, 0.05 * s.half), turn(-0.6, 0.6);
-    for (int k = 0; k < 3; ++k) b.base[k] += step(rng);
-    for (double& x : b.q) x = turn(rng);
-    const std::size_t count = 20 + 4 * e;
-    for (std::size_t k = 0; k < count; ++k) {
-      const double t = double(k) / double(count - 1);
-      Config c;
-      c.base = a.base + t * (b.base - a.base);
-      for (std::size_t j = 0; j < kLinks; ++j) c.q[j] = a.q[j] + t * (b.q[j] - a.q[j]);
-      poseOf(*s.robot, c, s.edge_poses);
+  for (const bool short_edges : {false, true}) {
+    Poses& poses = short_edges ? s.short_poses : s.edge_poses;
+    std::vector<std::size_t>& starts = short_edges ? s.short_starts : s.edge_starts;
+    const double scale = short_edges ? 0.1 : 1.0;
+    for (std::size_t e = 0; e < 20; ++e) {
+      starts.push_back(poses.size() / kLinks);
+      Config a = randomConfig(rng, s.half);
+      for (int tries = 0; tries < 10000; ++tries) {
+        Poses p;
+        poseOf(*s.robot, a, p);
+        if (!cube::checkStates(*s.world, s.robot->body, p, one)[0].colliding) break;
+        a = randomConfig(rng, s.half);
+      }
+      Config b = a;
+      std::uniform_real_distribution<double> step(-0.05 * s.half, 0.05 * s.half), turn(-0.6, 0.6);
+      for (int k = 0; k < 3; ++k) b.base[k] += scale * step(rng);
+      for (double& x : b.q) x += scale * (turn(rng) - x);
+      const std::size_t count = 20 + 4 * e;
+      for (std::size_t k = 0; k < count; ++k) {
+        const double t = double(k) / double(count - 1);
+        Config c;
+        c.base = a.base + t * (b.base - a.base);
+        for (std::size_t j = 0; j < kLinks; ++j) c.q[j] = a.q[j] + t * (b.q[j] - a.q[j]);
+        poseOf(*s.robot, c, poses);
+      }
+      if (!short_edges) continue;
+      // Link l's motion bound per interval: every point of link l lies within (l - j + 1.1)
+      // link lengths of joint j (the joints are len apart; a link's points within 1.03 len of
+      // its joint), so it moves at most the base's step plus the sum of each joint's turn
+      // times that.
+      const double steps = double(count - 1);
+      std::vector<S> bound(kLinks);
+      for (std::size_t l = 0; l < kLinks; ++l) {
+        S b_l = (b.base - a.base).norm() / steps;
+        for (std::size_t j = 0; j <= l; ++j)
+          b_l += std::abs(b.q[j] - a.q[j]) / steps * (double(l - j) + 1.1) * s.robot->len;
+        bound[l] = b_l;
+      }
+      for (std::size_t k = 0; k < count; ++k)
+        s.short_bounds.insert(s.short_bounds.end(), bound.begin(), bound.end());
     }
   }
   // Free edges: 20 edges of 32 states whose every state is free, short steps from a free
@@ -427,6 +468,8 @@ const Poses& posesOf(const Setup& s, Kind k) {
       return s.free_edge_poses;
     case Kind::states_long:
       return s.long_states;
+    case Kind::edges_continuous:
+      return s.short_poses;
     default:
       return s.free_mix;
   }
@@ -478,6 +521,65 @@ std::vector<std::size_t> loopAnswers(CubeLoop& loop, const Setup& s, Kind k) {
       s, k, [&](const fcl::Transform3<S>* p, bool self) { return loop.check(*s.world, p, self); });
 }
 
+// The states a motion check visits in path order: each edge's up to its answer.
+std::size_t visited(const Setup& s, const std::vector<std::size_t>& first) {
+  std::size_t n = 0;
+  for (std::size_t e = 0; e < first.size(); ++e) {
+    const std::size_t end =
+        e + 1 < s.short_starts.size() ? s.short_starts[e + 1] : s.short_poses.size() / kLinks;
+    n += first[e] == cube::kNoIndex ? end - s.short_starts[e] : first[e] + 1;
+  }
+  return n;
+}
+
+// edges_continuous: continuously with the motion bounds, or (discrete) without them.
+std::vector<std::size_t> shortEdges(const Setup& s, int threads, bool discrete) {
+  cube::BatchOptions o;
+  o.threads = threads;
+  if (discrete)
+    return cube::checkMotions(*s.world, s.robot->body, s.short_poses, s.short_starts,
+                              cube::MotionOrder::path, o);
+  return cube::checkMotions(*s.world, s.robot->body, s.short_poses, s.short_starts, s.short_bounds,
+                            cube::MotionOrder::path, o);
+}
+
+// edges_continuous: the continuous check, outside the timed part, against the discrete one (a
+// continuous answer comes no later than the discrete one's: a raised margin keeps every
+// contact) and the same on two threads.
+void runContinuous(benchmark::State& state, Setup& s, const std::string& manager) {
+  const bool discrete = manager == "cube_discrete";
+  const int threads = manager == "cube_t2" ? 2 : 1;
+  const auto plain = shortEdges(s, 1, true);
+  const auto mine = shortEdges(s, threads, discrete);
+  bool sound = mine == shortEdges(s, 1, discrete);
+  for (std::size_t e = 0; e < plain.size(); ++e) sound = sound && mine[e] <= plain[e];
+  if (!sound) {
+    state.SkipWithError("continuous answers later than the discrete check, or per thread count");
+    g_extra_failed = true;
+    return;
+  }
+  double seconds = 0;
+  std::size_t calls = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(shortEdges(s, threads, discrete));
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    seconds += dt;
+    ++calls;
+    state.SetIterationTime(dt);
+  }
+  const double per_call = seconds / double(std::max<std::size_t>(calls, 1));
+  const std::size_t checked = visited(s, mine);
+  std::size_t free_edges = 0;
+  for (const std::size_t f : mine) free_edges += f == cube::kNoIndex;
+  state.counters["us_per_state"] = 1e6 * per_call / double(s.short_poses.size() / kLinks);
+  state.counters["us_per_checked_state"] = 1e6 * per_call / double(checked);
+  state.counters["free_edges"] = double(free_edges);
+  double& ref = s.per_checked["edges_continuous"];
+  if (discrete) ref = per_call / double(checked);
+  if (!discrete && ref > 0) state.counters["vs_discrete"] = ref / (per_call / double(checked));
+}
+
 std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
   cube::BatchOptions o;
   o.threads = threads;
@@ -500,6 +602,7 @@ std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
 void run(benchmark::State& state, Kind kind, const std::string& scene, std::size_t n,
          const std::string& manager) {
   Setup& s = setupFor(scene, n);
+  if (kind == Kind::edges_continuous) return runContinuous(state, s, manager);
   const bool is_cube = manager == "cube" || manager == "cube_t2";
   const bool is_loop = manager == "cube_loop" || manager == "cube_loop_t2";
   const std::string key = std::string(kindName(kind));
@@ -604,13 +707,14 @@ void registerBatch() {
       if (n == 2000 && std::string(scene) != "meshes") continue;
       if (n >= 100000 && std::string(scene) == "meshes") continue;
       for (Kind k : {Kind::states_free, Kind::states_hit, Kind::states_self, Kind::edges,
-                     Kind::edges_free, Kind::single, Kind::states_long}) {
+                     Kind::edges_free, Kind::edges_continuous, Kind::single, Kind::states_long}) {
         // Long links: meshes only, where a state meets many objects FCL must answer.
         if (k == Kind::states_long && std::string(scene) != "meshes") continue;
         std::vector<std::string> managers;
+        if (k == Kind::edges_continuous) managers.push_back("cube_discrete");  // first: the base
         for (const char* m : kFcl)
-          if (runsFcl(m, scene, n, k)) managers.push_back(m);
-        if (k != Kind::single) {
+          if (k != Kind::edges_continuous && runsFcl(m, scene, n, k)) managers.push_back(m);
+        if (k != Kind::single && k != Kind::edges_continuous) {
           managers.push_back("cube_loop");
           managers.push_back("cube_loop_t2");
         }

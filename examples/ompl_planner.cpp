@@ -4,13 +4,18 @@
 // computeAABB, world->collide(link) link by link on FCL's DynamicAABBTreeCollisionManager, a
 // robot manager's self-collide, OMPL's DiscreteMotionValidator over that checker). Same
 // problems, same seeds: identical answers give identical exploration, so the example checks that
-// both found the very same paths, and prints the planning times.
+// both found the very same paths, and prints the planning times. A third run per problem checks
+// the edges continuously (cube::checkMotion with motion bounds from the arm's kinematics: an edge
+// is valid only if no link can touch anything between its states), same seeds; its paths differ
+// (it refuses edges the discrete check accepts), so the example checks every path it found, and
+// the discrete runs' too, on a subdivision 100 times finer with FCL, and prints the counts.
 //
 // Usage: ompl_planner [world objects] [problems] [threads] [object size scale] [--load N]
-//                     [--resolution R]
+//                     [--resolution R] [--refine F]
 // (default 2000 5 0 1.0: BatchOptions' default threads, the hardware's). The planner keeps OMPL's
 // defaults: RRTConnect's range (a fifth of the space's extent) and the motion checks' resolution
-// (1% of it), unless --resolution sets that fraction. --load N runs N spinning processes beside
+// (1% of it), unless --resolution sets that fraction; the continuous run checks F times as many
+// states (default kRefine). --load N runs N spinning processes beside
 // the planning (a loaded machine).
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -27,6 +32,7 @@
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -51,6 +57,10 @@ using Object = fcl::CollisionObjectd;
 using Poses = std::vector<fcl::Transform3d>;
 constexpr int kJoints = 7;
 constexpr double kLength = 1.0;  // each link
+// The continuous run's states per state of OMPL's resolution: its motion bounds shrink with the
+// states' spacing, and with OMPL's own spacing they raise the links so much that links two apart
+// (always within one link length of each other) count as touching.
+constexpr int kRefine = 32;
 
 // ---- The arm ----------------------------------------------------------------------------------
 
@@ -117,11 +127,17 @@ class CubeValidity final : public ob::StateValidityChecker {
 // (the last state, then midpoints breadth first): the same answer. Each state's joints are
 // interpolated as RealVectorStateSpace::interpolate does and its poses computed only when the
 // check reads it (cube::PoseFunction): an edge that collides early costs no kinematics after.
+//
+// Continuous (a third run): the states j = 0 .. nd, s1 included (the motion from s1 to the first
+// state counts too), with each link's motion bound between consecutive states from the
+// kinematics: joint j turns the points of link l >= j about an axis through its joint, all
+// within (l - j + 1.01) link lengths of it, so a point of link l moves at most the sum over
+// j <= l of |dq_j| (l - j + 1.01) lengths while the joints move linearly by dq.
 class CubeMotion final : public ob::MotionValidator {
  public:
   CubeMotion(const ob::SpaceInformationPtr& si, const cube::CubeCollisionManagerd& world,
-             const cube::BodySet<S>& body, int threads)
-      : ob::MotionValidator(si), world_(world), body_(body) {
+             const cube::BodySet<S>& body, int threads, int refine)
+      : ob::MotionValidator(si), world_(world), body_(body), refine_(refine) {
     options_.self_collision = true;
     options_.threads = threads;
   }
@@ -141,7 +157,10 @@ class CubeMotion final : public ob::MotionValidator {
       ++valid_;
       return true;
     }
-    last_valid.second = double(first) / double(nd);  // state `first` is j = first + 1
+    // State `first` is j = first + 1 (continuous: j = first, s1 being j = 0); the one before
+    // it is the last valid (continuous: s1 if s1's own grown check fails).
+    const std::size_t j = refine_ > 0 ? first : first + 1;
+    last_valid.second = double(j > 0 ? j - 1 : 0) / double(nd);
     if (last_valid.first != nullptr)
       si_->getStateSpace()->interpolate(s1, s2, last_valid.second, last_valid.first);
     ++invalid_;
@@ -151,22 +170,33 @@ class CubeMotion final : public ob::MotionValidator {
  private:
   std::pair<std::size_t, int> firstColliding(const ob::State* s1, const ob::State* s2,
                                              cube::MotionOrder order) const {
-    const int nd = si_->getStateSpace()->validSegmentCount(s1, s2);
+    const int nd = si_->getStateSpace()->validSegmentCount(s1, s2) * std::max(refine_, 1);
     const double* from = jointsOf(s1);
     const double* to = jointsOf(s2);
+    const std::size_t first_j = refine_ > 0 ? 0 : 1;
     const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* poses) {
-      const double t = double(k + 1) / double(nd);
+      const double t = double(k + first_j) / double(nd);
       double q[kJoints];
       for (int i = 0; i < kJoints; ++i) q[i] = from[i] + (to[i] - from[i]) * t;
       forwardKinematics(q, poses);
     };
-    states_ += std::size_t(nd);
-    return {cube::checkMotion(world_, body_, std::size_t(nd), pose_of, order, options_), nd};
+    const std::size_t states = std::size_t(nd) + 1 - first_j;
+    states_ += states;
+    if (refine_ == 0)
+      return {cube::checkMotion(world_, body_, states, pose_of, order, options_), nd};
+    std::vector<S> bounds(states * kJoints);
+    for (int l = 0; l < kJoints; ++l) {
+      double b = 0;
+      for (int j = 0; j <= l; ++j) b += std::abs(to[j] - from[j]) * (l - j + 1.01) * kLength;
+      for (std::size_t k = 0; k < states; ++k) bounds[k * kJoints + l] = b / double(nd);
+    }
+    return {cube::checkMotion(world_, body_, states, pose_of, bounds, order, options_), nd};
   }
 
   const cube::CubeCollisionManagerd& world_;
   const cube::BodySet<S>& body_;
   cube::BatchOptions options_;
+  int refine_;  // 0: discrete; else continuous on `refine_` times OMPL's states
 
  public:
   mutable std::size_t states_ = 0;  // states of the edges checked (one planner thread)
@@ -236,15 +266,16 @@ struct Outcome {
   double seconds = 0;
   std::size_t edges = 0, edge_states = 0;  // cube's checkMotion calls and their states
   std::vector<std::vector<double>> path;
+  bool fine_contact = false;  // the path touches something on a 100 times finer subdivision
 };
 
-enum class Checker { cube, fcl };
+enum class Checker { cube, cube_continuous, fcl };
 
 Outcome plan(Checker which, const std::vector<double>& start, const std::vector<double>& goal,
              std::uint_fast32_t seed, const cube::CubeCollisionManagerd& cube_world,
              const cube::BodySet<S>& body, const fcl::BroadPhaseCollisionManagerd& fcl_world,
              const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry, int threads,
-             double resolution) {
+             double resolution, int refine) {
   auto space = std::make_shared<ob::RealVectorStateSpace>(kJoints);
   space->setBounds(-M_PI, M_PI);
   space->setStateSamplerAllocator(
@@ -252,9 +283,10 @@ Outcome plan(Checker which, const std::vector<double>& start, const std::vector<
   auto si = std::make_shared<ob::SpaceInformation>(space);
   if (resolution > 0) si->setStateValidityCheckingResolution(resolution);
   std::shared_ptr<CubeMotion> motion;
-  if (which == Checker::cube) {
+  if (which != Checker::fcl) {
     si->setStateValidityChecker(std::make_shared<CubeValidity>(si, cube_world, body, threads));
-    motion = std::make_shared<CubeMotion>(si, cube_world, body, threads);
+    motion = std::make_shared<CubeMotion>(si, cube_world, body, threads,
+                                          which == Checker::cube_continuous ? refine : 0);
     si->setMotionValidator(motion);
   } else {
     si->setStateValidityChecker(std::make_shared<FclValidity>(si, fcl_world, geometry));
@@ -286,6 +318,16 @@ Outcome plan(Checker which, const std::vector<double>& start, const std::vector<
       const double* q = jointsOf(path.getState(k));
       out.path.emplace_back(q, q + kJoints);
     }
+    // Each segment on 100 times the states the motion checks take, with FCL's checker.
+    FclValidity fine(si, fcl_world, geometry);
+    ob::ScopedState<> at(space);
+    for (std::size_t k = 0; k + 1 < path.getStateCount() && !out.fine_contact; ++k) {
+      const unsigned steps = 100 * space->validSegmentCount(path.getState(k), path.getState(k + 1));
+      for (unsigned i = 0; i <= steps && !out.fine_contact; ++i) {
+        space->interpolate(path.getState(k), path.getState(k + 1), double(i) / steps, at.get());
+        out.fine_contact = !fine.isValid(at.get());
+      }
+    }
   }
   return out;
 }
@@ -310,13 +352,20 @@ bool touches(const std::vector<double>& q,
 int main(int argc, char** argv) {
   const int load = cube::scenes::BusyLoad::takeArgument(argc, argv, "--load");
   double resolution = 0;  // OMPL's default
-  for (int i = 1; i + 1 < argc; ++i)
-    if (std::string(argv[i]) == "--resolution") {
-      resolution = std::atof(argv[i + 1]);
-      for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
-      argc -= 2;
-      break;
+  int refine = kRefine;
+  for (int i = 1; i + 1 < argc;) {
+    const std::string arg = argv[i];
+    if (arg != "--resolution" && arg != "--refine") {
+      ++i;
+      continue;
     }
+    if (arg == "--resolution")
+      resolution = std::atof(argv[i + 1]);
+    else
+      refine = std::max(1, std::atoi(argv[i + 1]));
+    for (int j = i; j + 2 <= argc; ++j) argv[j] = argv[j + 2];
+    argc -= 2;
+  }
   const std::size_t n = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 2000;
   const int problems = argc > 2 ? std::atoi(argv[2]) : 5;
   const int threads = argc > 3 ? std::atoi(argv[3]) : 0;
@@ -366,14 +415,20 @@ int main(int argc, char** argv) {
       kJoints, objs.size(), problems, threads, load);
   const cube::scenes::BusyLoad busy(load, 1800);
   std::size_t edges = 0, edge_states = 0;
-  double cube_s = 0, fcl_s = 0;
-  int same = 0, solved = 0;
+  double cube_s = 0, fcl_s = 0, cont_s = 0;
+  int same = 0, solved = 0, cont_solved = 0, fine_contacts = 0, cont_fine_contacts = 0;
   for (int p = 0; p < problems; ++p) {
     const std::uint_fast32_t seed = 1000 + p;
     const Outcome c = plan(Checker::cube, tasks[p].first, tasks[p].second, seed, cube_world, body,
-                           fcl_world, geometry, threads, resolution);
+                           fcl_world, geometry, threads, resolution, refine);
     const Outcome f = plan(Checker::fcl, tasks[p].first, tasks[p].second, seed, cube_world, body,
-                           fcl_world, geometry, threads, resolution);
+                           fcl_world, geometry, threads, resolution, refine);
+    const Outcome k = plan(Checker::cube_continuous, tasks[p].first, tasks[p].second, seed,
+                           cube_world, body, fcl_world, geometry, threads, resolution, refine);
+    cont_s += k.seconds;
+    cont_solved += k.solved;
+    fine_contacts += c.fine_contact;
+    cont_fine_contacts += k.fine_contact;
     edges += c.edges;
     edge_states += c.edge_states;
     const bool equal = c.solved == f.solved && c.path == f.path;
@@ -381,13 +436,22 @@ int main(int argc, char** argv) {
     solved += c.solved;
     cube_s += c.seconds;
     fcl_s += f.seconds;
-    std::printf("  problem %d: %s, %zu states; cube %.1f ms, FCL %.1f ms (%.2fx)%s\n", p,
-                c.solved ? "solved" : "not solved", c.path.size(), 1e3 * c.seconds, 1e3 * f.seconds,
-                f.seconds / c.seconds, equal ? "" : "  PATHS DIFFER");
+    std::printf(
+        "  problem %d: %s, %zu states; cube %.1f ms, FCL %.1f ms (%.2fx)%s; continuous: %s, %zu "
+        "states, %.1f ms\n",
+        p, c.solved ? "solved" : "not solved", c.path.size(), 1e3 * c.seconds, 1e3 * f.seconds,
+        f.seconds / c.seconds, equal ? "" : "  PATHS DIFFER", k.solved ? "solved" : "not solved",
+        k.path.size(), 1e3 * k.seconds);
   }
-  std::printf("planning time: cube %.1f ms, FCL DynamicAABBTree %.1f ms: %.2fx less\n",
-              1e3 * cube_s, 1e3 * fcl_s, fcl_s / cube_s);
+  std::printf(
+      "planning time: cube %.1f ms, FCL DynamicAABBTree %.1f ms: %.2fx less; cube continuous "
+      "%.1f ms\n",
+      1e3 * cube_s, 1e3 * fcl_s, fcl_s / cube_s, 1e3 * cont_s);
+  std::printf(
+      "paths touching an obstacle on a 100x finer subdivision: discrete %d of %d, continuous %d "
+      "of %d\n",
+      fine_contacts, solved, cont_fine_contacts, cont_solved);
   std::printf("same paths: %d of %d problems (%d solved); %zu motion checks, %.1f states an edge\n",
               same, problems, solved, edges, edges ? double(edge_states) / double(edges) : 0.0);
-  return same == problems && solved > 0 ? 0 : 1;
+  return same == problems && solved > 0 && cont_fine_contacts == 0 ? 0 : 1;
 }

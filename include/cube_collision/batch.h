@@ -96,6 +96,12 @@ struct BatchOptions {
   /// them from 64 states of undecided edges. A region then takes the count less the other threads
   /// runnable on the machine at that moment, at least one.
   int threads = 0;
+  /// checkMotion(s) over a pose array: check the motion between consecutive states of an edge
+  /// too, with each link's motion bounds computed from its two poses as for motion interpolated
+  /// in SE(3) (see "Continuous edges" below). Ignored by checkStates; the overloads that take
+  /// motion bounds check continuously whatever its value; checkMotion(s) with a PoseFunction and
+  /// no bounds throw std::invalid_argument with it set.
+  bool continuous = false;
 };
 
 /// One state's answer.
@@ -164,7 +170,9 @@ enum class MotionOrder {
 /// together share one walk of the world); once an edge's colliding state is known, no state
 /// after it in the order is started, and no later run is read: on one thread, for an answer at
 /// place r of the order, at most max(5, 2 r + 3) of the edge's states are read. Only
-/// self_collision and threads of `options` apply. No poses and no edges: an empty answer. Throws
+/// self_collision, threads and continuous of `options` apply (continuous: see "Continuous edges"
+/// below; a state's check then also reads its neighbours' poses in the edge, and a NaN or
+/// infinite one throws there). No poses and no edges: an empty answer. Throws
 /// std::invalid_argument as checkStates, and for edge_starts that do not start at 0 or do not
 /// increase strictly within the states, states with no edge_starts included (before any work);
 /// a pose with a NaN or infinite entry throws if its state comes before its edge's first
@@ -200,9 +208,11 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
 /// pose array is made: the call's memory is the visiting order, 16 bytes a state (up to 32
 /// while it is made), and the poses of one run (32 states) per thread. Throws
-/// std::invalid_argument for an empty body set or a null function (before any work), and as
-/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on (possibly one
-/// from a state after the answer in its run, or with `threads` > 1 in a later one).
+/// std::invalid_argument for an empty body set, a null function or BatchOptions::continuous set
+/// (SE(3) bounds need every state's poses: the overload with motion bounds checks continuously)
+/// (before any work), and as checkMotion for a NaN or infinite pose; an exception from pose_of
+/// is passed on (possibly one from a state after the answer in its run, or with `threads` > 1 in
+/// a later one).
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
@@ -226,14 +236,84 @@ std::vector<StateResult<S>> checkStates(
 /// check reads are written, as checkMotion with a pose function says (with `threads` > 1, a few
 /// after an edge's answer may be, and their answers dropped). The same answers as checkMotions
 /// over all the poses, whatever the thread count. Throws std::invalid_argument as checkMotions
-/// and for a null function (before any work); an exception from pose_of is passed on (with
-/// `threads` > 1, possibly one from a state after its edge's answer): a caller that wants the
-/// array form's rule for a bad pose writes a NaN entry into it instead of throwing.
+/// and for a null function or BatchOptions::continuous set (before any work); an exception from
+/// pose_of is passed on (with `threads` > 1, possibly one from a state after its edge's answer): a
+/// caller that wants the array form's rule for a bad pose writes a NaN entry into it instead of
+/// throwing.
 template <typename S>
 std::vector<std::size_t> checkMotions(
     const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
     const std::vector<std::size_t>& edge_starts,
     const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
     MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
+
+// Continuous edges. A discrete edge check can step over an obstacle thinner than the motion
+// between two states. With continuous checking, an edge is reported free only if no link can
+// touch a world object (or, with self_collision, another checked link) anywhere between
+// consecutive states, given a bound on each link's motion per interval:
+//  - motion bound b of link l over the interval from state k to k + 1 of an edge: an upper bound
+//    on the length of the path of every point of link l between the two states. A point that
+//    has moved a length L1 since state k has L2 <= b - L1 left to state k + 1, so it lies within
+//    b / 2 of its place at state k or at state k + 1; two links' points at one instant, within
+//    (b_i + b_j) / 2 of each other's at one of the two states (L1_i + L1_j + L2_i + L2_j <=
+//    b_i + b_j).
+//  - so each state k of the edge is checked as checkMotions checks it, with link l's margin
+//    raised by max(b of interval k - 1, b of interval k) / 2 (the intervals of the edge that
+//    state k ends and starts; an edge's first and last states have one, a lone state none):
+//    a state fails when fcl::collide reports a contact, or fcl::distance is at most the raised
+//    margins (link margin + raise + the object's margin; for two links both margins and both
+//    raises). A contact anywhere inside an interval makes at least one of its two states fail,
+//    and so does a link within its margins of an object anywhere inside an interval: exactly,
+//    up to the accuracy of FCL's own fcl::collide and fcl::distance on the states.
+//  - it is conservative: a state may fail though nothing is touched on the motion (the check
+//    sees each link grown by half its larger bound in every direction).
+// The answer per edge is the index within the edge of its first state, in the visiting order,
+// whose raised check fails (kNoIndex: the whole edge is free, the motion between its states
+// included); the thread count does not change it. Nothing is said of the motion before the
+// edge's first state or after its last.
+// Bounds computed for motion interpolated in SE(3) (BatchOptions::continuous): each link's
+// translation linear and its rotation along the geodesic between its two orientations, b =
+// |t1 - t0| + theta * rho, theta the rotation angle of R0^T R1 and rho the largest distance from
+// the link frame's origin to a corner of the link's local AABB. They hold only if the caller's
+// links move that way between states; a robot interpolated in joint space needs bounds from its
+// kinematics (the overloads that take them). Cost: runs of an edge's states share the world's
+// walk as in checkMotions, each state with its own raised margins; a state's check with raised
+// margins meets more candidate pairs, and a pair within the raised margins but apart costs
+// fcl::distance on top of fcl::collide (on meshes, a walk of their BVH): per state, from about the
+// discrete check's cost where the raises are small against the gaps between links and objects, to
+// many times it where they are not; computing SE(3) bounds reads the neighbours' poses.
+
+/// checkMotions with continuous checking (see above) and the caller's bounds: motion_bounds[k *
+/// body.size() + l] bounds link l's motion from state k to state k + 1 of the same edge, one
+/// value per pose of `poses` (those of each edge's last state are not used). Throws
+/// std::invalid_argument as checkMotions, and for motion bounds whose size is not poses.size() or
+/// with a negative, NaN or infinite value (naming the first), before any work.
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body,
+    const std::vector<fcl::Transform3<S>>& poses, const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+    MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
+
+/// checkMotions with the caller's motion bounds for one edge made of all the states of `poses`.
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        const std::vector<fcl::Transform3<S>>& poses,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order = MotionOrder::path,
+                        const BatchOptions& options = BatchOptions());
+
+/// checkMotion over a PoseFunction with continuous checking and the caller's motion bounds:
+/// motion_bounds[k * body.size() + l] for link l from state k to k + 1, states * body.size()
+/// values (the last state's not used). Throws std::invalid_argument as the overload without
+/// bounds, and for bounds of another size or with a negative, NaN or infinite value, naming the
+/// first, before any work.
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        std::size_t states,
+                        const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order = MotionOrder::path,
+                        const BatchOptions& options = BatchOptions());
 
 }  // namespace cube

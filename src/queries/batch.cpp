@@ -10,11 +10,13 @@
 #include <atomic>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "adapter/manager_access.h"
 #include "core/parallel_for.h"
 #include "cube_collision/narrow_phase.h"
+#include "queries/motion_bounds.h"
 #include "queries/state_checker.h"
 
 namespace cube {
@@ -114,25 +116,37 @@ namespace detail {
 namespace {
 
 // One thread's scratch of a motion check: the checker and, for poses written on demand, room
-// for the states of one run.
+// for the states of one run; for a continuous check, room for a state's margin raises.
 template <typename S>
 struct MotionScratch {
   StateChecker<S> checker;
   std::vector<fcl::Transform3<S>> poses;
-  // `run_states`: the most states of a run (0: poses are not written here).
-  MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states)
-      : checker(world, links), poses(run_states * links.size()) {}
+  std::vector<S> raise;
+  // `run_states`: the most states of a run (0: poses are not written here); `continuous`: room
+  // for the raises of a run.
+  MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states,
+                bool continuous)
+      : checker(world, links),
+        poses(run_states * links.size()),
+        raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {}
 };
+
+// A discrete check: no state's margins raised.
+struct NoRaise {};
 
 // checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
 // the links' poses, the j-th state of a run placed together), edges as edge_starts says (checked
-// by the caller).
-template <typename S, class PoseAt>
+// by the caller). A continuous check: raise_at(state, edge begin, edge end, raise, bad) writes
+// the links' margin raises of a state to raise[0 .. links), or sets `bad` to the index of a pose
+// it read with a NaN or infinite entry.
+template <typename S, class PoseAt, class RaiseAt = NoRaise>
 std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
                                          std::size_t states,
                                          const std::vector<std::size_t>& edge_starts,
                                          MotionOrder order, const BatchOptions& options,
-                                         bool on_demand, const PoseAt& pose_at) {
+                                         bool on_demand, const PoseAt& pose_at,
+                                         const RaiseAt& raise_at = RaiseAt()) {
+  constexpr bool continuous = !std::is_same<RaiseAt, NoRaise>::value;
   const std::size_t edges = edge_starts.size();
   std::vector<std::size_t> first(edges, kNoIndex);
   if (edges == 0) return first;
@@ -182,7 +196,9 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   for (std::size_t e = 0; e < edges; ++e)
     longest = std::max(longest, (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e]);
   const std::size_t run_states = on_demand ? std::min(longest, StateChecker<S>::kGroupStates) : 0;
-  const auto make = [&] { return std::make_unique<MotionScratch<S>>(core, links, run_states); };
+  const auto make = [&] {
+    return std::make_unique<MotionScratch<S>>(core, links, run_states, continuous);
+  };
   // The states of run r in rank order, up to the edge's first collision; the number checked.
   const auto check = [&](auto& scratch, std::size_t r) -> std::size_t {
     const Run& run = runs[r];
@@ -194,9 +210,41 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     const fcl::Transform3<S>* at[kRun];
     for (std::size_t j = 0; j < count; ++j)
       at[j] = pose_at(*scratch, items[run.first + j].state, j);
-    for (std::size_t done = 0; done < count;) {
-      const std::size_t took =
-          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
+    // Item i's event (a contact, or a pose error: bad_pose) at its rank.
+    const auto event = [&](std::size_t i, std::size_t bad_pose) {
+      const Item& item = items[i];
+      if (bad_pose != kNoIndex) {
+        // As a contact: no state after it in the order is started, and the serial scan's
+        // first event decides (a pose error before any contact throws).
+#pragma omp critical(cube_batch_bad_pose)
+        bad.emplace_back(i, bad_pose);
+      }
+      std::size_t known = b.load(std::memory_order_relaxed);
+      while (item.rank < known &&
+             !b.compare_exchange_weak(known, item.rank, std::memory_order_relaxed)) {
+      }
+    };
+    // A continuous check: each state's raised margins, up to the first whose bounds read a bad
+    // pose (checked as the event at its place once the states before it are free).
+    const S* raises[kRun];
+    std::size_t raised = count, raise_bad = kNoIndex;
+    if constexpr (continuous) {
+      const std::uint32_t e = items[run.first].edge;
+      const std::size_t begin = edge_starts[e];
+      const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+      for (std::size_t j = 0; j < count; ++j) {
+        S* raise = scratch->raise.data() + j * n;
+        raise_at(items[run.first + j].state, begin, end, raise, raise_bad);
+        if (raise_bad != kNoIndex) {
+          raised = j;
+          break;
+        }
+        raises[j] = raise;
+      }
+    }
+    for (std::size_t done = 0; done < raised;) {
+      const std::size_t took = scratch->checker.placeGroup(
+          at + done, raised - done, options.self_collision, continuous ? raises + done : nullptr);
       for (std::size_t j = 0; j < took; ++j) {
         const std::size_t i = run.first + done + j;
         const Item& item = items[i];
@@ -204,19 +252,16 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
         const int answer =
             scratch->checker.checkPlaced(j, options.self_collision, false, false, nullptr);
         if (answer == 0) continue;
-        if (answer == StateChecker<S>::kBadPose) {
-          // As a contact: no state after it in the order is started, and the serial scan's
-          // first event decides (a pose error before any contact throws).
-#pragma omp critical(cube_batch_bad_pose)
-          bad.emplace_back(i, item.state * n + scratch->checker.badLink());
-        }
-        std::size_t known = b.load(std::memory_order_relaxed);
-        while (item.rank < known &&
-               !b.compare_exchange_weak(known, item.rank, std::memory_order_relaxed)) {
-        }
+        event(i, answer == StateChecker<S>::kBadPose ? item.state * n + scratch->checker.badLink()
+                                                     : kNoIndex);
         return done + j + 1;
       }
       done += took;
+    }
+    if (raised < count) {
+      if (items[run.first + raised].rank > b.load(std::memory_order_relaxed)) return raised;
+      event(run.first + raised, raise_bad);
+      return raised + 1;
     }
     return count;
   };
@@ -268,13 +313,14 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
 }  // namespace
 }  // namespace detail
 
+namespace detail {
+namespace {
+
+// checkMotions' checks of its arguments; the number of states.
 template <typename S>
-std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
-                                      const std::vector<fcl::Transform3<S>>& poses,
-                                      const std::vector<std::size_t>& edge_starts,
-                                      MotionOrder order, const BatchOptions& options) {
-  const auto& links = detail::BodyAccess::links(body);
-  const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
+std::size_t checkedEdges(const Links<S>& links, const std::vector<fcl::Transform3<S>>& poses,
+                         const std::vector<std::size_t>& edge_starts) {
+  const std::size_t states = checkedStates(links, poses, "checkMotions");
   if (edge_starts.empty() && states > 0)
     batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
   for (std::size_t e = 0; e < edge_starts.size(); ++e)
@@ -282,10 +328,96 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
         edge_starts[e] >= states)
       batchError("checkMotions",
                  "edge_starts must start at 0 and increase strictly within the states");
+  return states;
+}
+
+// Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
+template <typename S>
+struct GivenRaise {
+  const std::vector<S>& bounds;
+  std::size_t n;
+  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
+                  std::size_t&) const {
+    raiseAt<S>(
+        n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
+        raise);
+  }
+};
+
+// Raises from the poses of the state and its neighbours, moving in SE(3) between them.
+template <typename S>
+struct Se3Raise {
+  const std::vector<fcl::Transform3<S>>& poses;
+  const std::vector<S> reach;
+  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
+                  std::size_t& bad) const {
+    const std::size_t n = reach.size();
+    const fcl::Transform3<S>* p = poses.data();
+    if (raiseAt<S>(
+            n, state, begin, end,
+            [&](std::size_t k, std::size_t l) {
+              return se3MotionBound(p[k * n + l], p[(k + 1) * n + l], reach[l]);
+            },
+            raise))
+      return;
+    // A pose read is NaN or infinite: the first such in pose order (a NaN bound comes from one).
+    for (std::size_t k = state > begin ? state - 1 : state; k <= state + 1 && k < end; ++k)
+      for (std::size_t l = 0; l < n; ++l)
+        if (!p[k * n + l].linear().allFinite() || !p[k * n + l].translation().allFinite()) {
+          bad = k * n + l;
+          return;
+        }
+  }
+};
+
+}  // namespace
+}  // namespace detail
+
+template <typename S>
+std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                                      const std::vector<fcl::Transform3<S>>& poses,
+                                      const std::vector<std::size_t>& edge_starts,
+                                      MotionOrder order, const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
+  const std::size_t n = links.size();
+  const auto pose_at = [&](auto&, std::size_t state, std::size_t) {
+    return poses.data() + state * n;
+  };
+  if (options.continuous)
+    return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
+                                   options, false, pose_at,
+                                   detail::Se3Raise<S>{poses, detail::linkReach<S>(links)});
+  return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
+                                 false, pose_at);
+}
+
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body,
+    const std::vector<fcl::Transform3<S>>& poses, const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds, MotionOrder order,
+    const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
+  detail::checkMotionBounds(motion_bounds, poses.size(), "checkMotions");
   const std::size_t n = links.size();
   return detail::firstCollisions(
       detail::coreOf(world), links, states, edge_starts, order, options, false,
-      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; });
+      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; },
+      detail::GivenRaise<S>{motion_bounds, n});
+}
+
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        const std::vector<fcl::Transform3<S>>& poses,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order, const BatchOptions& options) {
+  const std::vector<std::size_t> starts =
+      poses.empty() ? std::vector<std::size_t>{} : std::vector<std::size_t>{0};
+  const std::vector<std::size_t> first =
+      checkMotions(world, body, poses, starts, motion_bounds, order, options);
+  return first.empty() ? kNoIndex : first[0];
 }
 
 template <typename S>
@@ -306,6 +438,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const auto& links = detail::BodyAccess::links(body);
   if (links.size() == 0) batchError("checkMotion", "the body set has no link");
   if (!pose_of) batchError("checkMotion", "null pose function");
+  if (options.continuous)
+    batchError("checkMotion",
+               "continuous checking with a pose function needs the motion bounds (the overload "
+               "that takes them)");
   if (states == 0) return kNoIndex;
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
@@ -358,7 +494,7 @@ std::vector<StateResult<S>> checkStates(
   detail::parallelForWith((states + kRun - 1) / kRun, threads, 1,
                           [&] {
                             return std::make_unique<detail::MotionScratch<S>>(
-                                core, links, std::min(kRun, states));
+                                core, links, std::min(kRun, states), false);
                           },
                           check_run);
   return out;
@@ -373,6 +509,10 @@ std::vector<std::size_t> checkMotions(
   const auto& links = detail::BodyAccess::links(body);
   if (links.size() == 0) batchError("checkMotions", "the body set has no link");
   if (!pose_of) batchError("checkMotions", "null pose function");
+  if (options.continuous)
+    batchError("checkMotions",
+               "continuous checking with a pose function needs the motion bounds (the overload "
+               "that takes them)");
   if (edge_starts.empty() && states > 0)
     batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
   for (std::size_t e = 0; e < edge_starts.size(); ++e)
@@ -388,24 +528,55 @@ std::vector<std::size_t> checkMotions(
                                  });
 }
 
-#define CUBE_INSTANTIATE_BATCH(S)                                                                \
-  template std::vector<StateResult<S>> checkStates<S>(                                           \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
-      const BatchOptions&);                                                                      \
-  template std::vector<std::size_t> checkMotions<S>(                                             \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&, \
-      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                        \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
-                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,       \
-                                      const BatchOptions&);                                      \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,         \
-                                      std::size_t, const PoseFunction<S>&, MotionOrder,          \
-                                      const BatchOptions&);                                      \
-  template std::vector<StateResult<S>> checkStates<S>(                                           \
-      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t, const PoseFunction<S>&,    \
-      const BatchOptions&);                                                                      \
-  template std::vector<std::size_t> checkMotions<S>(                                             \
-      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                            \
+template <typename S>
+std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
+                        std::size_t states,
+                        const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        MotionOrder order, const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  if (links.size() == 0) batchError("checkMotion", "the body set has no link");
+  if (!pose_of) batchError("checkMotion", "null pose function");
+  detail::checkMotionBounds(motion_bounds, states * links.size(), "checkMotion");
+  if (states == 0) return kNoIndex;
+  const std::vector<std::size_t> starts{0};
+  return detail::firstCollisions(
+      detail::coreOf(world), links, states, starts, order, options, true,
+      [&](auto& scratch, std::size_t state, std::size_t j) {
+        fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+        pose_of(state, at);
+        return at;
+      },
+      detail::GivenRaise<S>{motion_bounds, links.size()})[0];
+}
+
+#define CUBE_INSTANTIATE_BATCH(S)                                                                 \
+  template std::vector<StateResult<S>> checkStates<S>(                                            \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+      const BatchOptions&);                                                                       \
+  template std::vector<std::size_t> checkMotions<S>(                                              \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                         \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,        \
+                                      const BatchOptions&);                                       \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      std::size_t, const PoseFunction<S>&, MotionOrder,           \
+                                      const BatchOptions&);                                       \
+  template std::vector<std::size_t> checkMotions<S>(                                              \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+      const std::vector<std::size_t>&, const std::vector<S>&, MotionOrder, const BatchOptions&);  \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      const std::vector<fcl::Transform3<S>>&,                     \
+                                      const std::vector<S>&, MotionOrder, const BatchOptions&);   \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
+                                      std::size_t, const PoseFunction<S>&, const std::vector<S>&, \
+                                      MotionOrder, const BatchOptions&);                          \
+  template std::vector<StateResult<S>> checkStates<S>(                                            \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t, const PoseFunction<S>&,     \
+      const BatchOptions&);                                                                       \
+  template std::vector<std::size_t> checkMotions<S>(                                              \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                             \
       const std::vector<std::size_t>&, const PoseFunction<S>&, MotionOrder, const BatchOptions&);
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)

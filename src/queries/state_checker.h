@@ -90,6 +90,7 @@ class StateChecker {
     for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
     self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
     self_gate_.excluded_n = links.size();
+    margin_ = links.margin.data();
     objects_.reset(new ObjectStorage[links.size()]);  // raw room: constructed on first use
     close_.resize(body_.leafCount());
     // The per-link numbers in one block (a batch of one state makes a checker for itself).
@@ -121,10 +122,12 @@ class StateChecker {
   /// Whether the state collides; the first pair and the clearance into `out` as asked.
   /// kBadPose (and the link in badLink()) if a pose has a NaN or infinite entry, found while
   /// placing the links: the state's poses are read once.
+  /// `extra` (null, or one value >= 0 per link): each link's margin raised by its value for this
+  /// state alone (a continuous edge's motion bounds).
   static constexpr int kBadPose = -1;
   int check(const fcl::Transform3<S>* poses, bool self, bool first_pair, bool clearance,
-            StateResult<S>* out) {
-    placeGroup(&poses, 1, self);
+            StateResult<S>* out, const S* extra = nullptr) {
+    placeGroup(&poses, 1, self, extra != nullptr ? &extra : nullptr);
     return checkPlaced(0, self, first_pair, clearance, out);
   }
 
@@ -138,9 +141,20 @@ class StateChecker {
   /// other links walk the world state by state. Otherwise it takes all `count`, each state
   /// placed and walking as it is checked. With a pair predicate (which sees each state's link
   /// objects) every state walks. The poses must stay until the last checkPlaced of the run.
-  std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self) {
+  /// `extras` (null, or extras[j] as check()'s `extra` for state j): the states' raised margins.
+  std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self,
+                         const S* const* extras = nullptr) {
     const std::size_t n = links_.size();
     shared_ = false;
+    raised_ = extras != nullptr;
+    margin_ = links_.margin.data();
+    if (raised_) {
+      if (raised_margins_.empty()) raised_margins_.resize(kGroupStates * n);  // once, if ever
+      for (std::size_t j = 0; j < count; ++j)
+        for (std::size_t l = 0; l < n; ++l)
+          raised_margins_[j * n + l] = links_.margin[l] + extras[j][l];
+      margin_ = raised_margins_.data();
+    }
     for (std::size_t j = 0; j < count; ++j) state_poses_[j] = states[j];
     if (eager_objects_) return count;
     const std::size_t all_count = count;
@@ -164,7 +178,7 @@ class StateChecker {
         if (close_[k]) {
           u = sweptBox(fcl::Vector3<S>(at_lo_[0][l], at_lo_[1][l], at_lo_[2][l]),
                        fcl::Vector3<S>(at_hi_[0][l], at_hi_[1][l], at_hi_[2][l]), far_[l],
-                       links_.reach[l], rate, links_.margin[l]);
+                       links_.reach[l], rate, runMargin(l, count));
         } else {
           for (int d = 0; d < 3; ++d) {
             u.lo[d] = std::numeric_limits<S>::max();
@@ -212,6 +226,7 @@ class StateChecker {
   /// State j of the run placeGroup took last: as check() for its poses.
   int checkPlaced(std::size_t j, bool self, bool first_pair, bool clearance, StateResult<S>* out) {
     const std::size_t n = links_.size();
+    if (raised_) margin_ = raised_margins_.data() + j * n;
     const fcl::Transform3<S>* poses = state_poses_[j];
     select(poses);
     if (!shared_ || clearance) {  // every link (a clearance walks them all)
@@ -379,8 +394,17 @@ class StateChecker {
   }
 
   typename Broadphase<S>::Probe probe(std::size_t l) {
-    return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), links_.margin[l],
+    return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), margin_[l],
                                          links_.bits[l]};
+  }
+
+  // Link l's largest margin over the first `count` states of the run (raised, or its own).
+  S runMargin(std::uint32_t l, std::size_t count) const {
+    if (!raised_) return links_.margin[l];
+    const std::size_t n = links_.size();
+    S m = raised_margins_[l];
+    for (std::size_t j = 1; j < count; ++j) m = std::max(m, raised_margins_[j * n + l]);
+    return m;
   }
 
   // Whether links first .. first + size - 1 lie close enough together over the states to share
@@ -393,7 +417,7 @@ class StateChecker {
     S extent = 0;
     for (std::uint32_t l = first; l < first + size; ++l)
       extent += S(2) * (links_.half_of[0][l] + links_.half_of[1][l] + links_.half_of[2][l]) +
-                S(6) * links_.margin[l];
+                S(6) * margin_[l];
     const S limit = (kGroupSpread - S(1)) * extent;
     S spread = 0;
     for (std::uint32_t l = first; l < first + size; ++l) {
@@ -431,7 +455,7 @@ class StateChecker {
                            {h_[0] + f, h_[1] + f, h_[2] + f}});
     const bool finite = walkBoxes(count, WalkBoxes<S>{{c_[0] + f, c_[1] + f, c_[2] + f},
                                                       {h_[0] + f, h_[1] + f, h_[2] + f},
-                                                      links_.margin.data() + f,
+                                                      margin_ + f,
                                                       S(judge_.rate()),
                                                       grow_ + f,
                                                       {lo_[0] + f, lo_[1] + f, lo_[2] + f},
@@ -526,11 +550,11 @@ class StateChecker {
   // FCL on a pair the records left open; a contact is handed to the collector. Whether it is one.
   template <class C>
   bool decide(C& hits, const Candidate& c) {
-    const S m = c.is_link ? links_.margin[c.link] + links_.margin[c.other]
-                          : links_.margin[c.link] + world_.marginOf(c.other);
+    const S m =
+        c.is_link ? margin_[c.link] + margin_[c.other] : margin_[c.link] + world_.marginOf(c.other);
     const Object& b =
         c.is_link ? static_cast<const Object&>(object(c.other)) : *world_.table().object(c.other);
-    if (!narrow(object(c.link), b, m)) return false;
+    if (!narrow(object(c.link), b, m, c)) return false;
     hits.add(c);
     return true;
   }
@@ -546,7 +570,7 @@ class StateChecker {
     c.worldRecords(*w, iw, s, h);
     const Slot& slot = c.linkRecords(link);
     return c.offer(hits, cand, slot.sphere, slot.shape, *s, *h,
-                   c.links_.margin[link] + c.world_.marginOf(iw));
+                   c.margin_[link] + c.world_.marginOf(iw));
   }
 
   template <class C>
@@ -556,7 +580,7 @@ class StateChecker {
     const Slot& a = c.linkRecords(i);
     const Slot& b = c.linkRecords(j);
     return c.offer(c.hits<C>(), Candidate{i, j, j, true}, a.sphere, a.shape, b.sphere, b.shape,
-                   c.links_.margin[i] + c.links_.margin[j]);
+                   c.margin_[i] + c.margin_[j]);
   }
 
   // FCL on the pairs kept, in walk order (a collector that keeps the first in Candidate's
@@ -594,11 +618,19 @@ class StateChecker {
     return slot;
   }
 
-  // FCL's answer: contact, or (margin m > 0) a distance of at most m.
-  bool narrow(const Object& a, const Object& b, S m) {
+  // FCL's answer for pair c: contact, or (margin m > 0) a distance of at most m. With raised
+  // margins (a continuous edge's), FCL's distance starts from a cap above m (an eighth more,
+  // plus the links' tolerance, beyond rounding): its BVH and octree walks skip what lies beyond
+  // the cap, and a distance of at most m is found as without it.
+  bool narrow(const Object& a, const Object& b, S m, const Candidate& c) {
     fcl::CollisionResult<S> result;
     if (fclCollide(&a, &b, request_, result) > 0) return true;
-    return m > S(0) && pairDistance(a, b) <= m;
+    if (!(m > S(0))) return false;
+    if (!raised_) return pairDistance(a, b) <= m;
+    const S slack = c.is_link ? grow_[c.link] + grow_[c.other] : grow_[c.link];
+    fcl::DistanceResult<S> capped;
+    capped.min_distance = m + m / S(8) + slack;
+    return fclDistance(&a, &b, distance_request_, capped) <= m;
   }
 
   S pairDistance(const Object& a, const Object& b) {
@@ -686,7 +718,12 @@ class StateChecker {
   // world_pairs_[world_at_[l] .. world_at_[l + 1]), the pairs of links whose boxes may meet, and
   // the links a state places (runs_, ranges of links), from the links' positions over the run.
   bool shared_ = false;
-  bool self_shared_ = false;         // every leaf took part: the self pairs too
+  bool self_shared_ = false;  // every leaf took part: the self pairs too
+  // Per link: the margins of the state checked (its links' margins, or raised_margins_' entries
+  // of the state in its run).
+  const S* margin_ = nullptr;
+  std::vector<S> raised_margins_;    // per state of the run and link: its raised margin
+  bool raised_ = false;              // the run's margins are raised
   std::vector<std::uint8_t> close_;  // per leaf of the links' tree: its links took part
   std::vector<std::uint8_t> need_;   // per link: placed in each state
   S* at_lo_[3];                      // per link and coordinate: its positions' box over the run

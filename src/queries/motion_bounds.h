@@ -1,0 +1,87 @@
+#pragma once
+
+// Continuous edges' motion bounds (batch.h, "Continuous edges"): the bound of a link's motion
+// between two poses interpolated in SE(3), the caller's bounds checked, and the raise of each
+// link's margin at a state of an edge. Private to the library.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "queries/body_links.h"
+
+namespace cube {
+namespace detail {
+
+// Per link: the largest distance from its frame's origin to a corner of its local AABB (every
+// point of the link lies within it).
+template <typename S>
+std::vector<S> linkReach(const typename BodySet<S>::Links& links) {
+  std::vector<S> reach(links.size());
+  for (std::size_t l = 0; l < links.size(); ++l) {
+    S r2 = 0;
+    for (int d = 0; d < 3; ++d) {
+      const S far = std::fabs(links.mid_of[d][l]) + links.half_of[d][l];
+      r2 += far * far;
+    }
+    reach[l] = std::sqrt(r2);
+  }
+  return reach;
+}
+
+// The length bound of the path of any point within `reach` of the frame's origin, moving from
+// pose a to pose b with the translation linear and the rotation along the geodesic: the
+// translation's length plus the rotation angle times the reach. NaN or infinite for a pose that
+// is.
+template <typename S>
+S se3MotionBound(const fcl::Transform3<S>& a, const fcl::Transform3<S>& b, S reach) {
+  const fcl::Matrix3<S> m = a.linear().transpose() * b.linear();
+  // The angle from its sine (the skew part) and cosine (the trace): accurate near 0 and pi,
+  // where acos of the trace alone is not.
+  const S sx = m(2, 1) - m(1, 2), sy = m(0, 2) - m(2, 0), sz = m(1, 0) - m(0, 1);
+  const S sine = S(0.5) * std::sqrt(sx * sx + sy * sy + sz * sz);
+  const S cosine = S(0.5) * (m.trace() - S(1));
+  const S angle = std::atan2(sine, cosine);
+  return (b.translation() - a.translation()).norm() + angle * reach;
+}
+
+// Throws unless `bounds` holds `expected` finite values >= 0.
+template <typename S>
+void checkMotionBounds(const std::vector<S>& bounds, std::size_t expected, const char* where) {
+  if (bounds.size() != expected)
+    batchError(where, "motion_bounds has " + std::to_string(bounds.size()) +
+                          " values where the states need " + std::to_string(expected));
+  for (std::size_t i = 0; i < bounds.size(); ++i)
+    if (!(bounds[i] >= S(0)) || !std::isfinite(bounds[i]))
+      batchError(where, "motion bound " + std::to_string(i) + " (" + std::to_string(bounds[i]) +
+                            ") is negative, NaN or infinite");
+}
+
+// Link l's margin raise at state k of the edge [begin, end) given bound(j, l) of the interval
+// from state j to j + 1: half the larger bound of the intervals state k ends and starts. False
+// if a bound is NaN or infinite (from a pose that is).
+template <typename S, class Bound>
+bool raiseAt(std::size_t n, std::size_t k, std::size_t begin, std::size_t end, const Bound& bound,
+             S* extra) {
+  S finite = 0;  // x - x: 0 for a finite x, NaN otherwise
+  for (std::size_t l = 0; l < n; ++l) {
+    S b = 0;
+    if (k > begin) {
+      const S before = bound(k - 1, l);
+      finite += before - before;
+      b = before;
+    }
+    if (k + 1 < end) {
+      const S after = bound(k, l);
+      finite += after - after;
+      b = std::max(b, after);
+    }
+    extra[l] = S(0.5) * b;
+  }
+  return finite == S(0);
+}
+
+}  // namespace detail
+}  // namespace cube
