@@ -167,6 +167,22 @@ def batch_tables(raw):
                            (f"; loop {loop / c1:.2f}x)" if loop else ")"))
             out.append(f"| {kind[6:]} | " + " | ".join(row) + " |")
         out.append("")
+    cont = [tuple(k.split("/")) for k in raw if k.startswith("batch_edges_continuous/")]
+    if cont:
+        out += ["Continuous edges (`edges_continuous`): microseconds per state the check visits, "
+                "continuous on one thread / the same edges discrete (`cube_discrete`), and the "
+                "ratio.", "", "| world | " + " | ".join(scenes) + " |",
+                "|---|" + "---|" * len(scenes)]
+        for n in sorted({int(k[2]) for k in cont}):
+            row = []
+            for sc in scenes:
+                c = get(raw, f"batch_edges_continuous/{sc}/{n}/cube", "us_per_checked_state")
+                d = get(raw, f"batch_edges_continuous/{sc}/{n}/cube_discrete",
+                        "us_per_checked_state")
+                row.append("–" if c is None or d is None else
+                           f"{c:.2f} / {d:.2f} µs ({c / d:.2f}x)")
+            out.append(f"| {n:,} | " + " | ".join(row) + " |")
+        out.append("")
     return out
 
 
