@@ -73,45 +73,6 @@ void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visi
 }  // namespace
 }  // namespace detail
 
-template <typename S>
-std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
-                                        const BodySet<S>& body,
-                                        const std::vector<fcl::Transform3<S>>& poses,
-                                        const BatchOptions& options) {
-  const auto& links = detail::BodyAccess::links(body);
-  const std::size_t states = detail::checkedStates(links, poses, "checkStates");
-  std::vector<StateResult<S>> out(states);
-  const detail::Broadphase<S>& core = detail::coreOf(world);
-  core.table().wantVolumes();
-  const int threads = detail::batchThreads(states, options.threads);
-  const std::size_t n = links.size();
-  // Runs of consecutive states, placed together where they lie close (StateChecker::placeGroup).
-  constexpr std::size_t kRun = detail::StateChecker<S>::kGroupStates;
-  const auto check_run = [&](auto& checker, std::size_t run) {
-    const std::size_t first = run * kRun;
-    const std::size_t count = std::min(kRun, states - first);
-    const fcl::Transform3<S>* at[kRun];
-    for (std::size_t j = 0; j < count; ++j) at[j] = poses.data() + (first + j) * n;
-    for (std::size_t done = 0; done < count;) {
-      const std::size_t took = checker->placeGroup(at + done, count - done, options.self_collision);
-      for (std::size_t j = 0; j < took; ++j) {
-        const std::size_t k = first + done + j;
-        const int answer = checker->checkPlaced(j, options.self_collision, options.first_pair,
-                                                options.clearance, &out[k]);
-        if (answer == detail::StateChecker<S>::kBadPose)
-          detail::badPose("checkStates", k * n + checker->badLink());
-        out[k].colliding = answer != 0;
-        if (out[k].colliding && options.clearance) out[k].clearance = S(0);
-      }
-      done += took;
-    }
-  };
-  detail::parallelForWith((states + kRun - 1) / kRun, threads, 1,
-                          [&] { return std::make_unique<detail::StateChecker<S>>(core, links); },
-                          check_run);
-  return out;
-}
-
 namespace detail {
 namespace {
 
@@ -130,6 +91,40 @@ struct MotionScratch {
         poses(run_states * links.size()),
         raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {}
 };
+
+// checkStates over `states` states whose poses pose_at(scratch, state, j) gives (the j-th state
+// of a run), into `out`: runs of consecutive states, placed together where they lie close
+// (StateChecker::placeGroup), on the threads; `run_states`: the thread's room for poses.
+template <typename S, class PoseAt>
+void checkStateRuns(const Broadphase<S>& core, const Links<S>& links, std::size_t states,
+                    const BatchOptions& options, std::size_t run_states,
+                    std::vector<StateResult<S>>& out, const PoseAt& pose_at) {
+  constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
+  const std::size_t n = links.size();
+  const auto check_run = [&](auto& scratch, std::size_t run) {
+    const std::size_t first = run * kRun;
+    const std::size_t count = std::min(kRun, states - first);
+    const fcl::Transform3<S>* at[kRun];
+    for (std::size_t j = 0; j < count; ++j) at[j] = pose_at(*scratch, first + j, j);
+    StateChecker<S>& checker = scratch->checker;
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t took = checker.placeGroup(at + done, count - done, options.self_collision);
+      for (std::size_t j = 0; j < took; ++j) {
+        const std::size_t k = first + done + j;
+        const int answer = checker.checkPlaced(j, options.self_collision, options.first_pair,
+                                               options.clearance, &out[k]);
+        if (answer == StateChecker<S>::kBadPose) badPose("checkStates", k * n + checker.badLink());
+        out[k].colliding = answer != 0;
+        if (out[k].colliding && options.clearance) out[k].clearance = S(0);
+      }
+      done += took;
+    }
+  };
+  parallelForWith(
+      (states + kRun - 1) / kRun, batchThreads(states, options.threads), 1,
+      [&] { return std::make_unique<MotionScratch<S>>(core, links, run_states, false); },
+      check_run);
+}
 
 // A discrete check: no state's margins raised.
 struct NoRaise {};
@@ -374,6 +369,23 @@ struct Se3Raise {
 }  // namespace detail
 
 template <typename S>
+std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
+                                        const BodySet<S>& body,
+                                        const std::vector<fcl::Transform3<S>>& poses,
+                                        const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedStates(links, poses, "checkStates");
+  std::vector<StateResult<S>> out(states);
+  const detail::Broadphase<S>& core = detail::coreOf(world);
+  core.table().wantVolumes();
+  const std::size_t n = links.size();
+  detail::checkStateRuns(
+      core, links, states, options, 0, out,
+      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; });
+  return out;
+}
+
+template <typename S>
 std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                                       const std::vector<fcl::Transform3<S>>& poses,
                                       const std::vector<std::size_t>& edge_starts,
@@ -462,41 +474,15 @@ std::vector<StateResult<S>> checkStates(
   std::vector<StateResult<S>> out(states);
   const detail::Broadphase<S>& core = detail::coreOf(world);
   core.table().wantVolumes();
-  const int threads = detail::batchThreads(states, options.threads);
   const std::size_t n = links.size();
-  // As the array form: runs of consecutive states, each run's poses written into the thread's
-  // room for a run, then placed together where they lie close.
-  constexpr std::size_t kRun = detail::StateChecker<S>::kGroupStates;
-  const auto check_run = [&](auto& scratch, std::size_t run) {
-    const std::size_t first = run * kRun;
-    const std::size_t count = std::min(kRun, states - first);
-    const fcl::Transform3<S>* at[kRun];
-    for (std::size_t j = 0; j < count; ++j) {
-      fcl::Transform3<S>* room = scratch->poses.data() + j * n;
-      pose_of(first + j, room);
-      at[j] = room;
-    }
-    for (std::size_t done = 0; done < count;) {
-      const std::size_t took =
-          scratch->checker.placeGroup(at + done, count - done, options.self_collision);
-      for (std::size_t j = 0; j < took; ++j) {
-        const std::size_t k = first + done + j;
-        const int answer = scratch->checker.checkPlaced(
-            j, options.self_collision, options.first_pair, options.clearance, &out[k]);
-        if (answer == detail::StateChecker<S>::kBadPose)
-          detail::badPose("checkStates", k * n + scratch->checker.badLink());
-        out[k].colliding = answer != 0;
-        if (out[k].colliding && options.clearance) out[k].clearance = S(0);
-      }
-      done += took;
-    }
-  };
-  detail::parallelForWith((states + kRun - 1) / kRun, threads, 1,
-                          [&] {
-                            return std::make_unique<detail::MotionScratch<S>>(
-                                core, links, std::min(kRun, states), false);
-                          },
-                          check_run);
+  // Each run's poses written into the thread's room for a run.
+  detail::checkStateRuns(core, links, states, options,
+                         std::min(detail::StateChecker<S>::kGroupStates, states), out,
+                         [&](auto& scratch, std::size_t state, std::size_t j) {
+                           fcl::Transform3<S>* room = scratch.poses.data() + j * n;
+                           pose_of(state, room);
+                           return room;
+                         });
   return out;
 }
 
