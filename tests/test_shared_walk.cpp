@@ -165,6 +165,66 @@ TEST(SharedWalk, EdgesOfSmallStepsGiveTheSerialScansAnswer) {
   EXPECT_LT(free_edges, 11u);
 }
 
+// Long links that turn about their origin without moving it (their positions stay put, their
+// ends sweep arcs), with margins: the states of a run checked on one shared walk, and edges of
+// such turns, against brute force. Pairs apart in one state of a run meet in others.
+TEST(SharedWalk, LinksTurningInPlaceGiveTheSerialScansAnswer) {
+  World w;
+  fillWorld(w, 220, 31, true, false);
+  std::mt19937 rng(14);
+  cube::BodySet<S> body;
+  for (std::size_t l = 0; l < 6; ++l)
+    body.addLink(
+        l == 2 ? meshBox(5.0, 0.25, 0.25) : Geometry(std::make_shared<fcl::Boxd>(5.0, 0.2, 0.3)),
+        l % 2 ? 0.05 : 0.0);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const std::size_t per = 40, edges = 14;
+  std::vector<fcl::Transform3d> poses;
+  std::vector<std::size_t> starts;
+  for (std::size_t e = 0; e < edges; ++e) {
+    starts.push_back(e * per);
+    std::vector<fcl::Transform3d> base;
+    std::vector<fcl::Vector3d> axis;
+    for (std::size_t l = 0; l < body.size(); ++l) {
+      base.push_back(randomPose(rng, 8));
+      axis.push_back(fcl::Vector3d(u(rng), u(rng), u(rng)).normalized());
+    }
+    for (std::size_t k = 0; k < per; ++k)
+      for (std::size_t l = 0; l < body.size(); ++l) {
+        fcl::Transform3d tf = base[l];
+        tf.linear() = tf.linear() * fcl::AngleAxisd(0.02 * double(k), axis[l]).toRotationMatrix();
+        poses.push_back(tf);
+      }
+  }
+  for (const bool self : {false, true}) {
+    cube::BatchOptions o;
+    o.self_collision = self;
+    o.first_pair = self;
+    o.threads = 1;
+    std::size_t hits = 0;
+    expectSame(cube::checkStates(w.manager, body, poses, o), w, body, poses, o, &hits);
+    EXPECT_GT(hits, per);
+    EXPECT_LT(hits, poses.size() / body.size() - per);
+  }
+  std::vector<bool> colliding;
+  for (std::size_t k = 0; k < poses.size() / body.size(); ++k)
+    colliding.push_back(brute(w, body, poses.data() + k * body.size(), false).colliding);
+  cube::BatchOptions o;
+  o.threads = 1;
+  std::size_t free_edges = 0, late = 0;
+  const auto first = cube::checkMotions(w.manager, body, poses, starts, cube::MotionOrder::path, o);
+  for (std::size_t e = 0; e < edges; ++e) {
+    std::size_t want = cube::kNoIndex;
+    for (std::size_t i = 0; i < per && want == cube::kNoIndex; ++i)
+      if (colliding[starts[e] + i]) want = i;
+    EXPECT_EQ(first[e], want) << "edge " << e;
+    free_edges += want == cube::kNoIndex;
+    late += want != cube::kNoIndex && want > 5;
+  }
+  EXPECT_GT(free_edges, 0u);
+  EXPECT_GT(late, 0u);  // contacts that a run's later states meet
+}
+
 // The box a run's walk takes for a link holds the link's walked box in every state of the run:
 // local AABBs off their origin, rotations that turn their diagonals onto the axes (the widest
 // they reach), positions anywhere in the run's box, far from the origin too.
@@ -249,6 +309,54 @@ TEST(SharedWalk, PoseSumCheckSeesEveryNonFiniteEntry) {
         x[at] = keep;
       }
   }
+}
+
+// Each link's positions' box over a run: the kernels against the least and largest coordinate
+// read one by one, and any non-finite translation seen (the rest of a pose is not read).
+TEST(SharedWalk, PositionBoxesKernelsAgreeWithTheCoordinates) {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> u(-40, 40);
+  for (const std::size_t count : {1, 2, 5, 32})
+    for (const std::size_t n : {1, 4, 7}) {
+      std::vector<std::vector<double>> states(count, std::vector<double>(16 * n));
+      for (auto& s : states)
+        for (double& x : s) x = u(rng);
+      std::vector<const double*> at;
+      for (const auto& s : states) at.push_back(s.data());
+      for (const int bad : {0, 1, 2}) {  // none, a translation, another entry of a pose
+        const double keep = states[count - 1][16 * (n - 1) + (bad == 1 ? 13 : 15)];
+        if (bad != 0) states[count - 1][16 * (n - 1) + (bad == 1 ? 13 : 15)] = std::nan("");
+        std::vector<double> lo[2][3], hi[2][3];
+        bool finite[2];
+        for (int v = 0; v < 2; ++v) {
+          double* l[3];
+          double* h[3];
+          for (int d = 0; d < 3; ++d) {
+            lo[v][d].assign(n, 0);
+            hi[v][d].assign(n, 0);
+            l[d] = lo[v][d].data();
+            h[d] = hi[v][d].data();
+          }
+          finite[v] = v == 0 ? cube::detail::positionBoxes(at.data(), count, n, l, h)
+                             : cube::detail::positionBoxesPortable(at.data(), count, n, l, h);
+        }
+        EXPECT_EQ(finite[0], bad != 1);
+        EXPECT_EQ(finite[1], bad != 1);
+        for (std::size_t k = 0; bad != 1 && k < n; ++k)
+          for (int d = 0; d < 3; ++d) {
+            double want_lo = states[0][16 * k + 12 + d], want_hi = want_lo;
+            for (const auto& s : states) {
+              want_lo = std::min(want_lo, s[16 * k + 12 + d]);
+              want_hi = std::max(want_hi, s[16 * k + 12 + d]);
+            }
+            for (int v = 0; v < 2; ++v) {
+              EXPECT_EQ(lo[v][d][k], want_lo);
+              EXPECT_EQ(hi[v][d][k], want_hi);
+            }
+          }
+        states[count - 1][16 * (n - 1) + (bad == 1 ? 13 : 15)] = keep;
+      }
+    }
 }
 
 TEST(SharedWalk, WalkBoxesKernelsAgreeBitForBit) {

@@ -162,11 +162,11 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     for (std::size_t r = 0; r < visit.size(); ++r, ++item)
       items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + visit[r]};
   }
-  // Runs of items placed together (StateChecker::placeGroup): per edge its first state in the
-  // order alone, then runs of consecutive ranks of 4, 8, 16 states and then kGroupStates (states
-  // consecutive along an edge lie close together and share a walk). A run's states are placed
-  // before any is checked: the doubling keeps the states placed beyond an edge's answer fewer
-  // than those before it.
+  // Runs of items placed together (StateChecker::placeGroup): per edge runs of consecutive ranks
+  // of 5, 8, 16 states and then kGroupStates (states consecutive along an edge lie close together
+  // and share a walk). A run's states are read before any is checked: a run starting at rank s
+  // holds at most s + 3 states (5 from the first), so an answer at rank r reads at most
+  // max(5, 2 r + 3) states.
   constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
   struct Run {
     std::size_t first;  // item
@@ -176,10 +176,10 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   for (std::size_t e = 0; e < edges; ++e) {
     const std::size_t begin = edge_starts[e];
     const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
-    for (std::size_t i = begin, size = 1; i < end;) {
+    for (std::size_t i = begin, size = 5; i < end;) {
       runs.push_back(Run{i, std::min(size, end - i)});
       i += size;
-      size = size == 1 ? 4 : std::min(kRun, 2 * size);
+      size = size == 5 ? 8 : std::min(kRun, 2 * size);
     }
   }
   // Per edge: the lowest rank known to collide (or to hold a bad pose).

@@ -136,8 +136,9 @@ class StateChecker {
   /// checkPlaced(j). Where states lie close together (an edge's, leaf by leaf of the links'
   /// tree), it takes the largest such run of count, count / 2, ... states (kGroupMinStates or
   /// more), and those links share one walk of the world over a box that holds all their boxes
-  /// in those states (from their positions alone: no state is placed here); a state then places
-  /// only the links that met something there, and tests their boxes against those objects. The
+  /// in those states (from their positions alone: no state is placed here), the pairs it meets
+  /// that stay apart over the run are dropped (dropApart); a state then places only the links
+  /// left with a pair, and tests their boxes against those objects. The
   /// other links walk the world state by state. Otherwise it takes all `count`, each state
   /// placed and walking as it is checked. With a pair predicate (which sees each state's link
   /// objects) every state walks. The poses must stay until the last checkPlaced of the run.
@@ -206,12 +207,21 @@ class StateChecker {
     if (self && self_shared_)
       collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onGatherSelf), this,
                    true, 0, nullptr, &self_gate_);
+    dropApart(states, count);
     // The links each state places: those that met something, those of leaves that walk, and
     // every link when the self pairs walk state by state.
     runs_.clear();
-    for (std::size_t k = 0; k < body_.leafCount(); ++k)
-      for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l)
-        need_[l] = !close_[k] || (self && !self_shared_) || world_at_[l] != world_at_[l + 1];
+    pair_links_.clear();
+    leaf_at_.resize(body_.leafCount() + 1);
+    for (std::size_t k = 0; k < body_.leafCount(); ++k) {
+      leaf_at_[k] = std::uint32_t(pair_links_.size());
+      for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l) {
+        const bool met = world_at_[l] != world_at_[l + 1];
+        if (close_[k] && met) pair_links_.push_back(l);
+        need_[l] = !close_[k] || (self && !self_shared_) || met;
+      }
+    }
+    leaf_at_[body_.leafCount()] = std::uint32_t(pair_links_.size());
     for (const auto& [i, j] : self_pairs_) need_[i] = need_[j] = 1;
     for (std::uint32_t l = 0; l < n; ++l)
       if (need_[l]) {
@@ -268,7 +278,7 @@ class StateChecker {
  private:
   // Fewer states than this never share a walk; a walk shared by states whose boxes span more
   // than kGroupSpread times one state's (extents summed over the links) is not tried.
-  static constexpr std::size_t kGroupMinStates = 4;
+  static constexpr std::size_t kGroupMinStates = 3;
   static constexpr S kGroupSpread = S(2);
 
   // Per link: the cull's records (placed on first use), its object's state.
@@ -354,11 +364,12 @@ class StateChecker {
     C& hits = this->hits<C>();
     const std::size_t n = links_.size();
     for (std::size_t k = 0; k < body_.leafCount() && !hits.found(); ++k) {
-      pending_.clear();
       const std::uint32_t first = body_.leafFirst(k), end = first + body_.leafSize(k);
+      if (close_[k] && leaf_at_[k] == leaf_at_[k + 1]) continue;  // its links met nothing
+      pending_.clear();
       if (close_[k]) {
-        for (std::uint32_t l = first; l < end; ++l) {
-          if (world_at_[l] == world_at_[l + 1]) continue;
+        for (std::uint32_t at = leaf_at_[k]; at < leaf_at_[k + 1]; ++at) {
+          const std::uint32_t l = pair_links_[at];
           const Box<S> box = walkedBox(l);
           for (std::uint32_t i = world_at_[l]; i < world_at_[l + 1]; ++i) {
             const WorldPair& w = world_pairs_[i];
@@ -393,6 +404,85 @@ class StateChecker {
     return hits.found();
   }
 
+  // Drops the pairs the walk shared by the run met that stay apart in every state of it: a
+  // link's records in the run's middle state grown by how far any point of it moves from there
+  // (sweptRecords) are apart from the other's records by more than the pair's margin. A link
+  // left with no pair is then not placed state by state.
+  void dropApart(const fcl::Transform3<S>* const* states, std::size_t count) {
+    const std::size_t n = links_.size(), mid = count / 2;
+    swept_.resize(n);  // room once
+    for (Swept& w : swept_) w.made = false;
+    const auto swept = [&](std::uint32_t l) -> const Swept* {
+      Swept& w = swept_[l];
+      if (!w.made) {
+        w.made = true;
+        w.usable = sweptRecords(states, count, mid, l, w.sphere, w.shape);
+      }
+      return w.usable ? &w : nullptr;
+    };
+    std::uint32_t kept = 0, begin = 0;
+    for (std::uint32_t l = 0; l < n; ++l) {
+      const std::uint32_t end = world_at_[l + 1];
+      world_at_[l] = kept;
+      const Swept* w = end > begin ? swept(l) : nullptr;
+      for (std::uint32_t i = begin; i < end; ++i) {
+        const WorldPair& p = world_pairs_[i];
+        if (w != nullptr) {
+          const VolumeSphere* s;
+          const VolumeShape* h;
+          worldRecords(*world_.table().object(p.id), p.id, s, h);
+          if (judge_.withinMargin(Records{&w->sphere, &w->shape}, Records{s, h},
+                                  runMargin(l, count) + world_.marginOf(p.id)) == Verdict::kApart)
+            continue;
+        }
+        world_pairs_[kept++] = p;
+      }
+      begin = end;
+    }
+    world_at_[n] = kept;
+    std::size_t self_kept = 0;
+    for (const auto& [i, j] : self_pairs_) {
+      const Swept* a = swept(i);
+      const Swept* b = a != nullptr ? swept(j) : nullptr;
+      if (b != nullptr &&
+          judge_.withinMargin(Records{&a->sphere, &a->shape}, Records{&b->sphere, &b->shape},
+                              runMargin(i, count) + runMargin(j, count)) == Verdict::kApart)
+        continue;
+      self_pairs_[self_kept++] = {i, j};
+    }
+    self_pairs_.resize(self_kept);
+  }
+
+  // Link l's records in state `ref` of the run's first `count`, grown by the farthest any point
+  // of its local AABB moves from there in a state of the run (translation, plus the rotation's
+  // change, by its Frobenius norm, times the AABB's reach): they hold the link in every state.
+  // Only what holds for the grown volume is kept (no inscribed ball, no cone bound); false
+  // where the link has no records there or the bound is not finite.
+  bool sweptRecords(const fcl::Transform3<S>* const* states, std::size_t count, std::size_t ref,
+                    std::uint32_t l, VolumeSphere& sphere, VolumeShape& shape) {
+    const fcl::Transform3<S>& at = states[ref][l];
+    double move = 0;
+    for (std::size_t j = 0; j < count; ++j) {
+      const fcl::Transform3<S>& p = states[j][l];
+      const double turn = double((p.linear() - at.linear()).norm());
+      const double shift = double((p.translation() - at.translation()).norm());
+      move = std::max(move, shift + double(links_.reach[l]) * turn);
+    }
+    if (!(move < double(kVolumeMaxScale))) return false;  // NaN too
+    if (!slots_[l].made) construct(l);
+    objectAt(l)->setTransform(at);
+    moveVolume(*objectAt(l), slots_[l].source, sphere, shape);
+    if (!(sphere.r >= 0.f)) return false;
+    // Outward: the sums in double, raised by far more than the float rounding's 2^-24.
+    const auto up = [move](float x) { return float((double(x) + move) * (1.0 + 1e-6)); };
+    sphere.r = up(sphere.r);
+    for (float& e : shape.e) e = up(e);
+    shape.scale = std::max(shape.scale, sphere.r);
+    shape.inner_r = 0.f;
+    shape.flags &= ~kVolumeCone;
+    return true;
+  }
+
   typename Broadphase<S>::Probe probe(std::size_t l) {
     return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), margin_[l],
                                          links_.bits[l]};
@@ -410,8 +500,8 @@ class StateChecker {
   // Whether links first .. first + size - 1 lie close enough together over the states to share
   // a walk: each link's positions over the states span (extents summed over the links) less
   // than kGroupSpread - 1 times the links' own extents (the union of a link's boxes is then
-  // within about kGroupSpread times one state's). Keeps each link's positions' box (at_lo_,
-  // at_hi_) and largest coordinate (far_). Stops at the first link that says no.
+  // within about kGroupSpread times one state's), and every position is finite. Keeps each
+  // link's positions' box (at_lo_, at_hi_) and largest coordinate (far_).
   bool closeTogether(const fcl::Transform3<S>* const* states, std::size_t count,
                      std::uint32_t first, std::uint32_t size) {
     S extent = 0;
@@ -419,22 +509,29 @@ class StateChecker {
       extent += S(2) * (links_.half_of[0][l] + links_.half_of[1][l] + links_.half_of[2][l]) +
                 S(6) * margin_[l];
     const S limit = (kGroupSpread - S(1)) * extent;
+    const S* at[kGroupStates];
+    for (std::size_t j = 0; j < count; ++j) at[j] = states[j][first].data();
+    S* lo[3] = {at_lo_[0] + first, at_lo_[1] + first, at_lo_[2] + first};
+    S* hi[3] = {at_hi_[0] + first, at_hi_[1] + first, at_hi_[2] + first};
+    // The first link alone, then the rest: states far apart (random samples) stop at the first.
+    if (!positionBoxes(at, count, 1, lo, hi) || !(spreadOf(first) <= limit)) return false;
+    for (std::size_t j = 0; j < count; ++j) at[j] += 16;
+    for (S*& p : lo) ++p;
+    for (S*& p : hi) ++p;
+    if (size > 1 && !positionBoxes(at, count, size - 1, lo, hi)) return false;
     S spread = 0;
     for (std::uint32_t l = first; l < first + size; ++l) {
-      fcl::Vector3<S> lo = states[0][l].translation(), hi = lo;
-      for (std::size_t j = 1; j < count; ++j) {
-        lo = lo.cwiseMin(states[j][l].translation());
-        hi = hi.cwiseMax(states[j][l].translation());
-      }
-      spread += (hi - lo).sum();
-      if (!(spread <= limit)) return false;  // NaN: no either
-      for (int d = 0; d < 3; ++d) {
-        at_lo_[d][l] = lo[d];
-        at_hi_[d][l] = hi[d];
-      }
-      far_[l] = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+      spread += spreadOf(l);
+      S far = 0;
+      for (int d = 0; d < 3; ++d)
+        far = std::max({far, std::abs(at_lo_[d][l]), std::abs(at_hi_[d][l])});
+      far_[l] = far;
     }
-    return true;
+    return spread <= limit;
+  }
+  S spreadOf(std::uint32_t l) const {
+    return (at_hi_[0][l] - at_lo_[0][l]) + (at_hi_[1][l] - at_lo_[1][l]) +
+           (at_hi_[2][l] - at_lo_[2][l]);
   }
 
   // Links first .. first + count - 1 of the state posed by `poses` (the one selected): their
@@ -734,6 +831,17 @@ class StateChecker {
   std::vector<std::uint32_t> world_at_, bucket_fill_;
   std::vector<WorldPair> world_pairs_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> self_pairs_;
+  // The links of close leaves that met something, leaf by leaf: leaf k's pair_links_[leaf_at_[k]
+  // .. leaf_at_[k + 1]).
+  std::vector<std::uint32_t> pair_links_, leaf_at_;
+  // Per link: its records grown to hold it over the run (dropApart), made on first use.
+  struct Swept {
+    VolumeSphere sphere;
+    VolumeShape shape;
+    bool made;
+    bool usable;
+  };
+  std::vector<Swept> swept_;
   struct alignas(LinkObject<S>) ObjectStorage {
     unsigned char bytes[sizeof(LinkObject<S>)];
   };

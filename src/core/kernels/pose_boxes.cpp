@@ -60,7 +60,56 @@ bool sumPortable(const S* x, std::size_t begin, std::size_t n, S sum) {
   return sum - sum == S(0);
 }
 
+// Objects begin .. n-1 of positionBoxes; whether their translations are finite.
+template <typename S>
+bool positionsPortable(const S* const* states, std::size_t count, std::size_t begin, std::size_t n,
+                       S* lo[3], S* hi[3]) {
+  S zero = 0;  // x - x is 0 for a finite x and NaN otherwise
+  for (std::size_t k = begin; k < n; ++k) {
+    const S* t = states[0] + 16 * k + 12;
+    S a[3] = {t[0], t[1], t[2]}, b[3] = {t[0], t[1], t[2]};
+    for (std::size_t j = 0; j < count; ++j) {
+      t = states[j] + 16 * k + 12;
+      for (int d = 0; d < 3; ++d) {
+        a[d] = std::min(a[d], t[d]);
+        b[d] = std::max(b[d], t[d]);
+        zero += t[d] - t[d];
+      }
+    }
+    for (int d = 0; d < 3; ++d) {
+      lo[d][k] = a[d];
+      hi[d][k] = b[d];
+    }
+  }
+  return zero == S(0);
+}
+
 #if defined(CUBE_POSE_AVX2)
+
+// positionsPortable one object at a time, its three coordinates (and the pose's last entry as
+// a fourth lane) in one instruction; min and max give what the portable version does.
+[[gnu::target("avx2")]] bool positionsAvx2(const double* const* states, std::size_t count,
+                                           std::size_t n, double* lo[3], double* hi[3]) {
+  __m256d zero = _mm256_setzero_pd();
+  for (std::size_t k = 0; k < n; ++k) {
+    __m256d a = _mm256_loadu_pd(states[0] + 16 * k + 12), b = a;
+    for (std::size_t j = 0; j < count; ++j) {
+      const __m256d t = _mm256_loadu_pd(states[j] + 16 * k + 12);
+      a = _mm256_min_pd(t, a);  // t < a ? t : a, as std::min(a, t)
+      b = _mm256_max_pd(t, b);  // t > b ? t : b, as std::max(b, t)
+      zero = _mm256_add_pd(zero, _mm256_sub_pd(t, t));
+    }
+    double x[4], y[4];
+    _mm256_storeu_pd(x, a);
+    _mm256_storeu_pd(y, b);
+    for (int d = 0; d < 3; ++d) {
+      lo[d][k] = x[d];
+      hi[d][k] = y[d];
+    }
+  }
+  // The fourth lane (the pose's last entry, which the portable version does not read) is left out.
+  return (_mm256_movemask_pd(_mm256_cmp_pd(zero, _mm256_setzero_pd(), _CMP_NEQ_UQ)) & 7) == 0;
+}
 
 [[gnu::target("avx2")]] std::size_t sumAvx2(const double* x, std::size_t n, double& sum) {
   __m256d a = _mm256_setzero_pd(), b = a, c = a, d = a;
@@ -194,6 +243,24 @@ bool sumIsFinite(const double* x, std::size_t n) {
   if (hasAvx2()) done = sumAvx2(x, n, sum);
 #endif
   return sumPortable(x, done, n, sum);
+}
+
+bool positionBoxes(const double* const* states, std::size_t count, std::size_t n, double* lo[3],
+                   double* hi[3]) {
+#if defined(CUBE_POSE_AVX2)
+  if (hasAvx2()) return positionsAvx2(states, count, n, lo, hi);
+#endif
+  return positionsPortable(states, count, 0, n, lo, hi);
+}
+
+bool positionBoxes(const float* const* states, std::size_t count, std::size_t n, float* lo[3],
+                   float* hi[3]) {
+  return positionsPortable(states, count, 0, n, lo, hi);
+}
+
+bool positionBoxesPortable(const double* const* states, std::size_t count, std::size_t n,
+                           double* lo[3], double* hi[3]) {
+  return positionsPortable(states, count, 0, n, lo, hi);
 }
 
 bool sumIsFinite(const float* x, std::size_t n) {
