@@ -16,6 +16,7 @@
 
 #include "pipeline/collectors.h"
 #include "scenes.h"
+#include "support/fcl_contacts.h"
 
 namespace {
 
@@ -25,18 +26,8 @@ using Scalars = ::testing::Types<double, float>;
 TYPED_TEST_SUITE(Collectors, Scalars);
 
 using cube::ObjectPair;
-
-template <typename S>
-cube::scenes::Scene<S> scene(bool meshes, std::uint32_t seed, double size_scale = 1.0) {
-  cube::scenes::SceneOptions o;
-  o.n = meshes ? 40 : 80;
-  o.layout = cube::scenes::Layout::clustered;
-  o.meshes = meshes;
-  o.seed = seed;
-  o.overlaps_per_object = 3.0;  // many touching pairs
-  o.size_scale = size_scale;
-  return cube::scenes::makeScene<S>(o);
-}
+using cube::scenes::Layout;
+using namespace fclcontacts;
 
 // Every pair i < j whose AABBs overlap, in (i, j) order: the pairs a walk could hand over.
 template <typename S>
@@ -56,19 +47,6 @@ std::vector<ObjectPair<S>> allPairs(const cube::scenes::Scene<S>& s) {
   const auto p = s.pointers();
   for (std::size_t i = 0; i < p.size(); ++i)
     for (std::size_t j = i + 1; j < p.size(); ++j) out.emplace_back(p[i], p[j]);
-  return out;
-}
-
-template <typename S>
-std::vector<fcl::CollisionRequest<S>> requests() {
-  std::vector<fcl::CollisionRequest<S>> out;
-  for (std::size_t max : {std::size_t(1), std::size_t(7), std::size_t(1) << 30})
-    for (bool contact : {false, true}) {
-      fcl::CollisionRequest<S> r;
-      r.num_max_contacts = max;
-      r.enable_contact = contact;
-      out.push_back(r);
-    }
   return out;
 }
 
@@ -93,30 +71,6 @@ struct Sequential {
     }
   }
 };
-
-template <typename S>
-bool sameBits(const fcl::Vector3<S>& a, const fcl::Vector3<S>& b) {
-  return std::memcmp(a.data(), b.data(), sizeof(S) * 3) == 0;
-}
-
-// Equal contact lists, in order; with `geometry`, every bit of position, normal and depth (FCL
-// leaves them unset without enable_contact).
-template <typename S>
-::testing::AssertionResult sameContacts(const fcl::CollisionResult<S>& a,
-                                        const fcl::CollisionResult<S>& b, bool geometry) {
-  if (a.numContacts() != b.numContacts())
-    return ::testing::AssertionFailure()
-           << a.numContacts() << " contacts against " << b.numContacts();
-  for (std::size_t k = 0; k < a.numContacts(); ++k) {
-    const fcl::Contact<S>&x = a.getContact(k), &y = b.getContact(k);
-    if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2)
-      return ::testing::AssertionFailure() << "contact " << k << ": other objects";
-    if (geometry && (!sameBits(x.pos, y.pos) || !sameBits(x.normal, y.normal) ||
-                     std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0))
-      return ::testing::AssertionFailure() << "contact " << k << " differs";
-  }
-  return ::testing::AssertionSuccess();
-}
 
 // Whether a pair touches and the request lets the judge prove it (no contact geometry asked,
 // shapes: FCL adds the one contact provedContact makes).
@@ -156,7 +110,7 @@ void feed(cube::detail::AllContacts<S>& all, const ObjectPair<S>& p,
 TYPED_TEST(Collectors, AllContactsFedAnyWayEqualsFclCollideInTurn) {
   using S = TypeParam;
   for (bool meshes : {false, true}) {
-    const auto sc = scene<S>(meshes, 11);
+    const auto sc = scene<S>(Layout::clustered, meshes, meshes ? 40 : 80, 11);
     const auto pairs = overlapping(sc);
     for (const auto& request : requests<S>()) {
       const Sequential<S> want(pairs, request);
@@ -195,7 +149,7 @@ TYPED_TEST(Collectors, AllContactsFedAnyWayEqualsFclCollideInTurn) {
 TYPED_TEST(Collectors, PairContactsDrainedInOrderEqualFclCollideInTurn) {
   using S = TypeParam;
   for (bool meshes : {false, true}) {
-    const auto sc = scene<S>(meshes, 12);
+    const auto sc = scene<S>(Layout::clustered, meshes, meshes ? 40 : 80, 12);
     const auto pairs = overlapping(sc);
     for (const auto& request : requests<S>()) {
       const Sequential<S> want(pairs, request);
@@ -239,7 +193,7 @@ TYPED_TEST(Collectors, PairContactsDrainedInOrderEqualFclCollideInTurn) {
 TYPED_TEST(Collectors, ClosestEqualsMinimumOfFclDistance) {
   using S = TypeParam;
   for (double size : {0.05, 1.0}) {  // apart; touching
-    const auto sc = scene<S>(false, 13, size);
+    const auto sc = scene<S>(Layout::clustered, false, 80, 13, size);
     const auto pairs = allPairs(sc);
     fcl::DistanceRequest<S> request(true);
     std::vector<fcl::DistanceResult<S>> own(pairs.size());

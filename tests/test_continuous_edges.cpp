@@ -25,32 +25,15 @@
 #include <vector>
 
 #include "cube_collision/batch.h"
+#include "support/mesh_box.h"
 
 namespace {
 
 using S = double;
 using Object = fcl::CollisionObjectd;
 using Geometry = std::shared_ptr<fcl::CollisionGeometryd>;
+using meshbox::meshBox;
 constexpr int kFine = 100;  // fine steps per interval of an edge
-
-// A box mesh whose centre lies at `offset` from its frame's origin: a link whose points turn
-// around a far origin.
-Geometry offsetMeshBox(const fcl::Vector3d& size, const fcl::Vector3d& offset) {
-  auto m = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-  std::vector<fcl::Vector3d> v;
-  for (int i = 0; i < 8; ++i)
-    v.push_back(offset + fcl::Vector3d((i & 1 ? 0.5 : -0.5) * size[0],
-                                       (i & 2 ? 0.5 : -0.5) * size[1],
-                                       (i & 4 ? 0.5 : -0.5) * size[2]));
-  const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
-                        {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
-  std::vector<fcl::Triangle> t;
-  for (const auto& x : f) t.emplace_back(x[0], x[1], x[2]);
-  m->beginModel();
-  m->addSubModel(v, t);
-  m->endModel();
-  return m;
-}
 
 Geometry randomLinkShape(std::mt19937& rng) {
   std::uniform_real_distribution<double> u(0.2, 0.7);
@@ -64,8 +47,7 @@ Geometry randomLinkShape(std::mt19937& rng) {
     case 3:
       return std::make_shared<fcl::Capsuled>(0.25 * u(rng), u(rng));
     default:
-      return offsetMeshBox(fcl::Vector3d(u(rng), 0.5 * u(rng), 0.5 * u(rng)),
-                           fcl::Vector3d(0.6, 0, 0));
+      return meshBox(fcl::Vector3d(u(rng), 0.5 * u(rng), 0.5 * u(rng)), fcl::Vector3d(0.6, 0, 0));
   }
 }
 

@@ -30,6 +30,7 @@
 #include "cube_collision/queries.h"
 #include "pipeline/fcl_narrow.h"
 #include "scenes.h"
+#include "support/fcl_contacts.h"
 #include "support/oracle.h"
 
 namespace {
@@ -39,6 +40,7 @@ using Object = fcl::CollisionObject<S>;
 using Pair = cube::oracle::Pair<S>;
 using cube::scenes::Layout;
 using Calls = cube::oracle::Calls<S>;
+using fclcontacts::sameContacts;
 
 constexpr std::size_t kObjects = 5000;  // above Broadphase::kSplitMin
 static_assert(kObjects >= cube::detail::Broadphase<S>::kSplitMin, "the split must run");
@@ -214,27 +216,6 @@ TEST(SplitWalk, EarlyStopSeesTheSerialPrefix) {
       const std::vector<Pair> want(serial.calls.begin(), serial.calls.begin() + after);
       EXPECT_EQ(s.calls, want) << "after " << after << " threads " << threads;
     }
-}
-
-// Bit-equal contact lists (objects, primitives, position, normal, depth). Without
-// enable_contact FCL leaves position, normal and depth unset: only objects and primitives count.
-::testing::AssertionResult sameContacts(const fcl::CollisionResult<S>& a,
-                                        const fcl::CollisionResult<S>& b,
-                                        bool with_geometry = true) {
-  if (a.numContacts() != b.numContacts())
-    return ::testing::AssertionFailure()
-           << a.numContacts() << " contacts against " << b.numContacts();
-  for (std::size_t k = 0; k < a.numContacts(); ++k) {
-    const fcl::Contact<S>&x = a.getContact(k), &y = b.getContact(k);
-    if (x.o1 != y.o1 || x.o2 != y.o2 || x.b1 != y.b1 || x.b2 != y.b2) {
-      return ::testing::AssertionFailure() << "contact " << k << ": other objects";
-    }
-    if (with_geometry && (std::memcmp(x.pos.data(), y.pos.data(), sizeof(S) * 3) != 0 ||
-                          std::memcmp(x.normal.data(), y.normal.data(), sizeof(S) * 3) != 0 ||
-                          std::memcmp(&x.penetration_depth, &y.penetration_depth, sizeof(S)) != 0))
-      return ::testing::AssertionFailure() << "contact " << k << " differs";
-  }
-  return ::testing::AssertionSuccess();
 }
 
 // FCL's own accumulation over the manager's serial walk (its narrow phase as the library applies

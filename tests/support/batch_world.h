@@ -1,6 +1,6 @@
 #pragma once
 
-// What the tests of the batched checks share (test_batch.cpp, test_shared_walk.cpp): worlds of
+// What the tests of the batched checks share (test_batch_*.cpp, test_shared_walk.cpp): worlds of
 // random objects (meshes, planes), random bodies and states, and brute force: every link against
 // every world object and every checked pair of links, with FCL's narrow phase.
 
@@ -34,31 +34,18 @@
 
 #include "cube_collision/batch.h"
 #include "cube_collision/margins.h"
+#include "mesh_box.h"
 #include "plane_brute.h"
 
 namespace batchworld {
-namespace {  // each test file its own copy
 
 using S = double;
 using Object = fcl::CollisionObjectd;
 using Geometry = std::shared_ptr<fcl::CollisionGeometryd>;
 
-Geometry meshBox(double sx, double sy, double sz) {
-  auto m = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-  std::vector<fcl::Vector3d> v;
-  for (int i = 0; i < 8; ++i)
-    v.emplace_back((i & 1 ? 0.5 : -0.5) * sx, (i & 2 ? 0.5 : -0.5) * sy, (i & 4 ? 0.5 : -0.5) * sz);
-  const int f[12][3] = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
-                        {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
-  std::vector<fcl::Triangle> t;
-  for (const auto& x : f) t.emplace_back(x[0], x[1], x[2]);
-  m->beginModel();
-  m->addSubModel(v, t);
-  m->endModel();
-  return m;
-}
+using meshbox::meshBox;
 
-Geometry randomShape(std::mt19937& rng, double size, bool meshes) {
+inline Geometry randomShape(std::mt19937& rng, double size, bool meshes) {
   std::uniform_real_distribution<double> u(0.3, 1.0);
   switch (std::uniform_int_distribution<int>(0, meshes ? 4 : 3)(rng)) {
     case 0:
@@ -74,7 +61,7 @@ Geometry randomShape(std::mt19937& rng, double size, bool meshes) {
   }
 }
 
-fcl::Transform3d randomPose(std::mt19937& rng, double half) {
+inline fcl::Transform3d randomPose(std::mt19937& rng, double half) {
   std::uniform_real_distribution<double> p(-half, half);
   std::normal_distribution<double> g;
   fcl::Transform3d tf = fcl::Transform3d::Identity();
@@ -95,7 +82,7 @@ struct World {
 
 // n shapes (and meshes) in a cube of half-size 10, plus, with `planes`, a floor halfspace and a
 // tilted plane.
-void fillWorld(World& w, std::size_t n, std::uint32_t seed, bool meshes, bool planes) {
+inline void fillWorld(World& w, std::size_t n, std::uint32_t seed, bool meshes, bool planes) {
   std::mt19937 rng(seed);
   for (std::size_t i = 0; i < n; ++i) {
     w.objects.push_back(
@@ -116,7 +103,8 @@ void fillWorld(World& w, std::size_t n, std::uint32_t seed, bool meshes, bool pl
 }
 
 // A chain of `links` links with random shapes (meshes among them with `meshes`).
-cube::BodySet<S> randomBody(std::size_t links, std::uint32_t seed, bool meshes, S margin = 0) {
+inline cube::BodySet<S> randomBody(std::size_t links, std::uint32_t seed, bool meshes,
+                                   S margin = 0) {
   std::mt19937 rng(seed);
   cube::BodySet<S> body;
   for (std::size_t l = 0; l < links; ++l) body.addLink(randomShape(rng, 1.0, meshes), margin);
@@ -125,8 +113,8 @@ cube::BodySet<S> randomBody(std::size_t links, std::uint32_t seed, bool meshes, 
 }
 
 // States: each link placed near a random centre (a robot folded in a ball of radius 3).
-std::vector<fcl::Transform3d> randomStates(std::size_t states, std::size_t links,
-                                           std::uint32_t seed, double spread = 9) {
+inline std::vector<fcl::Transform3d> randomStates(std::size_t states, std::size_t links,
+                                                  std::uint32_t seed, double spread = 9) {
   std::mt19937 rng(seed);
   std::vector<fcl::Transform3d> poses;
   for (std::size_t k = 0; k < states; ++k) {
@@ -140,10 +128,10 @@ std::vector<fcl::Transform3d> randomStates(std::size_t states, std::size_t links
   return poses;
 }
 
-S bruteDistance(const Object& a, const Object& b);
+inline S bruteDistance(const Object& a, const Object& b);
 
 // Brute force for one pair (link first): touching within margin m.
-bool bruteTouch(const Object& a, const Object& b, S m) {
+inline bool bruteTouch(const Object& a, const Object& b, S m) {
   if (cube::brute::touch(a, b)) return true;
   return m > 0 && bruteDistance(a, b) <= m;
 }
@@ -157,9 +145,9 @@ struct Brute {
 
 // The oracle: every link against every world object (filter bits, predicate), every checked
 // link pair, in batch.h's documented order for the first pair.
-Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d* poses, bool self,
-            const std::function<bool(Object*, Object*)>& keep = nullptr,
-            const std::vector<std::pair<std::uint64_t, std::uint64_t>>& bits = {}) {
+inline Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d* poses,
+                   bool self, const std::function<bool(Object*, Object*)>& keep = nullptr,
+                   const std::vector<std::pair<std::uint64_t, std::uint64_t>>& bits = {}) {
   std::vector<std::unique_ptr<Object>> links;
   for (std::size_t l = 0; l < body.size(); ++l) {
     links.push_back(std::make_unique<Object>(body.geometry(l), poses[l]));
@@ -198,7 +186,7 @@ Brute brute(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d
 }
 
 // fcl::distance, or for a plane or halfspace the gap of the brute force (plane_brute.h).
-S bruteDistance(const Object& a, const Object& b) {
+inline S bruteDistance(const Object& a, const Object& b) {
   if (cube::brute::planar(a.getNodeType()) || cube::brute::planar(b.getNodeType()))
     return cube::brute::distance(a, b);
   fcl::DistanceRequestd req;
@@ -206,11 +194,11 @@ S bruteDistance(const Object& a, const Object& b) {
   return fcl::distance(&a, &b, req, res);
 }
 
-void expectSame(const std::vector<cube::StateResult<S>>& got, const World& w,
-                const cube::BodySet<S>& body, const std::vector<fcl::Transform3d>& poses,
-                const cube::BatchOptions& o, std::size_t* colliding = nullptr,
-                const std::function<bool(Object*, Object*)>& keep = nullptr,
-                const std::vector<std::pair<std::uint64_t, std::uint64_t>>& bits = {}) {
+inline void expectSame(const std::vector<cube::StateResult<S>>& got, const World& w,
+                       const cube::BodySet<S>& body, const std::vector<fcl::Transform3d>& poses,
+                       const cube::BatchOptions& o, std::size_t* colliding = nullptr,
+                       const std::function<bool(Object*, Object*)>& keep = nullptr,
+                       const std::vector<std::pair<std::uint64_t, std::uint64_t>>& bits = {}) {
   ASSERT_EQ(got.size(), poses.size() / body.size());
   std::size_t hits = 0;
   for (std::size_t k = 0; k < got.size(); ++k) {
@@ -237,7 +225,7 @@ void expectSame(const std::vector<cube::StateResult<S>>& got, const World& w,
 }
 
 // The states of an edge of n states in the order MotionOrder names (batch.h), written here.
-std::vector<std::size_t> visitOrder(std::size_t n, cube::MotionOrder order) {
+inline std::vector<std::size_t> visitOrder(std::size_t n, cube::MotionOrder order) {
   std::vector<std::size_t> visit;
   if (order == cube::MotionOrder::path || n < 2) {
     for (std::size_t i = 0; i < n; ++i) visit.push_back(i);
@@ -255,5 +243,4 @@ std::vector<std::size_t> visitOrder(std::size_t n, cube::MotionOrder order) {
   return visit;
 }
 
-}  // namespace
 }  // namespace batchworld

@@ -4,7 +4,7 @@
 // what fcl::NaiveCollisionManager reports on the same objects. The narrow phase is FCL's as the
 // library applies it (detail::fclCollide: the pairs FCL 0.7 answers wrongly or crashes on are
 // answered from the geometry, checked against brute force in test_unbounded.cpp and
-// test_culling.cpp).
+// test_culling_plane_pairs.cpp).
 
 #include <fcl/broadphase/broadphase_bruteforce.h>
 #include <fcl/broadphase/broadphase_collision_manager.h>

@@ -1,0 +1,224 @@
+// The update policies rebuild when they should and only then; a no-motion update keeps the
+// callback order; batch builds keep no slack. Answers stay brute force's throughout.
+
+#include <gtest/gtest.h>
+
+#include "support/dynamic_world.h"
+
+namespace cube {
+namespace testing {
+namespace {
+
+using namespace dynamic_world;
+
+// The automatic policy rebuilds once objects are scattered far from where the tree was built,
+// bringing the tree quality back within the threshold, and does not rebuild on small jitter.
+TYPED_TEST(Dynamic, AutomaticPolicyRebuildsOnScatterNotOnJitter) {
+  using S = TypeParam;
+  for (Variant variant : {Variant::all, Variant::single, Variant::vector}) {
+    SCOPED_TRACE(name(variant));
+    auto sc = scene<S>(1000, 111);
+    const auto objs = sc.pointers();
+    CubeCollisionManager<S> cube;
+    cube.registerObjects(objs);
+    cube.setup();
+    const auto& t = ::cube::detail::coreOf(cube).tree();
+    const double threshold = cube.config().rebuild_threshold;
+    const auto built = t.buildCount();
+    for (std::uint32_t round = 0; round < 5; ++round) {
+      const auto moved = scenes::jitter(sc, 0.01, 0.01 * 2 * kHalf, true, 200 + round);
+      ASSERT_FALSE(moved.empty());
+      applyUpdate(cube, variant, moved);
+      EXPECT_EQ(t.buildCount(), built) << "small jitter rebuilt the tree";
+      EXPECT_LE(t.area(), threshold * t.builtArea());
+    }
+    ASSERT_TRUE(valid(cube));
+    EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+    // Scatter: every object teleported.
+    const auto moved = scenes::jitter(sc, 1.0, 2 * kHalf, true, 300);
+    applyUpdate(cube, variant, moved);
+    EXPECT_GT(t.buildCount(), built) << "scattering did not rebuild";
+    EXPECT_LE(t.area(), threshold * t.builtArea()) << "quality not back within the threshold";
+    ASSERT_TRUE(valid(cube));
+    EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+  }
+}
+
+// UpdatePolicy::refit never rebuilds on update, however bad the tree gets, and stays correct.
+TYPED_TEST(Dynamic, RefitPolicyNeverRebuildsOnUpdate) {
+  using S = TypeParam;
+  for (Variant variant : {Variant::all, Variant::single, Variant::vector}) {
+    SCOPED_TRACE(name(variant));
+    auto sc = scene<S>(600, 121);
+    const auto objs = sc.pointers();
+    Config c;
+    c.update_policy = UpdatePolicy::refit;
+    CubeCollisionManager<S> cube(c);
+    cube.registerObjects(objs);
+    cube.setup();
+    const auto& t = ::cube::detail::coreOf(cube).tree();
+    const auto built = t.buildCount();
+    for (std::uint32_t round = 0; round < 3; ++round) {
+      applyUpdate(cube, variant, scenes::jitter(sc, 1.0, 2 * kHalf, true, 400 + round));
+      EXPECT_EQ(t.buildCount(), built);
+      ASSERT_TRUE(valid(cube));
+      EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+    }
+    // The tree did degrade past the threshold: automatic would have rebuilt.
+    EXPECT_GT(t.area(), c.rebuild_threshold * t.builtArea());
+  }
+}
+
+// The first setup() builds from scratch; a later setup() after a few registrations and removals
+// keeps the incremental tree under the automatic policy (as FCL's tree manager keeps its
+// incremental insertions), and rebuilds under a forced policy. Answers are right either way.
+TYPED_TEST(Dynamic, LaterSetupKeepsIncrementalWorkUnlessPolicyForces) {
+  using S = TypeParam;
+  for (UpdatePolicy policy : {UpdatePolicy::automatic, UpdatePolicy::refit}) {
+    auto sc = scene<S>(500, 131);
+    auto objs = sc.pointers();
+    Config c;
+    c.update_policy = policy;
+    CubeCollisionManager<S> cube(c);
+    cube.registerObjects(std::vector<Obj<S>*>(objs.begin(), objs.begin() + 450));
+    cube.setup();
+    const auto built = ::cube::detail::coreOf(cube).tree().buildCount();
+    for (std::size_t i = 450; i < objs.size(); ++i) cube.registerObject(objs[i]);
+    for (std::size_t i = 0; i < 20; ++i) cube.unregisterObject(objs[i]);
+    EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), built);
+    cube.setup();
+    if (policy == UpdatePolicy::automatic) {
+      EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), built)
+          << "setup() threw the insertions away";
+    } else {
+      EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), built + 1)
+          << "forced policy did not rebuild";
+    }
+    ASSERT_TRUE(valid(cube));
+    const std::vector<Obj<S>*> kept(objs.begin() + 20, objs.end());
+    EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(kept));
+  }
+}
+
+// UpdatePolicy::rebuild rebuilds on every update, even when nothing moved.
+TYPED_TEST(Dynamic, RebuildPolicyAlwaysRebuilds) {
+  using S = TypeParam;
+  auto sc = scene<S>(300, 131);
+  const auto objs = sc.pointers();
+  Config c;
+  c.update_policy = UpdatePolicy::rebuild;
+  CubeCollisionManager<S> cube(c);
+  cube.registerObjects(objs);
+  cube.setup();
+  const auto& t = ::cube::detail::coreOf(cube).tree();
+  for (std::uint32_t round = 0; round < 3; ++round) {
+    for (Variant variant : {Variant::all, Variant::single, Variant::vector}) {
+      SCOPED_TRACE(name(variant));
+      const auto before = t.buildCount();
+      const auto moved = scenes::jitter(sc, round == 0 ? 0.0 : 0.05, 40, false, 500 + round);
+      applyUpdate(
+          cube, variant,
+          variant == Variant::single && moved.empty() ? std::vector<Obj<S>*>{objs[0]} : moved);
+      EXPECT_GT(t.buildCount(), before);
+      ASSERT_TRUE(valid(cube));
+      EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+    }
+  }
+}
+
+// A no-motion update changes nothing: the next queries make the same callbacks in the same
+// order, whether the tree was built in one batch, grown incrementally, or refitted after motion.
+TYPED_TEST(Dynamic, NoMotionUpdateKeepsCallbackOrder) {
+  using S = TypeParam;
+  for (UpdatePolicy policy : {UpdatePolicy::automatic, UpdatePolicy::refit}) {
+    for (int history = 0; history < 3; ++history) {
+      SCOPED_TRACE("policy " + std::to_string(int(policy)) + ", history " +
+                   std::to_string(history));
+      auto sc = scene<S>(400, 141, 1.0, scenes::Layout::clustered);
+      const auto objs = sc.pointers();
+      Config c;
+      c.update_policy = policy;
+      CubeCollisionManager<S> cube(c);
+      if (history == 1) {  // grown one object at a time after an initial build
+        cube.registerObjects(std::vector<Obj<S>*>(objs.begin(), objs.begin() + 300));
+        cube.setup();
+        for (std::size_t i = 300; i < objs.size(); ++i) cube.registerObject(objs[i]);
+        for (std::size_t i = 0; i < 40; ++i) cube.unregisterObject(objs[i * 7]);
+      } else {
+        cube.registerObjects(objs);
+        cube.setup();
+      }
+      if (history == 2) {  // refitted after motion
+        cube.update(scenes::jitter(sc, 0.05, 40, true, 600));
+        cube.update();
+      }
+      const std::vector<Obj<S>*> queries{objs[1], objs[100], objs[399], objs[250]};
+      const Sequence<S> before = record(cube, queries);
+      ASSERT_GT(before.self.size(), 50u);
+      ASSERT_FALSE(before.objects.empty());
+      const auto builds = ::cube::detail::coreOf(cube).tree().buildCount();
+      cube.update();
+      EXPECT_TRUE(record(cube, queries) == before) << "after update()";
+      cube.update(objs);
+      EXPECT_TRUE(record(cube, queries) == before) << "after update(vector of all)";
+      for (auto* o : objs) cube.update(o);
+      EXPECT_TRUE(record(cube, queries) == before) << "after update(obj) of each";
+      EXPECT_EQ(::cube::detail::coreOf(cube).tree().buildCount(), builds);
+      EXPECT_TRUE(valid(cube));
+    }
+  }
+  // With UpdatePolicy::rebuild the rebuilt tree of an unchanged scene is the same tree.
+  auto sc = scene<S>(400, 142);
+  const auto objs = sc.pointers();
+  Config c;
+  c.update_policy = UpdatePolicy::rebuild;
+  CubeCollisionManager<S> cube(c);
+  cube.registerObjects(objs);
+  cube.setup();
+  const std::vector<Obj<S>*> queries{objs[3], objs[200]};
+  const Sequence<S> before = record(cube, queries);
+  cube.update();
+  EXPECT_TRUE(record(cube, queries) == before) << "rebuild policy, update()";
+}
+
+// A batch build holds each object once and no more room than its objects need: the slots are
+// exactly the objects, the pointer map is sized to its load limit, and a batch into a manager
+// that holds objects (live ones, dead slots) builds over both with the same answers.
+TYPED_TEST(Dynamic, BatchBuildsKeepNoSlack) {
+  using S = TypeParam;
+  const std::size_t n = 3000;
+  auto sc = scene<S>(2 * n, 171);
+  const auto all = sc.pointers();
+  const std::vector<Obj<S>*> first(all.begin(), all.begin() + n),
+      second(all.begin() + n, all.end());
+  CubeCollisionManager<S> cube;
+  cube.registerObjects(first);
+  cube.setup();
+  ASSERT_TRUE(valid(cube));
+  const auto& core = ::cube::detail::coreOf(cube);
+  EXPECT_EQ(core.tree().items().capacity(), n);
+  // 3/4 of the map's places at most are taken, and no more places than that asks for.
+  EXPECT_LE(core.table().mapBytes(), sizeof(std::uint32_t) * ((4 * (n + 1) + 2) / 3));
+  EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(first));
+  // Dead slots, then a batch as large as what is left: one build over the live slots and it.
+  std::vector<Obj<S>*> live;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 3 == 0)
+      cube.unregisterObject(first[i]);
+    else
+      live.push_back(first[i]);
+  }
+  ASSERT_TRUE(valid(cube));
+  const auto builds = core.tree().buildCount();
+  cube.registerObjects(second);
+  cube.setup();
+  ASSERT_TRUE(valid(cube));
+  EXPECT_GT(core.tree().buildCount(), builds);
+  live.insert(live.end(), second.begin(), second.end());
+  EXPECT_EQ(core.tree().items().capacity(), live.size());
+  EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(live));
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace cube
