@@ -77,7 +77,8 @@ struct PoseReader {
   }
 };
 
-// The states converted at a time for the continuous checks (whole edges; a longer edge alone).
+// The states converted at a time for continuous checks with SE(3) bounds (whole edges; a longer
+// edge alone).
 constexpr std::size_t kChunkStates = 512;
 
 // Reads states' poses as PoseReader does, except that a pose failing transformFrom's checks is
@@ -117,19 +118,20 @@ class BadPoses {
   std::map<std::size_t, std::string> bad_;  // pose index -> its error
 };
 
-// motion_bounds as float64 (state-major: the library's layout, k * links + l), checked: shape
-// (states, links), every value finite and >= 0 (ValueError naming the first other one).
-Array motionBounds(py::handle obj, std::size_t states, std::size_t links) {
+// motion_bounds in the library's layout (state-major: k * links + l), checked while copied:
+// shape (states, links), every value finite and >= 0 (ValueError naming the first other one).
+std::vector<double> motionBounds(py::handle obj, std::size_t states, std::size_t links) {
   const Array b =
       floats(obj, "motion_bounds",
              {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
   const double* d = b.data();
-  for (std::size_t i = 0; i < states * links; ++i)
-    if (!(d[i] >= 0) || !std::isfinite(d[i]))
+  std::vector<double> out(d, d + states * links);
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (!(out[i] >= 0) || !std::isfinite(out[i]))
       throw py::value_error("motion_bounds[" + std::to_string(i / links) + ", " +
-                            std::to_string(i % links) + "] is " + std::to_string(d[i]) +
+                            std::to_string(i % links) + "] is " + std::to_string(out[i]) +
                             ": each bound must be finite and >= 0");
-  return b;
+  return out;
 }
 
 void needCube(const Manager& m, const char* what) {
@@ -232,7 +234,8 @@ TypeError (non-numeric poses).)doc")
             else
               throw py::value_error("order must be 'path' or 'bisection'");
             const bool given = !motion_bounds.is_none();
-            const Array bounds = given ? motionBounds(motion_bounds, states, n) : Array();
+            const std::vector<double> bounds =
+                given ? motionBounds(motion_bounds, states, n) : std::vector<double>();
             cube::BatchOptions opt;
             opt.self_collision = self_collision;
             opt.continuous = continuous;
@@ -246,14 +249,14 @@ TypeError (non-numeric poses).)doc")
               // its rule decides whether the call throws, whatever the thread count; the error
               // then names it as transformFrom does.
               BadPoses bad(a.data(), n);
-              if (!s.empty() && (given || continuous)) {
-                // The continuous forms read a state's neighbours (SE(3) bounds) or take bounds
-                // per pose: the library's array forms, over consecutive edges of about
-                // kChunkStates states at a time (edges are independent: the same answers and
-                // the same first error as one call), their poses converted into one buffer
-                // reused across chunks, which stays in cache and costs no page faults per state.
+              const auto read = [&](std::size_t k, fcl::Transform3d* out) { bad.read(k, out); };
+              if (!s.empty() && continuous && !given) {
+                // SE(3) bounds read a state's neighbours: the library's array form, over
+                // consecutive edges of about kChunkStates states at a time (edges are
+                // independent: the same answers and the same first error as one call), their
+                // poses converted into one buffer reused across chunks, which stays in cache and
+                // costs no page faults per state.
                 std::vector<fcl::Transform3d> tfs;
-                std::vector<double> chunk_bounds;
                 std::vector<std::size_t> chunk_starts;
                 const auto end_of = [&](std::size_t e) {
                   return e + 1 < s.size() ? s[e + 1] : states;
@@ -263,31 +266,28 @@ TypeError (non-numeric poses).)doc")
                   for (e1 = e0 + 1; e1 < s.size() && end_of(e1) - first <= kChunkStates;) ++e1;
                   const std::size_t last = end_of(e1 - 1);
                   tfs.resize((last - first) * n);
-                  for (std::size_t k = first; k < last; ++k)
-                    bad.read(k, tfs.data() + (k - first) * n);
+                  for (std::size_t k = first; k < last; ++k) read(k, tfs.data() + (k - first) * n);
                   chunk_starts.clear();
                   for (std::size_t e = e0; e < e1; ++e) chunk_starts.push_back(s[e] - first);
                   std::vector<std::size_t> part;
                   try {
-                    if (given) {
-                      chunk_bounds.assign(bounds.data() + first * n, bounds.data() + last * n);
-                      part = cube::checkMotions<double>(*m.cube(), body.set, tfs, chunk_starts,
-                                                        chunk_bounds, mo, opt);
-                    } else {
-                      part = cube::checkMotions<double>(*m.cube(), body.set, tfs, chunk_starts, mo,
-                                                        opt);
-                    }
+                    part =
+                        cube::checkMotions<double>(*m.cube(), body.set, tfs, chunk_starts, mo, opt);
                   } catch (const std::invalid_argument& e) {
                     bad.rethrow(e, first * n);
                   }
                   res.insert(res.end(), part.begin(), part.end());
                 }
               } else if (!s.empty()) {
-                // Discrete: only the states the check reads are converted, on its threads.
+                // Discrete, or the caller's bounds: only the states the check reads are
+                // converted, on its threads.
                 try {
-                  res = cube::checkMotions<double>(
-                      *m.cube(), body.set, states, s,
-                      [&](std::size_t k, fcl::Transform3d* out) { bad.read(k, out); }, mo, opt);
+                  if (given) {
+                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, bounds,
+                                                     mo, opt);
+                  } else {
+                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, mo, opt);
+                  }
                 } catch (const std::invalid_argument& e) {
                   bad.rethrow(e, 0);
                 }
