@@ -205,9 +205,8 @@ std::vector<S> se3Bounds(const cube::BodySet<S>& body, const std::vector<fcl::Tr
 // The documented rule by brute force: the first state in `order` (OMPL's bisection: last, then
 // middles breadth first) whose check with each link's margin raised by half the larger bound of
 // its two intervals fails (contact, or fcl::distance within the raised margins).
-std::size_t ruleAnswer(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d* poses,
-                       const S* bounds, std::size_t states, cube::MotionOrder order, bool self) {
-  const std::size_t n = body.size();
+// The states of an edge in `order`.
+std::vector<std::size_t> visitingOrder(std::size_t states, cube::MotionOrder order) {
   std::vector<std::size_t> visit;
   if (order == cube::MotionOrder::path || states < 2) {
     for (std::size_t k = 0; k < states; ++k) visit.push_back(k);
@@ -223,7 +222,13 @@ std::size_t ruleAnswer(const World& w, const cube::BodySet<S>& body, const fcl::
       if (mid < hi) open.emplace_back(mid + 1, hi);
     }
   }
-  for (const std::size_t k : visit) {
+  return visit;
+}
+
+std::size_t ruleAnswer(const World& w, const cube::BodySet<S>& body, const fcl::Transform3d* poses,
+                       const S* bounds, std::size_t states, cube::MotionOrder order, bool self) {
+  const std::size_t n = body.size();
+  for (const std::size_t k : visitingOrder(states, order)) {
     std::vector<S> raise(n, 0);
     for (std::size_t l = 0; l < n; ++l) {
       if (k > 0) raise[l] = std::max(raise[l], bounds[(k - 1) * n + l] / 2);
@@ -386,6 +391,40 @@ TEST(ContinuousEdges, ThreadCountsGiveTheSameAnswers) {
       EXPECT_EQ(one, two);
       EXPECT_EQ(given_one, given_two);
       EXPECT_EQ(one, given_one);
+      // The pose function overload with the same bounds, on one and two threads: the same
+      // answers, and no state after an edge's answer in its order is computed on one thread
+      // beyond its run (at most max(5, 2 r + 3) of an edge answered at place r).
+      const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* out) {
+        std::copy(poses.begin() + k * n, poses.begin() + (k + 1) * n, out);
+      };
+      const std::size_t states = poses.size() / n;
+      for (const int threads : {1, 2}) {
+        o.threads = threads;
+        EXPECT_EQ(cube::checkMotions(w.manager, body, states, starts, pose_of, bounds, order, o),
+                  one);
+      }
+      std::vector<std::atomic<int>> computed(states);
+      const cube::PoseFunction<S> counting = [&](std::size_t k, fcl::Transform3d* out) {
+        ++computed[k];
+        pose_of(k, out);
+      };
+      o.threads = 1;
+      EXPECT_EQ(cube::checkMotions(w.manager, body, states, starts, counting, bounds, order, o),
+                one);
+      for (std::size_t e = 0; e < edges.size(); ++e) {
+        const std::size_t begin = starts[e], end = begin + edges[e].states;
+        std::size_t count = 0;
+        for (std::size_t k = begin; k < end; ++k) {
+          EXPECT_LE(computed[k].load(), 1);
+          count += computed[k].load();
+        }
+        const std::vector<std::size_t> visit = visitingOrder(edges[e].states, order);
+        const std::size_t place =
+            one[e] == cube::kNoIndex
+                ? visit.size()
+                : std::size_t(std::find(visit.begin(), visit.end(), one[e]) - visit.begin());
+        EXPECT_LE(count, std::max<std::size_t>(5, 2 * place + 3)) << "edge " << e;
+      }
       o.threads = 1;
       std::size_t colliding = 0;
       for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -416,11 +455,12 @@ TEST(ContinuousEdges, BadBoundsThrowAndChangeNothing) {
     std::copy(poses.begin() + k * n, poses.begin() + (k + 1) * n, out);
   };
   const auto expectThrow = [&](const std::vector<S>& bad, const std::string& says) {
-    for (int overload = 0; overload < 3; ++overload) {
+    for (int overload = 0; overload < 4; ++overload) {
       try {
         if (overload == 0) cube::checkMotion(w.manager, body, poses, bad);
         if (overload == 1) cube::checkMotions(w.manager, body, poses, {0}, bad);
         if (overload == 2) cube::checkMotion(w.manager, body, e.states, pose_of, bad);
+        if (overload == 3) cube::checkMotions(w.manager, body, e.states, {0}, pose_of, bad);
         ADD_FAILURE() << "no throw for " << says;
       } catch (const std::invalid_argument& error) {
         EXPECT_NE(std::string(error.what()).find(says), std::string::npos) << error.what();
@@ -456,6 +496,8 @@ TEST(ContinuousEdges, BadBoundsThrowAndChangeNothing) {
   }
   EXPECT_EQ(cube::checkMotion(w.manager, body, poses, bounds), before);
   EXPECT_EQ(cube::checkMotion(w.manager, body, e.states, pose_of, bounds), before);
+  EXPECT_EQ(cube::checkMotions(w.manager, body, e.states, {0}, pose_of, bounds),
+            std::vector<std::size_t>{before});
   EXPECT_EQ(cube::checkMotion(w.manager, body, poses, cube::MotionOrder::path, o), before);
 }
 

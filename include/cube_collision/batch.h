@@ -303,6 +303,22 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 
+/// checkMotions over a PoseFunction with continuous checking and the caller's motion bounds:
+/// motion_bounds[k * body.size() + l] for link l from state k to k + 1 of the same edge,
+/// states * body.size() values (those of each edge's last state not used). Only the states a
+/// check reads are written, as checkMotions over a PoseFunction says; the same answers as
+/// checkMotions over all the poses with these bounds, whatever the thread count. Throws
+/// std::invalid_argument as that overload (but checks continuously whatever
+/// BatchOptions::continuous says), and for bounds of another size or with a negative, NaN or
+/// infinite value, naming the first, before any work.
+template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
+    const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+    MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
+
 /// checkMotion over a PoseFunction with continuous checking and the caller's motion bounds:
 /// motion_bounds[k * body.size() + l] for link l from state k to k + 1, states * body.size()
 /// values (the last state's not used). Throws std::invalid_argument as the overload without

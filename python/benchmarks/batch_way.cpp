@@ -1,6 +1,6 @@
 // cube_collision_bench: the library's own checkStates / checkMotions on a Python manager's world
 // and Body, timed in C++ (poses converted before the clock starts), for bench_check_states.py's
-// comparison of the Python calls with the C++ calls they wrap.
+// comparison of the Python calls with the C++ calls they wrap (continuous edges included).
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -10,6 +10,7 @@
 #include <chrono>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "batch.h"
@@ -81,18 +82,22 @@ void bindBatchWay(py::module_& m) {
       "check_motions_cpp",
       [](const Manager& world, const Body& body,
          const py::array_t<double, py::array::c_style>& poses,
-         const std::vector<std::size_t>& edge_starts, int threads, int repeats) {
+         const std::vector<std::size_t>& edge_starts, int threads, int repeats, bool continuous,
+         const std::optional<std::vector<double>>& motion_bounds) {
         const auto tfs = transformsOf(poses, body.links.size());
         cube::BatchOptions opt;
         opt.threads = threads;
+        opt.continuous = continuous;
         std::vector<std::size_t> res;
         double seconds;
         {
           py::gil_scoped_release nogil;
           std::shared_lock lock(world.mutex);
           seconds = best(repeats, [&] {
-            res = cube::checkMotions(*world.cube(), body.set, tfs, edge_starts,
-                                     cube::MotionOrder::path, opt);
+            res = motion_bounds ? cube::checkMotions(*world.cube(), body.set, tfs, edge_starts,
+                                                     *motion_bounds, cube::MotionOrder::path, opt)
+                                : cube::checkMotions(*world.cube(), body.set, tfs, edge_starts,
+                                                     cube::MotionOrder::path, opt);
           });
         }
         py::array_t<std::int64_t> first(static_cast<py::ssize_t>(res.size()));
@@ -102,9 +107,11 @@ void bindBatchWay(py::module_& m) {
         return py::make_tuple(seconds, first);
       },
       py::arg("manager"), py::arg("body"), py::arg("poses"), py::arg("edge_starts"),
-      py::arg("threads"), py::arg("repeats"),
+      py::arg("threads"), py::arg("repeats"), py::arg("continuous") = false,
+      py::arg("motion_bounds") = py::none(),
       "(best seconds of `repeats` cube::checkMotions calls in path order, first colliding state "
-      "per edge or -1).");
+      "per edge or -1); `continuous` as BatchOptions::continuous, `motion_bounds` (flat, "
+      "state-major) the overload that takes them.");
 }
 
 }  // namespace cubepy

@@ -8,13 +8,17 @@ with the poses converted before the clock starts. The robot is bench_batch.cpp's
 links (boxes, capsules, cylinders, each --link times the world's typical object size), joints about
 alternating axes, adjacent links excluded; random configurations across the world sorted into
 free and colliding ones, 70% free in the batch (bench_batch.cpp's states_free), and edges of 20
-to 100 states from free configurations. The world:
+to 100 states from free configurations. Continuous edges (check_motions_continuous): other edges
+of 20 to 100 states from free configurations to an end whose joint angles lie within --near of
+the start's, checked with continuous=True (se3) and with motion_bounds (bounds: the same SE(3)
+bounds computed here), against checkMotions with BatchOptions::continuous and the overload that
+takes motion bounds. The world:
 boxes, spheres and cylinders at uniform random poses, about one overlap per object. Answers are
 compared before any time is printed; each time is the best of --repeat calls, the Python and
 the C++ call in turn; ratio = Python / C++.
 
   PYTHONPATH=build/python python3 python/benchmarks/bench_check_states.py [--objects 10000]
-      [--states 10000] [--repeat 5] [--threads 1 0]
+      [--states 10000] [--repeat 5] [--threads 1 0] [--near 0.02]
 """
 
 import argparse
@@ -119,15 +123,21 @@ def mix(free, hit, states, free_share):
     return b, q
 
 
-def edges(rng, free, count, length):
+def edges(rng, free, count, length, near=None):
     """`count` straight edges of 20 to 100 states in configuration space from free
-    configurations; (poses, starts)."""
+    configurations; (poses, starts). near: the end's joint angles within `near` of the start's
+    and its base within a link length (short edges, for the continuous checks), instead of
+    anywhere."""
     bases, qs, starts = [], [], []
     total = 0
     for e in range(count):
         b0, q0 = free[0][e % len(free[0])][None], free[1][e % len(free[1])][None]
-        b1 = b0 + rng.uniform(-0.05 * HALF, 0.05 * HALF, (1, 3))
-        q1 = rng.uniform(-0.6, 0.6, (1, LINKS))
+        if near is None:
+            b1 = b0 + rng.uniform(-0.05 * HALF, 0.05 * HALF, (1, 3))
+            q1 = rng.uniform(-0.6, 0.6, (1, LINKS))
+        else:
+            b1 = b0 + rng.uniform(-length, length, (1, 3))
+            q1 = q0 + rng.uniform(-near, near, (1, LINKS))
         k = 20 + (e * 4) % 81
         t = np.linspace(0, 1, k)[:, None]
         bases.append(b0 + t * (b1 - b0))
@@ -135,6 +145,24 @@ def edges(rng, free, count, length):
         starts.append(total)
         total += k
     return chain(np.concatenate(bases), np.concatenate(qs), length), np.array(starts)
+
+
+def se3_bounds(length, poses, starts):
+    """(states, LINKS) motion bounds for links moving in SE(3) between consecutive states of an
+    edge, as BatchOptions::continuous computes them: |t1 - t0| + angle * the farthest corner of
+    the link's local box (every link of robot() has half extents 0.15, 0.15, 0.5 link lengths);
+    0 after an edge's last state."""
+    reach = length * math.sqrt(2 * 0.15 ** 2 + 0.5 ** 2)
+    a, b = poses[:-1], poses[1:]
+    m = np.swapaxes(a[..., :3, :3], -1, -2) @ b[..., :3, :3]
+    skew = np.stack([m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0],
+                     m[..., 1, 0] - m[..., 0, 1]], -1)
+    angle = np.arctan2(0.5 * np.linalg.norm(skew, axis=-1),
+                       0.5 * (np.trace(m, axis1=-2, axis2=-1) - 1))
+    out = np.zeros(poses.shape[:2])
+    out[:-1] = np.linalg.norm(b[..., :3, 3] - a[..., :3, 3], axis=-1) + angle * reach
+    out[np.asarray(starts[1:]) - 1] = 0
+    return out
 
 
 def timed(repeat, py, cpp):
@@ -155,6 +183,8 @@ def main(argv=None):
     ap.add_argument("--states", type=int, default=10000)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 0])
+    ap.add_argument("--near", type=float, default=0.02,
+                    help="continuous edges: joint angles of the end within this of the start's")
     ap.add_argument("--link", type=float, default=1.0,
                     help="link length in the world's typical object sizes")
     args = ap.parse_args(argv)
@@ -169,6 +199,8 @@ def main(argv=None):
         return 1
     poses = chain(*mix(free, hit, args.states, 0.7), length)
     edge_poses, starts = edges(rng, free, max(1, args.states // 60), length)
+    near_poses, near_starts = edges(rng, free, max(1, args.states // 60), length, args.near)
+    bounds = se3_bounds(length, near_poses, near_starts)
     print(f"world: {args.objects} objects; {args.states} states of {LINKS} links; "
           f"{len(starts)} edges of {len(edge_poses)} states; load {load_average()}")
     failed = False
@@ -200,6 +232,24 @@ def main(argv=None):
         print(f"check_motions threads={threads} free={int((cpp < 0).sum())}/{len(cpp)}: "
               f"python {1e3 * t_py:8.2f} ms, C++ {1e3 * t_cpp:8.2f} ms, "
               f"ratio {t_py / t_cpp:.3f}")
+        for label, kw in (("se3", {"continuous": True}),
+                          ("bounds", {"motion_bounds": bounds})):
+            py = m.check_motions(body, near_poses, near_starts, threads=threads, **kw)
+            flat = {"motion_bounds": bounds.ravel().tolist()} if "motion_bounds" in kw else kw
+            _, cpp = cb.check_motions_cpp(m, body, near_poses, list(near_starts), threads, 1,
+                                          **flat)
+            if not np.array_equal(py, cpp):
+                print(f"check_motions_continuous ({label}): answers differ", file=sys.stderr)
+                failed = True
+                continue
+            t_py, t_cpp = timed(
+                args.repeat,
+                lambda: m.check_motions(body, near_poses, near_starts, threads=threads, **kw),
+                lambda: cb.check_motions_cpp(m, body, near_poses, list(near_starts), threads, 1,
+                                             **flat)[0])
+            print(f"check_motions_continuous {label:6} threads={threads} "
+                  f"free={int((cpp < 0).sum())}/{len(cpp)}: python {1e3 * t_py:8.2f} ms, "
+                  f"C++ {1e3 * t_cpp:8.2f} ms, ratio {t_py / t_cpp:.3f}")
     return 1 if failed else 0
 
 

@@ -201,8 +201,11 @@ class CollisionManager:
         """Many states (poses (states, links, 4, 4)) of body against this world."""
     def check_motions(self, body: Body, poses: ArrayLike, edge_starts: ArrayLike, *,
                       order: str = "path", self_collision: bool = False,
+                      continuous: bool = False, motion_bounds: Optional[ArrayLike] = None,
                       threads: Optional[int] = None) -> npt.NDArray[np.int64]:
-        """Per edge, the first colliding state's index within it, or -1."""
+        """Per edge, the first colliding state's index within it, or -1. continuous=True (SE(3)
+        bounds from the poses) or motion_bounds (states, links): -1 only if nothing can be
+        touched between consecutive states either."""
 
     def _collide_python(self, callback: Callable[["_Handle", "_Handle"], bool],
                         target: Any = None) -> None: ...

@@ -77,6 +77,63 @@ struct PoseReader {
   }
 };
 
+// The states converted at a time for continuous checks with SE(3) bounds (whole edges; a longer
+// edge alone).
+constexpr std::size_t kChunkStates = 512;
+
+// Reads states' poses as PoseReader does, except that a pose failing transformFrom's checks is
+// written as a NaN one (the library's rule then decides whether the call throws) and its error
+// kept: rethrow() turns the library's error naming it into that error. Safe to call from the
+// checking threads.
+class BadPoses {
+ public:
+  BadPoses(const double* data, std::size_t links) : read_{data, links} {}
+  void read(std::size_t state, fcl::Transform3d* out) {
+    for (std::size_t l = 0; l < read_.links; ++l) {
+      const std::size_t at = state * read_.links + l;
+      if (rigidFast(read_.data + 16 * at, out[l])) continue;
+      try {
+        out[l] = transformFrom(read_.data + 16 * at, poseName(at, read_.links));
+      } catch (const py::value_error& e) {
+        const std::lock_guard<std::mutex> guard(mutex_);
+        bad_.emplace(at, e.what());
+        out[l].setIdentity();
+        out[l].translation()[0] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+  }
+  /// `offset`: the index of the library's pose 0 among the array's.
+  [[noreturn]] void rethrow(const std::invalid_argument& e, std::size_t offset) const {
+    const std::string what = e.what();
+    for (const auto& [at, error] : bad_)
+      if (at >= offset &&
+          what.find("pose " + std::to_string(at - offset) + " ") != std::string::npos)
+        throw py::value_error(error);
+    throw e;
+  }
+
+ private:
+  PoseReader read_;
+  std::mutex mutex_;
+  std::map<std::size_t, std::string> bad_;  // pose index -> its error
+};
+
+// motion_bounds in the library's layout (state-major: k * links + l), checked while copied:
+// shape (states, links), every value finite and >= 0 (ValueError naming the first other one).
+std::vector<double> motionBounds(py::handle obj, std::size_t states, std::size_t links) {
+  const Array b =
+      floats(obj, "motion_bounds",
+             {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
+  const double* d = b.data();
+  std::vector<double> out(d, d + states * links);
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (!(out[i] >= 0) || !std::isfinite(out[i]))
+      throw py::value_error("motion_bounds[" + std::to_string(i / links) + ", " +
+                            std::to_string(i % links) + "] is " + std::to_string(out[i]) +
+                            ": each bound must be finite and >= 0");
+  return out;
+}
+
 void needCube(const Manager& m, const char* what) {
   if (!m.isCube())
     throw py::value_error(std::string(what) +
@@ -152,10 +209,12 @@ TypeError (non-numeric poses).)doc")
       .def(
           "check_motions",
           [](const Manager& m, const Body& body, py::handle poses, py::handle edge_starts,
-             const std::string& order, bool self_collision, py::object threads) {
+             const std::string& order, bool self_collision, bool continuous,
+             py::handle motion_bounds, py::object threads) {
             needCube(m, "check_motions");
             std::size_t states = 0;
-            const Array a = posesArray(poses, body.links.size(), &states);
+            const std::size_t n = body.links.size();
+            const Array a = posesArray(poses, n, &states);
             IndexArray starts = indices(edge_starts, "edge_starts", {-1});
             std::vector<std::size_t> s;
             for (py::ssize_t i = 0; i < starts.size(); ++i) {
@@ -174,8 +233,12 @@ TypeError (non-numeric poses).)doc")
               mo = cube::MotionOrder::bisection;
             else
               throw py::value_error("order must be 'path' or 'bisection'");
+            const bool given = !motion_bounds.is_none();
+            const std::vector<double> bounds =
+                given ? motionBounds(motion_bounds, states, n) : std::vector<double>();
             cube::BatchOptions opt;
             opt.self_collision = self_collision;
+            opt.continuous = continuous;
             opt.threads = threads.is_none() ? m.threads() : threads.cast<int>();
             std::vector<std::size_t> res;
             {
@@ -183,36 +246,51 @@ TypeError (non-numeric poses).)doc")
               std::shared_lock lock(m.mutex);
               refuseFclCrashes(&m, nullptr, body.kinds(), false, "check_motions");
               // A pose that fails the checks is handed to the library as a NaN one, so that
-              // its rule decides whether the call throws (the pose's state is read before its
-              // edge's first contact), whatever the thread count; the error then names it as
-              // transformFrom does.
-              const PoseReader read{a.data(), body.links.size()};
-              std::mutex bad_mutex;
-              std::map<std::size_t, std::string> bad;  // pose index -> its error
-              const auto pose_of = [&](std::size_t state, fcl::Transform3d* out) {
-                for (std::size_t l = 0; l < read.links; ++l) {
-                  const std::size_t at = state * read.links + l;
-                  if (rigidFast(read.data + 16 * at, out[l])) continue;
+              // its rule decides whether the call throws, whatever the thread count; the error
+              // then names it as transformFrom does.
+              BadPoses bad(a.data(), n);
+              const auto read = [&](std::size_t k, fcl::Transform3d* out) { bad.read(k, out); };
+              if (!s.empty() && continuous && !given) {
+                // SE(3) bounds read a state's neighbours: the library's array form, over
+                // consecutive edges of about kChunkStates states at a time (edges are
+                // independent: the same answers and the same first error as one call), their
+                // poses converted into one buffer reused across chunks, which stays in cache and
+                // costs no page faults per state.
+                std::vector<fcl::Transform3d> tfs;
+                std::vector<std::size_t> chunk_starts;
+                const auto end_of = [&](std::size_t e) {
+                  return e + 1 < s.size() ? s[e + 1] : states;
+                };
+                for (std::size_t e0 = 0, e1; e0 < s.size(); e0 = e1) {
+                  const std::size_t first = s[e0];
+                  for (e1 = e0 + 1; e1 < s.size() && end_of(e1) - first <= kChunkStates;) ++e1;
+                  const std::size_t last = end_of(e1 - 1);
+                  tfs.resize((last - first) * n);
+                  for (std::size_t k = first; k < last; ++k) read(k, tfs.data() + (k - first) * n);
+                  chunk_starts.clear();
+                  for (std::size_t e = e0; e < e1; ++e) chunk_starts.push_back(s[e] - first);
+                  std::vector<std::size_t> part;
                   try {
-                    out[l] = transformFrom(read.data + 16 * at, poseName(at, read.links));
-                  } catch (const py::value_error& e) {
-                    const std::lock_guard<std::mutex> guard(bad_mutex);
-                    bad.emplace(at, e.what());
-                    out[l].setIdentity();
-                    out[l].translation()[0] = std::numeric_limits<double>::quiet_NaN();
+                    part =
+                        cube::checkMotions<double>(*m.cube(), body.set, tfs, chunk_starts, mo, opt);
+                  } catch (const std::invalid_argument& e) {
+                    bad.rethrow(e, first * n);
                   }
+                  res.insert(res.end(), part.begin(), part.end());
                 }
-              };
-              try {
-                if (!s.empty())
-                  res =
-                      cube::checkMotions<double>(*m.cube(), body.set, states, s, pose_of, mo, opt);
-              } catch (const std::invalid_argument& e) {
-                const std::string what = e.what();
-                for (const auto& [at, error] : bad)
-                  if (what.find("pose " + std::to_string(at) + " ") != std::string::npos)
-                    throw py::value_error(error);
-                throw;
+              } else if (!s.empty()) {
+                // Discrete, or the caller's bounds: only the states the check reads are
+                // converted, on its threads.
+                try {
+                  if (given) {
+                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, bounds,
+                                                     mo, opt);
+                  } else {
+                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, mo, opt);
+                  }
+                } catch (const std::invalid_argument& e) {
+                  bad.rethrow(e, 0);
+                }
               }
             }
             py::array_t<std::int64_t> out(static_cast<py::ssize_t>(res.size()));
@@ -222,13 +300,36 @@ TypeError (non-numeric poses).)doc")
           },
           py::arg("body"), py::arg("poses"), py::arg("edge_starts"), py::kw_only(),
           py::arg("order") = "path", py::arg("self_collision") = false,
+          py::arg("continuous") = false, py::arg("motion_bounds") = py::none(),
           py::arg("threads") = py::none(), R"doc(
 Checks edges (motions): edge e is states edge_starts[e] .. edge_starts[e + 1] - 1 of poses
 (states, links, 4, 4). Returns (edges,) int64: the index within the edge of its first colliding
 state in `order` ('path': 0, 1, 2...; 'bisection': OMPL's DiscreteMotionValidator order), -1 if
-the edge is free. ValueError for edge_starts not starting at 0 or not increasing, or as
-check_states; a pose not finite or rigid only where its state is checked (before its edge's
-first colliding state in `order`: the states after it are not read, on any thread count).)doc");
+the edge is free.
+
+Discrete (the default): only the edge's states are checked; an obstacle thinner than the motion
+between two states can be stepped over.
+Continuous (continuous=True, or motion_bounds given): -1 means no link can touch a world object
+(or, with self_collision, another checked link) anywhere between consecutive states of the edge,
+given a bound b on each link's motion per interval (the longest path any point of the link
+travels). Each state is checked with each link's margin raised by half the larger bound of the
+two intervals it ends and starts (a contact, or fcl::distance within the raised margins); the
+answer is the first state in `order` whose raised check fails. Conservative: an edge may be
+refused though nothing is touched. Every state the discrete check finds colliding fails too.
+continuous=True computes the bounds from the poses, for each link moving in SE(3) between states
+(translation linear, rotation along the geodesic): |t1 - t0| + angle * the farthest corner of
+the link's local box from its origin; they do not hold for other motions (a joint-space edge of
+an arm): give those bounds instead. motion_bounds: (states, links) float array, [k, l] bounds
+link l's motion from state k to k + 1 of the same edge (each edge's last state's values are not
+used, but checked); with it the check is continuous whatever `continuous` says. Nothing is said
+of the motion before an edge's first state or after its last.
+
+Raises ValueError for edge_starts not starting at 0 or not increasing, motion_bounds of another
+shape or with a negative, NaN or infinite value (before any work), or as check_states; TypeError
+for non-numeric motion_bounds. A pose not finite or rigid raises only where its state is checked
+(before its edge's first colliding state in `order`: the states after it are not read, on any
+thread count); with continuous=True a state's check also reads its neighbours' poses in the
+edge.)doc");
 }
 
 void bindBatch(py::module_& m) {

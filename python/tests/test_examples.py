@@ -36,3 +36,5 @@ def test_check_states_benchmark_runs(capsys):
                                     "--threads", "1", "2"]) == 0
     out = capsys.readouterr().out
     assert out.count("check_states ") == 4 and out.count("check_motions ") == 2
+    # continuous edges, with SE(3) bounds and with given bounds, per thread count
+    assert out.count("check_motions_continuous ") == 4

@@ -326,6 +326,21 @@ std::size_t checkedEdges(const Links<S>& links, const std::vector<fcl::Transform
   return states;
 }
 
+// checkMotions' checks of its arguments over a pose function, before any work.
+template <typename S>
+void checkPoseEdges(const Links<S>& links, std::size_t states,
+                    const std::vector<std::size_t>& edge_starts, const PoseFunction<S>& pose_of) {
+  if (links.size() == 0) batchError("checkMotions", "the body set has no link");
+  if (!pose_of) batchError("checkMotions", "null pose function");
+  if (edge_starts.empty() && states > 0)
+    batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
+  for (std::size_t e = 0; e < edge_starts.size(); ++e)
+    if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
+        edge_starts[e] >= states)
+      batchError("checkMotions",
+                 "edge_starts must start at 0 and increase strictly within the states");
+}
+
 // Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
 template <typename S>
 struct GivenRaise {
@@ -515,6 +530,26 @@ std::vector<std::size_t> checkMotions(
 }
 
 template <typename S>
+std::vector<std::size_t> checkMotions(
+    const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
+    const std::vector<std::size_t>& edge_starts,
+    const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
+    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds, MotionOrder order,
+    const BatchOptions& options) {
+  const auto& links = detail::BodyAccess::links(body);
+  detail::checkPoseEdges(links, states, edge_starts, pose_of);
+  detail::checkMotionBounds(motion_bounds, states * links.size(), "checkMotions");
+  return detail::firstCollisions(
+      detail::coreOf(world), links, states, edge_starts, order, options, true,
+      [&](auto& scratch, std::size_t state, std::size_t j) {
+        fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+        pose_of(state, at);
+        return at;
+      },
+      detail::GivenRaise<S>{motion_bounds, links.size()});
+}
+
+template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
                         const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
@@ -567,5 +602,14 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)
 #undef CUBE_INSTANTIATE_BATCH
+
+#define CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(S)                                                      \
+  template std::vector<std::size_t> checkMotions<S>(                                               \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                              \
+      const std::vector<std::size_t>&, const PoseFunction<S>&, const std::vector<S>&, MotionOrder, \
+      const BatchOptions&);
+CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(double)
+CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(float)
+#undef CUBE_INSTANTIATE_BATCH_POSE_BOUNDS
 
 }  // namespace cube
