@@ -326,9 +326,11 @@ TEST(SharedWalk, PositionBoxesKernelsAgreeWithTheCoordinates) {
       for (const int bad : {0, 1, 2}) {  // none, a translation, another entry of a pose
         const double keep = states[count - 1][16 * (n - 1) + (bad == 1 ? 13 : 15)];
         if (bad != 0) states[count - 1][16 * (n - 1) + (bad == 1 ? 13 : 15)] = std::nan("");
-        std::vector<double> lo[2][3], hi[2][3];
-        bool finite[2];
-        for (int v = 0; v < 2; ++v) {
+        // The kernel on all objects, the portable version, the kernel on the last n - 1 and then
+        // the first.
+        std::vector<double> lo[3][3], hi[3][3];
+        bool finite[3];
+        for (int v = 0; v < 3; ++v) {
           double* l[3];
           double* h[3];
           for (int d = 0; d < 3; ++d) {
@@ -337,11 +339,15 @@ TEST(SharedWalk, PositionBoxesKernelsAgreeWithTheCoordinates) {
             l[d] = lo[v][d].data();
             h[d] = hi[v][d].data();
           }
-          finite[v] = v == 0 ? cube::detail::positionBoxes(at.data(), count, n, l, h)
-                             : cube::detail::positionBoxesPortable(at.data(), count, n, l, h);
+          if (v == 0)
+            finite[v] = cube::detail::positionBoxes(at.data(), count, 0, n, l, h);
+          else if (v == 1)
+            finite[v] = cube::detail::positionBoxesPortable(at.data(), count, 0, n, l, h);
+          else
+            finite[v] = cube::detail::positionBoxes(at.data(), count, 1, n - 1, l, h) &&
+                        cube::detail::positionBoxes(at.data(), count, 0, 1, l, h);
         }
-        EXPECT_EQ(finite[0], bad != 1);
-        EXPECT_EQ(finite[1], bad != 1);
+        for (int v = 0; v < 3; ++v) EXPECT_EQ(finite[v], bad != 1) << v;
         for (std::size_t k = 0; bad != 1 && k < n; ++k)
           for (int d = 0; d < 3; ++d) {
             double want_lo = states[0][16 * k + 12 + d], want_hi = want_lo;
@@ -349,7 +355,7 @@ TEST(SharedWalk, PositionBoxesKernelsAgreeWithTheCoordinates) {
               want_lo = std::min(want_lo, s[16 * k + 12 + d]);
               want_hi = std::max(want_hi, s[16 * k + 12 + d]);
             }
-            for (int v = 0; v < 2; ++v) {
+            for (int v = 0; v < 3; ++v) {
               EXPECT_EQ(lo[v][d][k], want_lo);
               EXPECT_EQ(hi[v][d][k], want_hi);
             }

@@ -160,10 +160,12 @@ class StateChecker {
     if (eager_objects_) return count;
     const std::size_t all_count = count;
     bool any = false, all = true;
+    const S* data[kGroupStates];  // each state's poses as numbers
+    for (std::size_t j = 0; j < count; ++j) data[j] = states[j]->data();
     for (; count >= kGroupMinStates; count /= 2) {
       all = true;
       for (std::size_t k = 0; k < body_.leafCount(); ++k) {
-        close_[k] = closeTogether(states, count, body_.leafFirst(k), body_.leafSize(k));
+        close_[k] = closeTogether(data, count, body_.leafFirst(k), body_.leafSize(k));
         any = any || close_[k];
         all = all && close_[k];
       }
@@ -502,23 +504,18 @@ class StateChecker {
   // than kGroupSpread - 1 times the links' own extents (the union of a link's boxes is then
   // within about kGroupSpread times one state's), and every position is finite. Keeps each
   // link's positions' box (at_lo_, at_hi_) and largest coordinate (far_).
-  bool closeTogether(const fcl::Transform3<S>* const* states, std::size_t count,
-                     std::uint32_t first, std::uint32_t size) {
+  bool closeTogether(const S* const* states, std::size_t count, std::uint32_t first,
+                     std::uint32_t size) {
     S extent = 0;
     for (std::uint32_t l = first; l < first + size; ++l)
       extent += S(2) * (links_.half_of[0][l] + links_.half_of[1][l] + links_.half_of[2][l]) +
                 S(6) * margin_[l];
     const S limit = (kGroupSpread - S(1)) * extent;
-    const S* at[kGroupStates];
-    for (std::size_t j = 0; j < count; ++j) at[j] = states[j][first].data();
-    S* lo[3] = {at_lo_[0] + first, at_lo_[1] + first, at_lo_[2] + first};
-    S* hi[3] = {at_hi_[0] + first, at_hi_[1] + first, at_hi_[2] + first};
     // The first link alone, then the rest: states far apart (random samples) stop at the first.
-    if (!positionBoxes(at, count, 1, lo, hi) || !(spreadOf(first) <= limit)) return false;
-    for (std::size_t j = 0; j < count; ++j) at[j] += 16;
-    for (S*& p : lo) ++p;
-    for (S*& p : hi) ++p;
-    if (size > 1 && !positionBoxes(at, count, size - 1, lo, hi)) return false;
+    if (!positionBoxes(states, count, first, 1, at_lo_, at_hi_) || !(spreadOf(first) <= limit))
+      return false;
+    if (size > 1 && !positionBoxes(states, count, first + 1, size - 1, at_lo_, at_hi_))
+      return false;
     S spread = 0;
     for (std::uint32_t l = first; l < first + size; ++l) {
       spread += spreadOf(l);

@@ -60,12 +60,12 @@ bool sumPortable(const S* x, std::size_t begin, std::size_t n, S sum) {
   return sum - sum == S(0);
 }
 
-// Objects begin .. n-1 of positionBoxes; whether their translations are finite.
+// Objects begin .. end-1 of positionBoxes; whether their translations are finite.
 template <typename S>
-bool positionsPortable(const S* const* states, std::size_t count, std::size_t begin, std::size_t n,
-                       S* lo[3], S* hi[3]) {
+bool positionsPortable(const S* const* states, std::size_t count, std::size_t begin,
+                       std::size_t end, S* const lo[3], S* const hi[3]) {
   S zero = 0;  // x - x is 0 for a finite x and NaN otherwise
-  for (std::size_t k = begin; k < n; ++k) {
+  for (std::size_t k = begin; k < end; ++k) {
     const S* t = states[0] + 16 * k + 12;
     S a[3] = {t[0], t[1], t[2]}, b[3] = {t[0], t[1], t[2]};
     for (std::size_t j = 0; j < count; ++j) {
@@ -89,9 +89,10 @@ bool positionsPortable(const S* const* states, std::size_t count, std::size_t be
 // positionsPortable one object at a time, its three coordinates (and the pose's last entry as
 // a fourth lane) in one instruction; min and max give what the portable version does.
 [[gnu::target("avx2")]] bool positionsAvx2(const double* const* states, std::size_t count,
-                                           std::size_t n, double* lo[3], double* hi[3]) {
+                                           std::size_t begin, std::size_t end, double* const lo[3],
+                                           double* const hi[3]) {
   __m256d zero = _mm256_setzero_pd();
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = begin; k < end; ++k) {
     __m256d a = _mm256_loadu_pd(states[0] + 16 * k + 12), b = a;
     for (std::size_t j = 0; j < count; ++j) {
       const __m256d t = _mm256_loadu_pd(states[j] + 16 * k + 12);
@@ -245,22 +246,22 @@ bool sumIsFinite(const double* x, std::size_t n) {
   return sumPortable(x, done, n, sum);
 }
 
-bool positionBoxes(const double* const* states, std::size_t count, std::size_t n, double* lo[3],
-                   double* hi[3]) {
+bool positionBoxes(const double* const* states, std::size_t count, std::size_t first, std::size_t n,
+                   double* const lo[3], double* const hi[3]) {
 #if defined(CUBE_POSE_AVX2)
-  if (hasAvx2()) return positionsAvx2(states, count, n, lo, hi);
+  if (hasAvx2()) return positionsAvx2(states, count, first, first + n, lo, hi);
 #endif
-  return positionsPortable(states, count, 0, n, lo, hi);
+  return positionsPortable(states, count, first, first + n, lo, hi);
 }
 
-bool positionBoxes(const float* const* states, std::size_t count, std::size_t n, float* lo[3],
-                   float* hi[3]) {
-  return positionsPortable(states, count, 0, n, lo, hi);
+bool positionBoxes(const float* const* states, std::size_t count, std::size_t first, std::size_t n,
+                   float* const lo[3], float* const hi[3]) {
+  return positionsPortable(states, count, first, first + n, lo, hi);
 }
 
-bool positionBoxesPortable(const double* const* states, std::size_t count, std::size_t n,
-                           double* lo[3], double* hi[3]) {
-  return positionsPortable(states, count, 0, n, lo, hi);
+bool positionBoxesPortable(const double* const* states, std::size_t count, std::size_t first,
+                           std::size_t n, double* const lo[3], double* const hi[3]) {
+  return positionsPortable(states, count, first, first + n, lo, hi);
 }
 
 bool sumIsFinite(const float* x, std::size_t n) {

@@ -53,17 +53,17 @@ bool sumIsFinitePortable(const double* x, std::size_t n);
 /// The version without AVX2, for the tests.
 bool walkBoxesPortable(std::size_t n, const WalkBoxes<double>& io);
 
-/// The box of each object's positions over several sets of poses: for objects k = 0 .. n-1,
-/// lo[d][k] and hi[d][k] the least and largest translation coordinate d of pose k over sets
-/// states[0 .. count-1] (count >= 1; pose k of set j is states[j][16 k .. 16 k + 15]). Returns
-/// whether every translation read is finite (lo and hi are then exact). Every version gives the
-/// same results, bit for bit.
-bool positionBoxes(const double* const* states, std::size_t count, std::size_t n, double* lo[3],
-                   double* hi[3]);
-bool positionBoxes(const float* const* states, std::size_t count, std::size_t n, float* lo[3],
-                   float* hi[3]);
-bool positionBoxesPortable(const double* const* states, std::size_t count, std::size_t n,
-                           double* lo[3], double* hi[3]);
+/// The box of each object's positions over several sets of poses: for objects k = first ..
+/// first + n - 1, lo[d][k] and hi[d][k] the least and largest translation coordinate d of pose k
+/// over sets states[0 .. count-1] (count >= 1; pose k of set j is states[j][16 k .. 16 k + 15]).
+/// Returns whether every translation read is finite (lo and hi are then exact). Every version
+/// gives the same results, bit for bit.
+bool positionBoxes(const double* const* states, std::size_t count, std::size_t first, std::size_t n,
+                   double* const lo[3], double* const hi[3]);
+bool positionBoxes(const float* const* states, std::size_t count, std::size_t first, std::size_t n,
+                   float* const lo[3], float* const hi[3]);
+bool positionBoxesPortable(const double* const* states, std::size_t count, std::size_t first,
+                           std::size_t n, double* const lo[3], double* const hi[3]);
 
 }  // namespace detail
 }  // namespace cube
