@@ -86,13 +86,14 @@ int main(int argc, char** argv) {
   scenes::SceneOptions o;
   o.n = std::strtoul(argv[2], nullptr, 10);
   o.seed = 5;
+  o.meshes = which == "long";  // long: a world of meshes
   scenes::Scene<S> scene = scenes::makeScene<S>(o);
   cube::CubeCollisionManager<S> world;
   world.registerObjects(scene.pointers());
   world.setup();
   Run run;
   if (which == "distance" || which == "contacts" || which == "states" || which == "edges" ||
-      which == "single")
+      which == "single" || which == "long")
     cube::collideAll<S>(world);  // the volumes the first pipeline query builds ("first")
 
   if (which == "self") {
@@ -183,11 +184,12 @@ int main(int argc, char** argv) {
     run.checksum = cube::collideAll<S>(world, all, one).numContacts();
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = 1;
-  } else if (which == "states" || which == "edges" || which == "single") {
+  } else if (which == "states" || which == "edges" || which == "single" || which == "long") {
     // states: 50 random states; edges: 20 edges of 32 states each, joints interpolated between
-    // a random state and one near it (a planner's edges), checked in path order.
+    // a random state and one near it (a planner's edges), checked in path order; long: 50
+    // random states of links 8 typical sizes long among meshes (most states meet several).
     cube::BodySet<S> body;
-    const double len = scenes::typicalSize(o);
+    const double len = scenes::typicalSize(o) * (which == "long" ? 8 : 1);
     for (int i = 0; i < 30; ++i)
       body.addLink(i % 2 ? std::shared_ptr<fcl::CollisionGeometryd>(
                                std::make_shared<fcl::Capsuled>(0.15 * len, 0.7 * len))
