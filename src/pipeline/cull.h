@@ -74,10 +74,13 @@ inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, con
                               const VolumeShape& hb, float rate, float enough);
 
 /// separationOf past its spheres, `s` being sphereGap of the two records (both with volumes):
-/// what a caller that tested the spheres already calls.
-inline VolumeGap separationPastSpheres(const SphereGap& s, const VolumeSphere& sa,
-                                       const VolumeShape& ha, const VolumeSphere& sb,
-                                       const VolumeShape& hb, float enough) {
+/// what a caller that tested the spheres already calls. Always inlined: separationOf is then the
+/// one body the table's streams inline as a whole.
+[[gnu::always_inline]] inline VolumeGap separationPastSpheres(const SphereGap& s,
+                                                              const VolumeSphere& sa,
+                                                              const VolumeShape& ha,
+                                                              const VolumeSphere& sb,
+                                                              const VolumeShape& hb, float enough) {
   const float d = s.centres, margin = s.margin, spheres = s.gap;
   const float stop = enough + margin;
   const bool sphere_a = (ha.flags & kVolumeSphere) != 0, sphere_b = (hb.flags & kVolumeSphere) != 0;
@@ -99,9 +102,11 @@ inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, con
 }
 
 /// Whether the records' inscribed balls (inner_r > 0 on both) overlap by more than rate x (1 +
-/// scale + both inner radii): looseVerdictOf's proof of contact.
-inline bool innerBallsMeet(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
-                           const VolumeShape& hb, float rate) {
+/// scale + both inner radii): looseVerdictOf's proof of contact. Always inlined, as
+/// separationPastSpheres.
+[[gnu::always_inline]] inline bool innerBallsMeet(const VolumeSphere& sa, const VolumeShape& ha,
+                                                  const VolumeSphere& sb, const VolumeShape& hb,
+                                                  float rate) {
   float gap2 = 0.f;
   for (int k = 0; k < 3; ++k) {
     const float g =
