@@ -5,7 +5,7 @@
 // whether the pair can beat the best distance so far; a query within margins whether the pair can
 // be within the margins' sum. The judge reads the pair's records: the object tables', or built
 // for an object of no table (PairVolumes), or, for a pair without records, built on the fly
-// (cull.h: the sphere-level records first, the full ones where the spheres leave it open).
+// (cull.h: level by level, the spheres first, each level only where the last leaves it open).
 // Queries differ by what they do with its answers, not by how a pair is decided.
 
 #include <fcl/narrowphase/collision_object.h>
