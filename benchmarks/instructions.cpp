@@ -18,12 +18,21 @@
 // with Config::keep_pairs and 1% of the objects moved before each step, the motion not counted),
 // keepstill (keep_pairs, nothing moved). distance, contacts and states count steady queries: one
 // pipeline query runs before the count, as it would have in a program that queries the world
-// repeatedly.
+// repeatedly. The paths that cull pairs of no object table, from the FCL objects: merged
+// (collideMerged of the world's candidate pairs, every contact, one thread), pairs (collidePairs
+// of them, FCL's default request, one thread), callback (the world's self-collide with
+// cube::defaultCollisionCallback, every contact), margins (contactsWithinMargin of a self-collide
+// with a margin on every object, one thread), fcltree (collideAll on FCL's dynamic AABB tree of
+// the scene, every contact, one thread), cullpairs (a self-collide of a manager with
+// Config::cull_pairs, a callback running fcl::collide; below the size of manager that keeps
+// records).
 
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/default_broadphase_callbacks.h>
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
 #if __has_include(<valgrind/callgrind.h>)
 #include <valgrind/callgrind.h>
 #else  // without valgrind's headers the workloads still run (and count nothing)
@@ -40,7 +49,10 @@
 #include <vector>
 
 #include "cube_collision/batch.h"
+#include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/margins.h"
+#include "cube_collision/narrow_phase.h"
 #include "cube_collision/queries.h"
 #include "scenes.h"
 
@@ -52,6 +64,14 @@ namespace scenes = cube::scenes;
 
 bool countPair(Object*, Object*, void* data) {
   ++*static_cast<std::size_t*>(data);
+  return false;
+}
+
+// A user's own narrow phase behind Config::cull_pairs: counts the pairs fcl::collide finds in
+// contact, which no cull may change (a count of the calls would change with the cull).
+bool collidingPair(Object* a, Object* b, void* data) {
+  fcl::CollisionResult<S> result;
+  *static_cast<std::size_t*>(data) += fcl::collide(a, b, fcl::CollisionRequest<S>(), result) > 0;
   return false;
 }
 
@@ -259,6 +279,60 @@ int main(int argc, char** argv) {
     }
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = std::size_t(count) * std::size_t(per_edge);
+  } else if (which == "merged" || which == "pairs") {
+    const std::vector<cube::ObjectPair<S>> pairs = cube::overlappingPairs<S>(world);
+    cube::NarrowPhaseOptions<S> one;
+    one.threads = 1;
+    if (which == "merged") {
+      fcl::CollisionRequest<S> all;
+      all.num_max_contacts = 1000000;
+      CALLGRIND_START_INSTRUMENTATION;
+      run.checksum = cube::collideMerged<S>(pairs, all, one).numContacts();
+      CALLGRIND_STOP_INSTRUMENTATION;
+    } else {
+      CALLGRIND_START_INSTRUMENTATION;
+      const auto results = cube::collidePairs<S>(pairs, fcl::CollisionRequest<S>(), one);
+      CALLGRIND_STOP_INSTRUMENTATION;
+      for (const auto& r : results) run.checksum += r.numContacts();
+    }
+    run.calls = 1;
+  } else if (which == "callback") {
+    cube::CollisionData<S> d;
+    d.request.num_max_contacts = 1000000;
+    CALLGRIND_START_INSTRUMENTATION;
+    world.collide(&d, cube::defaultCollisionCallback<S>);
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.checksum = d.result.numContacts();
+    run.calls = 1;
+  } else if (which == "margins") {
+    world.setMargin(0.05 * scenes::typicalSize(o));
+    CALLGRIND_START_INSTRUMENTATION;
+    const auto near = cube::contactsWithinMargin<S>(world, fcl::DistanceRequest<S>(true), 1);
+    CALLGRIND_STOP_INSTRUMENTATION;
+    for (const auto& c : near) run.checksum += c.colliding ? 1000 : 1;
+    run.calls = 1;
+  } else if (which == "fcltree") {
+    fcl::DynamicAABBTreeCollisionManager<S> tree;
+    tree.registerObjects(scene.pointers());
+    tree.setup();
+    fcl::CollisionRequest<S> all;
+    all.num_max_contacts = 1000000;
+    cube::NarrowPhaseOptions<S> one;
+    one.threads = 1;
+    CALLGRIND_START_INSTRUMENTATION;
+    run.checksum = cube::collideAll<S>(tree, all, one).numContacts();
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 1;
+  } else if (which == "cullpairs") {
+    cube::Config config;
+    config.cull_pairs = true;
+    cube::CubeCollisionManager<S> culled(config);
+    culled.registerObjects(scene.pointers());
+    culled.setup();
+    CALLGRIND_START_INSTRUMENTATION;
+    culled.collide(&run.checksum, collidingPair);
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 1;
   } else {
     std::fprintf(stderr, "cube_instructions: unknown case %s\n", which.c_str());
     return 2;

@@ -11,6 +11,8 @@
 namespace fcl {
 template <typename S>
 class CollisionObject;
+template <typename S>
+class CollisionGeometry;
 }  // namespace fcl
 
 namespace cube {
@@ -65,10 +67,39 @@ inline constexpr std::uint32_t kVolumeKinds = kVolumeSphere | kVolumeBox | kVolu
                                               kVolumeCone;
 
 /// Builds `o`'s records from its transform and geometry (local AABB, kind, size): the inscribed
-/// ball only for occupied spheres, boxes, capsules, cylinders, cones and ellipsoids. Defined in
-/// cull.cpp.
+/// ball only for occupied spheres, boxes, capsules, cylinders, cones and ellipsoids.
 template <typename S>
 void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeShape& shape);
+
+/// The records of an object of no table as the cull builds them on the fly, level by level, each
+/// only where the last leaves the pair open. First the sphere: the bounding sphere FCL keeps per
+/// geometry (aabb_center and aabb_radius; a sphere's own centre and radius), placed by the
+/// object's transform and rounded outward as buildVolume's, and the scale of its coordinates
+/// (VolumeShape::scale). sphere.r < 0 where buildVolume gives no volumes. `exact`: the geometry is
+/// a sphere (its sphere is all its records say about distance). `geometry`, `pose`: the
+/// object's geometry and transform (4x4, by columns), which the next levels read.
+template <typename S>
+struct VolumeBall {
+  VolumeSphere sphere;
+  float scale;
+  bool exact;
+  const fcl::CollisionGeometry<S>* geometry;
+  const S* pose;
+};
+template <typename S>
+void buildBall(const fcl::CollisionObject<S>& o, VolumeBall<S>& ball);
+/// The next level, for an object whose `ball` (buildBall's) has volumes: the oriented box of
+/// the geometry's local AABB about the ball's centre, rounded outward, and the ball's scale; for
+/// a sphere its flag kVolumeSphere alone. No inner ball, kind or round primitive: what
+/// separationOf reads. False where the box is not about the ball's centre (a local AABB changed
+/// without computeLocalAABB) or is not finite.
+template <typename S>
+bool buildBox(const VolumeBall<S>& ball, VolumeShape& shape);
+/// The last level, on buildBox's `shape` of the same object: the ball inside the geometry that
+/// buildVolume keeps (occupied spheres, boxes, capsules, cylinders, cones and ellipsoids centred
+/// on their frame's origin), rounded inward; false, and `shape` as it was, for the others.
+template <typename S>
+bool buildInner(const VolumeBall<S>& ball, VolumeShape& shape);
 
 /// What an object's records are built from: its geometry's part (the local AABB's centre and
 /// half extents, the bounding radius, the inscribed ball, the kind), read from the geometry at
@@ -114,6 +145,12 @@ extern template void buildVolume<double>(const fcl::CollisionObject<double>&, Vo
                                          VolumeShape&);
 extern template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&,
                                         VolumeShape&);
+extern template void buildBall<double>(const fcl::CollisionObject<double>&, VolumeBall<double>&);
+extern template void buildBall<float>(const fcl::CollisionObject<float>&, VolumeBall<float>&);
+extern template bool buildBox<double>(const VolumeBall<double>&, VolumeShape&);
+extern template bool buildBox<float>(const VolumeBall<float>&, VolumeShape&);
+extern template bool buildInner<double>(const VolumeBall<double>&, VolumeShape&);
+extern template bool buildInner<float>(const VolumeBall<float>&, VolumeShape&);
 extern template void moveVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&,
                                         VolumeSphere&, VolumeShape&);
 extern template void moveVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&,

@@ -1,13 +1,13 @@
 #pragma once
 
-// Exact conservative culling between the box test and FCL's narrow phase, on two FCL objects
-// (separation, verdict: cull.cpp) or on their float records (separationOf, verdictOf: the bounds
-// in record_bounds.h; the records are built in volume_build.cpp). The pair judge
-// (pair_judge.h) is what the queries call. FCL gives a rotated
-// object the box of its bounding sphere, so most pairs whose boxes overlap are apart (three in
-// four in the benchmark's scenes). Tighter volumes, built from what FCL keeps per object (the
-// geometry's local AABB and the object's transform), prove many of them apart for a few dozen
-// flops instead of a narrow-phase call of microseconds.
+// Exact conservative culling between the box test and FCL's narrow phase: one engine, on two
+// objects' float records (separationOf, verdictOf: the bounds in record_bounds.h; the records are
+// built in volume_build.cpp), the object tables' or, for objects of no table, built on the fly
+// (verdictOnTheFly, separationOnTheFly: cull.cpp). The pair judge (pair_judge.h) is what the
+// queries call. FCL gives a rotated object the box of its bounding sphere, so most pairs whose
+// boxes overlap are apart (three in four in the benchmark's scenes). Tighter volumes, built from
+// what FCL keeps per object (the geometry's local AABB and the object's transform), prove many
+// of them apart for a few dozen flops instead of a narrow-phase call of microseconds.
 
 #include <fcl/narrowphase/collision_object.h>
 #include <fcl/narrowphase/collision_request.h>
@@ -23,58 +23,15 @@
 namespace cube {
 namespace detail {
 
-/// What the tight volumes say about two objects: a lower bound on their distance (-infinity when
-/// unknown: a plane, a halfspace, an octree, a non-finite extent or transform), and the margin
-/// by which a bound must beat a narrow-phase answer to decide for it, max(2 tolerance, 1e-6 for
-/// double or 1e-4 for float) x (1 + the largest coordinate or extent involved): FCL may answer
-/// within its tolerance, and this bound's own arithmetic errs by a few ulps of the coordinates.
-/// The bound is the largest of the bounding spheres' gap (exact for spheres), a sphere's gap to
-/// the other's oriented box, and the separating-axis gaps of the two oriented boxes of the
-/// geometries' local AABBs (exact along the axes for boxes). The spheres come from what FCL keeps
-/// per geometry (aabb_center, aabb_radius, as computeLocalAABB() sets them) and the object's
-/// transform; when their gap alone exceeds enough + margin, the boxes are not looked at, nor
-/// when `enough` is finite and the boxes' bound could not exceed enough + margin (each box holds
-/// the ball of its smallest half extent); the bound is then the spheres' gap.
-template <typename S>
-struct Separation {
-  S lower_bound;
-  S margin;
-};
-template <typename S>
-Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
-                         S tolerance, S enough = std::numeric_limits<S>::infinity());
-
-/// True only if objects a and b certainly do not touch, even within the narrow phase's
-/// `tolerance` (fcl::CollisionRequest::gjk_tolerance): separation's bound beats its margin.
-template <typename S>
-bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance);
-
-/// What the tight volumes settle about a pair for a collision request.
+/// What the records settle about a pair.
 enum class Verdict : unsigned char {
-  kApart,     ///< surelyApart: FCL would report no contact
-  kTouching,  ///< surelyTouching: FCL would report a contact
+  kApart,     ///< FCL would report no contact
+  kTouching,  ///< FCL would report a contact
   kUnknown,   ///< FCL must decide
 };
 
-/// True only if objects a and b certainly overlap, by more than separation's margin (so by more
-/// than FCL's `tolerance` with room for rounding): balls inscribed in the two shapes overlap by
-/// that much. For spheres, boxes, capsules, cylinders, cones and ellipsoids whose geometries are
-/// occupied (cost_density >= threshold_occupied: FCL ignores the others); false for every other
-/// geometry (meshes, octrees, convex, triangles, planes, halfspaces) and for non-finite input.
-/// For a request without enable_contact and with num_max_contacts > 0, such a pair gets from
-/// FCL's shape collision exactly one contact, Contact(a's geometry, b's geometry, NONE, NONE),
-/// when the result has room.
-template <typename S>
-bool surelyTouching(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
-                    S tolerance);
-
-/// kApart if surelyApart, else kTouching if `prove` and surelyTouching, else kUnknown.
-template <typename S>
-Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance,
-                bool prove);
-
-/// Whether a collision request's answer for a pair that surelyTouching proves is known without
-/// FCL: no contact geometry, no costs, no GJK guess carried, and room for a contact.
+/// Whether a collision request's answer for a pair that the records prove touching is known
+/// without FCL: no contact geometry, no costs, no GJK guess carried, and room for a contact.
 template <typename S>
 bool provable(const fcl::CollisionRequest<S>& request) {
   return !request.enable_contact && !request.enable_cost && !request.enable_cached_gjk_guess &&
@@ -99,13 +56,32 @@ struct VolumeGap {
   float lower_bound;
   float margin;
 };
-inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
-                              const VolumeShape& hb, float rate, float enough) {
-  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return {-std::numeric_limits<float>::infinity(), 0.f};
+/// The spheres' part of separationOf, all that a sphere-level record (VolumeBall) allows: the
+/// distance of the centres, the spheres' gap, and the margin for the larger scale.
+struct SphereGap {
+  float centres;
+  float gap;
+  float margin;
+};
+inline SphereGap sphereGap(const VolumeSphere& sa, float scale_a, const VolumeSphere& sb,
+                           float scale_b, float rate) {
   const float dx = sb.c[0] - sa.c[0], dy = sb.c[1] - sa.c[1], dz = sb.c[2] - sa.c[2];
   const float d = std::sqrt(dx * dx + dy * dy + dz * dz);
-  const float margin = rate * (1.f + std::max(ha.scale, hb.scale));
-  const float spheres = d - sa.r - sb.r;
+  return {d, d - sa.r - sb.r, rate * (1.f + std::max(scale_a, scale_b))};
+}
+
+inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                              const VolumeShape& hb, float rate, float enough);
+
+/// separationOf past its spheres, `s` being sphereGap of the two records (both with volumes):
+/// what a caller that tested the spheres already calls. Always inlined: separationOf is then the
+/// one body the table's streams inline as a whole.
+[[gnu::always_inline]] inline VolumeGap separationPastSpheres(const SphereGap& s,
+                                                              const VolumeSphere& sa,
+                                                              const VolumeShape& ha,
+                                                              const VolumeSphere& sb,
+                                                              const VolumeShape& hb, float enough) {
+  const float d = s.centres, margin = s.margin, spheres = s.gap;
   const float stop = enough + margin;
   const bool sphere_a = (ha.flags & kVolumeSphere) != 0, sphere_b = (hb.flags & kVolumeSphere) != 0;
   if ((sphere_a && sphere_b) || spheres > stop) return {spheres, margin};
@@ -119,6 +95,29 @@ inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, con
   return {std::max(spheres, gap), margin};
 }
 
+inline VolumeGap separationOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
+                              const VolumeShape& hb, float rate, float enough) {
+  if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return {-std::numeric_limits<float>::infinity(), 0.f};
+  return separationPastSpheres(sphereGap(sa, ha.scale, sb, hb.scale, rate), sa, ha, sb, hb, enough);
+}
+
+/// Whether the records' inscribed balls (inner_r > 0 on both) overlap by more than rate x (1 +
+/// scale + both inner radii): looseVerdictOf's proof of contact. Always inlined, as
+/// separationPastSpheres.
+[[gnu::always_inline]] inline bool innerBallsMeet(const VolumeSphere& sa, const VolumeShape& ha,
+                                                  const VolumeSphere& sb, const VolumeShape& hb,
+                                                  float rate) {
+  float gap2 = 0.f;
+  for (int k = 0; k < 3; ++k) {
+    const float g =
+        (sb.c[k] + hb.inner_z * hb.R[3 * k + 2]) - (sa.c[k] + ha.inner_z * ha.R[3 * k + 2]);
+    gap2 += g * g;
+  }
+  const float scale = std::max(ha.scale, hb.scale);
+  const float reach_in = ha.inner_r + hb.inner_r - rate * (1.f + scale + ha.inner_r + hb.inner_r);
+  return reach_in > 0.f && gap2 < reach_in * reach_in;
+}
+
 /// verdict() from two objects' records (buildVolume), for a request whose tolerance gives
 /// `rate` (volumeMarginRate): kApart when separationOf's bound (enough 0) beats its margin;
 /// kTouching, with `prove`, when the inscribed balls overlap by more than rate x (1 + scale + both
@@ -129,17 +128,8 @@ inline Verdict looseVerdictOf(const VolumeSphere& sa, const VolumeShape& ha, con
   const VolumeGap gap = separationOf(sa, ha, sb, hb, rate, 0.f);
   if (gap.lower_bound > gap.margin) return Verdict::kApart;
   if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;  // no volumes: no proof
-  if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f) {
-    float gap2 = 0.f;
-    for (int k = 0; k < 3; ++k) {
-      const float g =
-          (sb.c[k] + hb.inner_z * hb.R[3 * k + 2]) - (sa.c[k] + ha.inner_z * ha.R[3 * k + 2]);
-      gap2 += g * g;
-    }
-    const float scale = std::max(ha.scale, hb.scale);
-    const float reach_in = ha.inner_r + hb.inner_r - rate * (1.f + scale + ha.inner_r + hb.inner_r);
-    if (reach_in > 0.f && gap2 < reach_in * reach_in) return Verdict::kTouching;
-  }
+  if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f && innerBallsMeet(sa, ha, sb, hb, rate))
+    return Verdict::kTouching;
   return Verdict::kUnknown;
 }
 
@@ -181,24 +171,72 @@ inline Verdict verdictOf(const VolumeSphere& sa, const VolumeShape& ha, const Vo
   return v != Verdict::kUnknown ? v : tightVerdictOf(sa, ha, sb, hb, rate, prove);
 }
 
-extern template bool surelyTouching<double>(const fcl::CollisionObject<double>&,
-                                            const fcl::CollisionObject<double>&, double);
-extern template bool surelyTouching<float>(const fcl::CollisionObject<float>&,
-                                           const fcl::CollisionObject<float>&, float);
-extern template Verdict verdict<double>(const fcl::CollisionObject<double>&,
-                                        const fcl::CollisionObject<double>&, double, bool);
-extern template Verdict verdict<float>(const fcl::CollisionObject<float>&,
-                                       const fcl::CollisionObject<float>&, float, bool);
-extern template Separation<double> separation<double>(const fcl::CollisionObject<double>&,
-                                                      const fcl::CollisionObject<double>&, double,
-                                                      double);
-extern template Separation<float> separation<float>(const fcl::CollisionObject<float>&,
+/// looseVerdictOf for two objects of no table (no records kept: another kind of manager, pair
+/// lists, FCL's callbacks), on records built on the fly level by level (core/volume.h), each
+/// only where the last leaves the pair open: the spheres (buildBall: what FCL keeps per geometry,
+/// placed), then the boxes (buildBox), then, with `prove`, the balls inside (buildInner). The
+/// round and inner bounds of tightVerdictOf are left to FCL: an FCL call follows for most pairs
+/// they would decide, and the full records cost more than the objects' boxes. kUnknown for an
+/// object without volumes (buildVolume's). What it proves, the records prove.
+template <typename S>
+Verdict verdictOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                        float rate, bool prove);
+
+/// separationOf for two objects of no table, on records built as verdictOnTheFly builds them:
+/// the spheres' gap where it exceeds enough + margin or both objects are spheres, else
+/// separationOf on the spheres and boxes (all it reads).
+template <typename S>
+VolumeGap separationOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                             float rate, float enough);
+
+/// separationOnTheFly for FCL's `tolerance` (volumeMarginRate), in S: a lower bound on the
+/// objects' distance (-infinity when unknown) and the margin it must beat a distance by.
+template <typename S>
+struct Separation {
+  S lower_bound;
+  S margin;
+};
+template <typename S>
+Separation<S> separation(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                         S tolerance, S enough = std::numeric_limits<S>::infinity()) {
+  const float e = enough >= S(FLT_MAX) ? std::numeric_limits<float>::infinity() : float(enough);
+  const VolumeGap g = separationOnTheFly(a, b, volumeMarginRate(tolerance), e);
+  return {S(g.lower_bound), S(g.margin)};
+}
+
+/// verdictOnTheFly for FCL's `tolerance`.
+template <typename S>
+Verdict verdict(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance,
+                bool prove) {
+  return verdictOnTheFly(a, b, volumeMarginRate(tolerance), prove);
+}
+
+/// True only if objects a and b certainly do not touch, even within FCL's `tolerance`.
+template <typename S>
+bool surelyApart(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b, S tolerance) {
+  return verdict(a, b, tolerance, false) == Verdict::kApart;
+}
+
+/// True only if objects a and b certainly overlap by more than the records' margin: volumes
+/// inside two occupied primitives (spheres, boxes, capsules, cylinders, cones, ellipsoids) meet.
+/// For a request that is provable(), such a pair gets from FCL exactly one contact,
+/// Contact(a's geometry, b's geometry, NONE, NONE), when the result has room.
+template <typename S>
+bool surelyTouching(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                    S tolerance) {
+  return verdict(a, b, tolerance, true) == Verdict::kTouching;
+}
+
+extern template Verdict verdictOnTheFly<double>(const fcl::CollisionObject<double>&,
+                                                const fcl::CollisionObject<double>&, float, bool);
+extern template Verdict verdictOnTheFly<float>(const fcl::CollisionObject<float>&,
+                                               const fcl::CollisionObject<float>&, float, bool);
+extern template VolumeGap separationOnTheFly<double>(const fcl::CollisionObject<double>&,
+                                                     const fcl::CollisionObject<double>&, float,
+                                                     float);
+extern template VolumeGap separationOnTheFly<float>(const fcl::CollisionObject<float>&,
                                                     const fcl::CollisionObject<float>&, float,
                                                     float);
-extern template bool surelyApart<double>(const fcl::CollisionObject<double>&,
-                                         const fcl::CollisionObject<double>&, double);
-extern template bool surelyApart<float>(const fcl::CollisionObject<float>&,
-                                        const fcl::CollisionObject<float>&, float);
 
 }  // namespace detail
 }  // namespace cube

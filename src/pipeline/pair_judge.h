@@ -3,8 +3,9 @@
 // The pair judge: the one place that decides a candidate pair before FCL, for every query. A
 // collide asks whether the pair is apart, proved touching, or needs FCL; a distance search
 // whether the pair can beat the best distance so far; a query within margins whether the pair can
-// be within the margins' sum. The judge reads the pair's records (the object tables', or built
-// for an object of no table: PairVolumes) and, for a pair without records, the objects (cull.h).
+// be within the margins' sum. The judge reads the pair's records: the object tables', or built
+// for an object of no table (PairVolumes), or, for a pair without records, built on the fly
+// (cull.h: level by level, the spheres first, each level only where the last leaves it open).
 // Queries differ by what they do with its answers, not by how a pair is decided.
 
 #include <fcl/narrowphase/collision_object.h>
@@ -40,7 +41,7 @@ class PairJudge {
   /// touching pairs may be proved (the request's answer for them is known without FCL,
   /// provable()); `cull`: false leaves every pair of a collide to FCL.
   PairJudge(S tolerance, bool prove, bool cull)
-      : tolerance_(tolerance), rate_(volumeMarginRate(tolerance)), prove_(prove), cull_(cull) {}
+      : rate_(volumeMarginRate(tolerance)), prove_(prove), cull_(cull) {}
   /// A collide request's judge: culls unless it has costs or a cached GJK guess (plainRequest),
   /// proves where provable(request).
   explicit PairJudge(const fcl::CollisionRequest<S>& request)
@@ -70,10 +71,10 @@ class PairJudge {
   Answer collideTight(const Records& a, const Records& b) const {
     return answerOf(tightVerdictOf(*a.sphere, *a.shape, *b.sphere, *b.shape, rate_, prove_));
   }
-  /// On the objects, for a pair without records: verdict().
+  /// On records built on the fly, for a pair without records (verdictOnTheFly).
   Answer collide(const Object& a, const Object& b) const {
     if (!cull_) return Answer::kComputed;
-    return answerOf(verdict(a, b, tolerance_, prove_));
+    return answerOf(verdictOnTheFly(a, b, rate_, prove_));
   }
   /// On the records where both sides have them (ra, rb not null), else on the objects.
   Answer collide(const Object& a, const Records* ra, const Object& b, const Records* rb) const {
@@ -85,16 +86,14 @@ class PairJudge {
 
   /// On the pair's records: separationOf's bound, less its margin, against best.
   bool mayBeat(const Records& a, const Records& b, S best) const {
-    const double within = double(best);
-    const float enough =
-        within >= double(FLT_MAX) ? std::numeric_limits<float>::infinity() : float(within);
-    const VolumeGap g = separationOf(*a.sphere, *a.shape, *b.sphere, *b.shape, rate_, enough);
-    return !(double(g.lower_bound) - double(g.margin) > within);
+    const VolumeGap g =
+        separationOf(*a.sphere, *a.shape, *b.sphere, *b.shape, rate_, enoughOf(best));
+    return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
-  /// On the objects, for a pair without records: separation().
+  /// On records built on the fly, for a pair without records (separationOnTheFly).
   bool mayBeat(const Object& a, const Object& b, S best) const {
-    const Separation<S> s = separation(a, b, tolerance_, best);
-    return !(s.lower_bound - s.margin > best);
+    const VolumeGap g = separationOnTheFly(a, b, rate_, enoughOf(best));
+    return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
   /// On the records where both sides have them, else on the objects.
   bool mayBeat(const Object& a, const Records* ra, const Object& b, const Records* rb,
@@ -118,14 +117,21 @@ class PairJudge {
     return verdictOf(sa, ha, sb, hb, rate_, prove_) == Verdict::kTouching ? Verdict::kTouching
                                                                           : Verdict::kUnknown;
   }
-  /// On the objects, for a pair without records: false when separation's bound beats m.
+  /// On records built on the fly, for a pair without records: false when their bound beats m
+  /// (as withinMargin's kApart).
   bool mayBeWithin(const Object& a, const Object& b, S m) const {
-    const Separation<S> s = separation(a, b, tolerance_, m);
-    return !(s.lower_bound > m + s.margin);
+    const float within = float(m);
+    const VolumeGap gap = separationOnTheFly(a, b, rate_, within);
+    return !(gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within);
   }
 
  private:
-  S tolerance_;
+  // A distance as separationOf's `enough` (infinite beyond floats).
+  static float enoughOf(S best) {
+    const double within = double(best);
+    return within >= double(FLT_MAX) ? std::numeric_limits<float>::infinity() : float(within);
+  }
+
   float rate_;
   bool prove_;
   bool cull_;

@@ -23,7 +23,7 @@ namespace detail {
 
 namespace {
 
-// inscribedBall in the geometry's frame: the ball's centre is on the z axis at `z`.
+// A ball inside the geometry, in its frame: the ball's centre is on the z axis at `z`.
 template <typename S>
 bool localInscribedBall(const fcl::CollisionGeometry<S>& g, double& z, double& r) {
   if (!g.isOccupied()) return false;
@@ -195,6 +195,88 @@ void buildVolume(const fcl::CollisionObject<S>& o, VolumeSphere& sphere, VolumeS
 }
 
 template <typename S>
+void buildBall(const fcl::CollisionObject<S>& o, VolumeBall<S>& ball) {
+  ball.sphere = kNoVolume;
+  const fcl::CollisionGeometry<S>* g = o.collisionGeometry().get();
+  if (g == nullptr) return;
+  const fcl::NODE_TYPE type = g->getNodeType();
+  if (type == fcl::GEOM_PLANE || type == fcl::GEOM_HALFSPACE || type == fcl::GEOM_OCTREE) return;
+  const bool is_sphere = type == fcl::GEOM_SPHERE;
+  const S* m = o.getTransform().matrix().data();  // 4x4, by columns
+  ball.geometry = g;
+  ball.pose = m;
+  // A sphere about its frame's origin; any other geometry, its local AABB's circumscribed
+  // sphere about that box's centre, as FCL keeps them (what buildVolume computes from the box).
+  const S r = is_sphere ? static_cast<const fcl::Sphere<S>*>(g)->radius : g->aabb_radius;
+  S c[3] = {m[12], m[13], m[14]};
+  if (!is_sphere) {
+    const S* a = g->aabb_center.data();
+    for (int k = 0; k < 3; ++k) c[k] += m[k] * a[0] + m[4 + k] * a[1] + m[8 + k] * a[2];
+  }
+  const S scale = std::max({std::fabs(c[0]), std::fabs(c[1]), std::fabs(c[2]), r});
+  // Beyond what the cull's float arithmetic takes (and not finite, and r < 0): no volumes.
+  if (!(std::isfinite(c[0] + c[1] + c[2] + r) && r >= S(0) && scale <= S(kVolumeMaxScale))) return;
+  // Rounding the centre to floats moves it by under an ulp of |c|, and the radius rounds by half
+  // an ulp of r; a geometry of float S keeps aabb_radius to a few ulps of r and the centre to a
+  // few of |c| (volumeMarginRate's floor for float covers far more).
+  for (int k = 0; k < 3; ++k) ball.sphere.c[k] = static_cast<float>(c[k]);
+  ball.sphere.r = static_cast<float>(double(r) + 8.0 * FLT_EPSILON * double(scale) + FLT_MIN);
+  ball.scale = static_cast<float>(scale);
+  ball.exact = is_sphere;
+}
+
+template <typename S>
+bool buildBox(const VolumeBall<S>& ball, VolumeShape& shape) {
+  shape.scale = ball.scale;
+  shape.inner_r = 0.f;
+  shape.inner_z = 0.f;
+  if (ball.exact) {
+    shape.flags = kVolumeSphere;
+    return true;
+  }
+  shape.flags = 0u;
+  const fcl::CollisionGeometry<S>* g = ball.geometry;
+  const fcl::AABB<S>& local = g->aabb_local;
+  if ((local.max_ + local.min_) * S(0.5) != g->aabb_center) return false;
+  const S* m = ball.pose;
+  // The axes round by half an ulp each (1.5 ulps of r at a corner), the half extents by half an
+  // ulp, the centre (buildBall) by an ulp of |c|: buildBall's slack covers it.
+  const double slack = 8.0 * FLT_EPSILON * double(ball.scale) + FLT_MIN;
+  float sum = 0.f;  // not finite if any axis or extent is not
+  bool sized = true;
+  for (int k = 0; k < 3; ++k) {
+    const double e = 0.5 * (double(local.max_[k]) - double(local.min_[k]));
+    shape.e[k] = static_cast<float>(e + slack);
+    sized = sized && e >= 0;
+    sum += shape.e[k];
+    for (int j = 0; j < 3; ++j) {
+      shape.R[3 * k + j] = static_cast<float>(m[4 * j + k]);
+      sum += shape.R[3 * k + j];
+    }
+  }
+  return sized && std::isfinite(sum);
+}
+
+template <typename S>
+bool buildInner(const VolumeBall<S>& ball, VolumeShape& shape) {
+  const fcl::CollisionGeometry<S>* g = ball.geometry;
+  // As localVolume: only for geometries centred on their frame's origin.
+  const double mid = ball.exact ? 0.0 : double(g->aabb_center.cwiseAbs().maxCoeff());
+  double z = 0, inner = 0;
+  if (!(mid <= 1e-12 * (1.0 + double(ball.scale))) || !localInscribedBall(*g, z, inner))
+    return false;
+  if (ball.exact)  // a sphere's box record has no axes; its ball is about its centre
+    for (float& x : shape.R) x = 0.f;
+  // buildBox's slack for the rounded centre and axes, and the ball's centre being the geometry's
+  // origin, not its box's centre (under 2 mid away).
+  const double r = inner - 8.0 * FLT_EPSILON * double(ball.scale) - FLT_MIN - 2.0 * mid;
+  if (!(r > 0)) return false;
+  shape.inner_r = static_cast<float>(r);
+  shape.inner_z = static_cast<float>(z);
+  return true;
+}
+
+template <typename S>
 void rebuildVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, VolumeSphere& sphere,
                    VolumeShape& shape) {
   localVolume(o.collisionGeometry().get(), local);
@@ -235,6 +317,12 @@ bool refreshVolume(const fcl::CollisionObject<S>& o, VolumeSource& local, Volume
 
 template void buildVolume<double>(const fcl::CollisionObject<double>&, VolumeSphere&, VolumeShape&);
 template void buildVolume<float>(const fcl::CollisionObject<float>&, VolumeSphere&, VolumeShape&);
+template void buildBall<double>(const fcl::CollisionObject<double>&, VolumeBall<double>&);
+template void buildBall<float>(const fcl::CollisionObject<float>&, VolumeBall<float>&);
+template bool buildBox<double>(const VolumeBall<double>&, VolumeShape&);
+template bool buildBox<float>(const VolumeBall<float>&, VolumeShape&);
+template bool buildInner<double>(const VolumeBall<double>&, VolumeShape&);
+template bool buildInner<float>(const VolumeBall<float>&, VolumeShape&);
 template void moveVolume<double>(const fcl::CollisionObject<double>&, VolumeSource&, VolumeSphere&,
                                  VolumeShape&);
 template void moveVolume<float>(const fcl::CollisionObject<float>&, VolumeSource&, VolumeSphere&,
