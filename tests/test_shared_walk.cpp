@@ -170,7 +170,7 @@ TEST(SharedWalk, EdgesOfSmallStepsGiveTheSerialScansAnswer) {
 // such turns, against brute force. Pairs apart in one state of a run meet in others.
 TEST(SharedWalk, LinksTurningInPlaceGiveTheSerialScansAnswer) {
   World w;
-  fillWorld(w, 220, 31, true, false);
+  fillWorld(w, 120, 31, true, false);
   std::mt19937 rng(14);
   cube::BodySet<S> body;
   for (std::size_t l = 0; l < 6; ++l)
@@ -178,7 +178,7 @@ TEST(SharedWalk, LinksTurningInPlaceGiveTheSerialScansAnswer) {
         l == 2 ? meshBox(5.0, 0.25, 0.25) : Geometry(std::make_shared<fcl::Boxd>(5.0, 0.2, 0.3)),
         l % 2 ? 0.05 : 0.0);
   std::uniform_real_distribution<double> u(-1, 1);
-  const std::size_t per = 40, edges = 14;
+  const std::size_t per = 24, edges = 10;
   std::vector<fcl::Transform3d> poses;
   std::vector<std::size_t> starts;
   for (std::size_t e = 0; e < edges; ++e) {
@@ -192,7 +192,7 @@ TEST(SharedWalk, LinksTurningInPlaceGiveTheSerialScansAnswer) {
     for (std::size_t k = 0; k < per; ++k)
       for (std::size_t l = 0; l < body.size(); ++l) {
         fcl::Transform3d tf = base[l];
-        tf.linear() = tf.linear() * fcl::AngleAxisd(0.02 * double(k), axis[l]).toRotationMatrix();
+        tf.linear() = tf.linear() * fcl::AngleAxisd(0.035 * double(k), axis[l]).toRotationMatrix();
         poses.push_back(tf);
       }
   }

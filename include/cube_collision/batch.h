@@ -166,10 +166,11 @@ enum class MotionOrder {
 /// edge, the index within the edge of its first colliding state in `order`, or kNoIndex if all
 /// are free: what checking the edge's states one by one in that order and stopping at the first
 /// collision gives, whatever the thread count. An edge's states are read in runs of consecutive
-/// places in the order, of 5, 8, 16 and then 32 states (states of a run that lie close
-/// together share one walk of the world); once an edge's colliding state is known, no state
-/// after it in the order is started, and no later run is read: on one thread, for an answer at
-/// place r of the order, at most max(5, 2 r + 3) of the edge's states are read. Only
+/// places in the order, of 5, 8, 16 and then 32 states in path order, of 1, 4, 8, 16 and then
+/// 32 in bisection order (states of a run that lie close together share one walk of the
+/// world); once an edge's colliding state is known, no state after it in the order is started,
+/// and no later run is read: on one thread, for an answer at place r of the order, at most
+/// max(5, 2 r + 3) of the edge's states are read. Only
 /// self_collision, threads and continuous of `options` apply (continuous: see "Continuous edges"
 /// below; a state's check then also reads its neighbours' poses in the edge, and a NaN or
 /// infinite one throws there). No poses and no edges: an empty answer. Throws

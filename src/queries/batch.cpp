@@ -163,9 +163,11 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
       items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + visit[r]};
   }
   // Runs of items placed together (StateChecker::placeGroup): per edge runs of consecutive ranks
-  // of 5, 8, 16 states and then kGroupStates (states consecutive along an edge lie close together
-  // and share a walk). A run's states are read before any is checked: a run starting at rank s
-  // holds at most s + 3 states (5 from the first), so an answer at rank r reads at most
+  // of 5, 8, 16 states and then kGroupStates in path order (states consecutive along an edge lie
+  // close together and share a walk); in bisection order the first state alone, then 4, 8, 16,
+  // kGroupStates (its first ranks lie far apart: the first answers an edge whose end collides,
+  // without reading more). A run's states are read before any is checked: a run starting at
+  // rank s holds at most s + 3 states (5 from the first), so an answer at rank r reads at most
   // max(5, 2 r + 3) states.
   constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
   struct Run {
@@ -176,10 +178,11 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   for (std::size_t e = 0; e < edges; ++e) {
     const std::size_t begin = edge_starts[e];
     const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
-    for (std::size_t i = begin, size = 5; i < end;) {
+    const std::size_t first = order == MotionOrder::path ? 5 : 1;
+    for (std::size_t i = begin, size = first; i < end;) {
       runs.push_back(Run{i, std::min(size, end - i)});
       i += size;
-      size = size == 5 ? 8 : std::min(kRun, 2 * size);
+      size = size == 1 ? 4 : size == 5 ? 8 : std::min(kRun, 2 * size);
     }
   }
   // Per edge: the lowest rank known to collide (or to hold a bad pose).
