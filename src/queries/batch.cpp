@@ -314,11 +314,8 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
 namespace detail {
 namespace {
 
-// checkMotions' checks of its arguments; the number of states.
-template <typename S>
-std::size_t checkedEdges(const Links<S>& links, const std::vector<fcl::Transform3<S>>& poses,
-                         const std::vector<std::size_t>& edge_starts) {
-  const std::size_t states = checkedStates(links, poses, "checkMotions");
+// checkMotions' check of its edge starts against its number of states.
+void checkEdgeStarts(std::size_t states, const std::vector<std::size_t>& edge_starts) {
   if (edge_starts.empty() && states > 0)
     batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
   for (std::size_t e = 0; e < edge_starts.size(); ++e)
@@ -326,6 +323,14 @@ std::size_t checkedEdges(const Links<S>& links, const std::vector<fcl::Transform
         edge_starts[e] >= states)
       batchError("checkMotions",
                  "edge_starts must start at 0 and increase strictly within the states");
+}
+
+// checkMotions' checks of its arguments; the number of states.
+template <typename S>
+std::size_t checkedEdges(const Links<S>& links, const std::vector<fcl::Transform3<S>>& poses,
+                         const std::vector<std::size_t>& edge_starts) {
+  const std::size_t states = checkedStates(links, poses, "checkMotions");
+  checkEdgeStarts(states, edge_starts);
   return states;
 }
 
@@ -335,13 +340,7 @@ void checkPoseEdges(const Links<S>& links, std::size_t states,
                     const std::vector<std::size_t>& edge_starts, const PoseFunction<S>& pose_of) {
   if (links.size() == 0) batchError("checkMotions", "the body set has no link");
   if (!pose_of) batchError("checkMotions", "null pose function");
-  if (edge_starts.empty() && states > 0)
-    batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
-  for (std::size_t e = 0; e < edge_starts.size(); ++e)
-    if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
-        edge_starts[e] >= states)
-      batchError("checkMotions",
-                 "edge_starts must start at 0 and increase strictly within the states");
+  checkEdgeStarts(states, edge_starts);
 }
 
 // Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
