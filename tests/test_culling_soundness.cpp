@@ -125,6 +125,54 @@ TYPED_TEST(Culling, PairJudgeNeverAnswersAgainstFcl) {
   EXPECT_GT(proved * 100, pairs) << proved << " of " << pairs;
 }
 
+// Within a margin, capsules, cylinders and cones are judged on their own round bounds, not only
+// on their boxes: pairs whose oriented boxes come within the margin while the shapes stay
+// farther apart than it (a corner of one box past the other's round side) are settled apart,
+// and never one that FCL finds within the margin.
+TYPED_TEST(Culling, WithinMarginSettlesRoundPairsTheirBoxesLeaveOpen) {
+  using S = TypeParam;
+  using cube::detail::Records;
+  using cube::detail::Verdict;
+  const fcl::CollisionRequest<S> request;
+  const fcl::DistanceRequest<S> distance_request;
+  const cube::detail::PairJudge<S> judge(request);
+  std::vector<std::pair<std::string, Geometry<S>>> round;
+  for (const auto& kind : allKinds<S>())
+    if (kind.first == "capsule" || kind.first == "cone" || kind.first == "cylinder")
+      round.push_back(kind);
+  ASSERT_EQ(round.size(), 3u);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-1.6, 1.6), margin(0.02, 0.15);
+  std::size_t boxes_open = 0, settled = 0;
+  for (const auto& [na, ga] : round)
+    for (const auto& [nb, gb] : round)
+      for (int rep = 0; rep < 400; ++rep) {
+        fcl::CollisionObject<S> a(ga), b(gb);
+        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
+        b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng)));
+        a.computeAABB();
+        b.computeAABB();
+        cube::detail::VolumeSphere sa, sb;
+        cube::detail::VolumeShape ha, hb;
+        cube::detail::buildVolume(a, sa, ha);
+        cube::detail::buildVolume(b, sb, hb);
+        const S m = S(margin(rng));
+        const cube::detail::VolumeGap boxes =
+            cube::detail::separationOf(sa, ha, sb, hb, float(judge.rate()), float(m));
+        if (boxes.lower_bound > float(m) + boxes.margin) continue;  // the boxes settle it
+        fcl::DistanceResult<S> res;
+        const S d = fcl::distance(&a, &b, distance_request, res);
+        if (!(d > S(2) * m)) continue;  // only pairs well beyond the margin
+        ++boxes_open;
+        const Verdict v = judge.withinMargin(Records{&sa, &ha}, Records{&sb, &hb}, m);
+        ASSERT_NE(v, Verdict::kTouching) << na << " vs " << nb << " rep " << rep;
+        settled += v == Verdict::kApart;
+      }
+  // The scene has such pairs, and the round bounds settle most of them.
+  ASSERT_GT(boxes_open, 200u);
+  EXPECT_GT(settled * 2, boxes_open) << settled << " of " << boxes_open;
+}
+
 // The tight volumes' bound, less its margin, never exceeds FCL's own distance: every kind, at
 // random poses from touching to well apart. And it is close enough to matter: for most pairs
 // a few object sizes apart it is at least half the distance.

@@ -135,26 +135,28 @@ inline Verdict looseVerdictOf(const VolumeSphere& sa, const VolumeShape& ha, con
 
 /// The rest of verdictOf, for a pair looseVerdictOf left kUnknown: kApart when, for a capsule,
 /// cylinder or cone, the capsule about its axis (outerCapsule) is apart from the other's (a
-/// sphere's, capsule's, cylinder's or cone's) or from the other's box by more than innerMargin;
+/// sphere's, capsule's, cylinder's or cone's) or from the other's box by more than innerMargin
+/// plus `beyond` (>= 0: a margin the pair must be farther apart than, already rounded up);
 /// kTouching, with `prove`, when the inner volumes meet by more than innerMargin
 /// (innerVolumesMeet: spheres, boxes, capsules, cylinders); else kUnknown.
 inline Verdict tightVerdictOf(const VolumeSphere& sa, const VolumeShape& ha, const VolumeSphere& sb,
-                              const VolumeShape& hb, float rate, bool prove) {
+                              const VolumeShape& hb, float rate, bool prove, float beyond = 0.f) {
   using namespace volume_detail;
   if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;
   const bool round_a = (ha.flags & kRoundKinds) != 0, round_b = (hb.flags & kRoundKinds) != 0;
   const bool sphere_pair = (ha.flags & hb.flags & kVolumeSphere) != 0;  // looseVerdictOf's exact
   if (sphere_pair) return Verdict::kUnknown;
   const float m = innerMargin(sa, ha, sb, hb, rate);
+  const float apart = m + beyond;
   if (round_a && round_b) {
-    if (capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) > m)
+    if (capsuleGap(sa, ha, outerCapsule(sa, ha), sb, hb, outerCapsule(sb, hb)) > apart)
       return Verdict::kApart;
   } else if (round_a || round_b) {
     // A capsule, cylinder or cone against another's box (a sphere's gap to it was exact).
     const bool a_round = round_a && (ha.flags & kVolumeSphere) == 0;
     const bool b_round = round_b && (hb.flags & kVolumeSphere) == 0;
-    if ((a_round && capsuleBoxGap(sa, ha, outerCapsule(sa, ha), sb, hb) > m) ||
-        (b_round && capsuleBoxGap(sb, hb, outerCapsule(sb, hb), sa, ha) > m))
+    if ((a_round && capsuleBoxGap(sa, ha, outerCapsule(sa, ha), sb, hb) > apart) ||
+        (b_round && capsuleBoxGap(sb, hb, outerCapsule(sb, hb), sa, ha) > apart))
       return Verdict::kApart;
   }
   if (prove && ha.inner_r > 0.f && hb.inner_r > 0.f && innerVolumesMeet(sa, ha, sb, hb, m))

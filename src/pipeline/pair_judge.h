@@ -112,10 +112,14 @@ class PairJudge {
     const VolumeShape &ha = *a.shape, &hb = *b.shape;
     if (m == S(0)) return verdictOf(sa, ha, sb, hb, rate_, prove_);
     const float within = float(m);
+    const float beyond = within + 4.f * FLT_EPSILON * within;  // m's rounding to a float
     const VolumeGap gap = separationOf(sa, ha, sb, hb, rate_, within);
-    if (gap.lower_bound > within + gap.margin + 4.f * FLT_EPSILON * within) return Verdict::kApart;
-    return verdictOf(sa, ha, sb, hb, rate_, prove_) == Verdict::kTouching ? Verdict::kTouching
-                                                                          : Verdict::kUnknown;
+    if (gap.lower_bound > beyond + gap.margin) return Verdict::kApart;
+    if (!(sa.r >= 0.f) || !(sb.r >= 0.f)) return Verdict::kUnknown;  // no volumes: no bound
+    if (prove_ && ha.inner_r > 0.f && hb.inner_r > 0.f && innerBallsMeet(sa, ha, sb, hb, rate_))
+      return Verdict::kTouching;
+    // The round shapes' bounds, farther than the margin: kApart; or the inner volumes' proof.
+    return tightVerdictOf(sa, ha, sb, hb, rate_, prove_, beyond);
   }
   /// On records built on the fly, for a pair without records: false when their bound beats m
   /// (as withinMargin's kApart).
