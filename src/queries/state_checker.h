@@ -4,6 +4,10 @@
 // the world's walks through the core's query entries, the cull on the records, FCL on the rest.
 // Private to the library.
 
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/collision_request.h>
 #include <fcl/narrowphase/collision_result.h>
 #include <fcl/narrowphase/distance_request.h>
@@ -726,14 +730,62 @@ class StateChecker {
   // plus the links' tolerance, beyond rounding): its BVH and octree walks skip what lies beyond
   // the cap, and a distance of at most m is found as without it.
   bool narrow(const Object& a, const Object& b, S m, const Candidate& c) {
+    const bool raised = raised_ && m > S(0);
+    S cap = 0;
+    if (raised) {
+      const S slack = c.is_link ? grow_[c.link] + grow_[c.other] : grow_[c.link];
+      cap = m + m / S(8) + slack;
+      // The grown primitive holds the primitive: clear of it, the pair neither touches nor
+      // comes within m, and neither FCL call below is needed.
+      if (grownApart(a, b, cap)) return false;
+    }
     fcl::CollisionResult<S> result;
     if (fclCollide(&a, &b, request_, result) > 0) return true;
     if (!(m > S(0))) return false;
-    if (!raised_) return pairDistance(a, b) <= m;
-    const S slack = c.is_link ? grow_[c.link] + grow_[c.other] : grow_[c.link];
+    if (!raised) return pairDistance(a, b) <= m;
     fcl::DistanceResult<S> capped;
-    capped.min_distance = m + m / S(8) + slack;
+    capped.min_distance = cap;
     return fclDistance(&a, &b, distance_request_, capped) <= m;
+  }
+
+  // For a mesh and a box, sphere, capsule or cylinder: whether the mesh stays clear of the
+  // primitive grown to hold every point within `reach` of it (its distance is then above reach).
+  // FCL's collision walks the mesh's BVH with cheaper tests than its distance does, and most
+  // pairs within a raised margin are farther apart than it.
+  bool grownApart(const Object& a, const Object& b, S reach) {
+    const Object* mesh = &a;
+    const Object* shape = &b;
+    if (mesh->getObjectType() != fcl::OT_BVH) std::swap(mesh, shape);
+    if (mesh->getObjectType() != fcl::OT_BVH || shape->getObjectType() != fcl::OT_GEOM ||
+        !(reach < std::numeric_limits<S>::infinity()))
+      return false;
+    const fcl::CollisionGeometry<S>& g = *shape->collisionGeometry();
+    std::shared_ptr<fcl::CollisionGeometry<S>> grown;
+    switch (shape->getNodeType()) {
+      case fcl::GEOM_BOX:
+        grown = std::make_shared<fcl::Box<S>>(static_cast<const fcl::Box<S>&>(g).side +
+                                              fcl::Vector3<S>::Constant(S(2) * reach));
+        break;
+      case fcl::GEOM_SPHERE:
+        grown =
+            std::make_shared<fcl::Sphere<S>>(static_cast<const fcl::Sphere<S>&>(g).radius + reach);
+        break;
+      case fcl::GEOM_CAPSULE: {
+        const auto& x = static_cast<const fcl::Capsule<S>&>(g);
+        grown = std::make_shared<fcl::Capsule<S>>(x.radius + reach, x.lz);
+        break;
+      }
+      case fcl::GEOM_CYLINDER: {
+        const auto& x = static_cast<const fcl::Cylinder<S>&>(g);
+        grown = std::make_shared<fcl::Cylinder<S>>(x.radius + reach, x.lz + S(2) * reach);
+        break;
+      }
+      default:
+        return false;
+    }
+    const fcl::CollisionObject<S> placed(grown, shape->getTransform());
+    fcl::CollisionResult<S> result;
+    return fclCollide(&placed, mesh, request_, result) == 0;
   }
 
   S pairDistance(const Object& a, const Object& b) {
