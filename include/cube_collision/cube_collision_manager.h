@@ -153,6 +153,27 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// Every excluded pair, each as (earlier registered, later registered), sorted by the
   /// registration order of the first, then of the second.
   std::vector<std::pair<Object*, Object*>> excludedPairs() const;
+  /// Whether this manager's queries hand the pair (a, b) to their callback when the two AABBs,
+  /// each grown by its margin, overlap: the rules above, decided where the queries decide them
+  /// (for a narrow phase of one's own over pairs found elsewhere, as Box2D's
+  /// b2ShouldShapesCollide). `a` is an object registered here (the callbacks' first object);
+  /// `b`, the second, is looked for as the queries look for it:
+  /// - `other` null or this manager: b registered here is a pair of the self query (collide());
+  ///   b not registered here is a query object of collide(b), with the default bits and in no
+  ///   excluded pair;
+  /// - `other` another CubeCollisionManager<S>: b registered there, as collide(other) pairs it:
+  ///   b's bits are other's, and the pair is dropped if either manager excludes it;
+  /// - `other` a manager of another kind: b is a query object here, as collide(other) pairs
+  ///   its objects (its bits and exclusions this manager's if registered here, else none).
+  /// True if the filter bits pass, the pair is not excluded, and then this manager's pair
+  /// filter (if set) keeps it, asked once as the queries ask it: keep(a, b), or, for two objects
+  /// registered here under Config::canonical_pairs, keep(earlier registered, later registered).
+  /// False, with nothing asked, if a == b, a is not registered here, or b is not registered in
+  /// another CubeCollisionManager `other`. O(1) on average, the pair filter's call aside.
+  /// Thread-safe as the const queries are; the pair filter runs on the calling thread and may
+  /// not change this manager (or `other`): std::logic_error, as from a query's callback.
+  /// Throws std::invalid_argument if a or b is null.
+  bool pairPasses(Object* a, Object* b, const Base* other = nullptr) const;
   /// Manager-wide margin (>= 0, finite), for every object without one of its own and for query
   /// objects not registered here: queries report the pairs whose AABBs overlap once each is
   /// grown by its margin. Between managers: against another CubeCollisionManager, each side's

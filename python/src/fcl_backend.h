@@ -1,17 +1,16 @@
 #pragma once
 
-// backend="fcl": FCL's DynamicAABBTreeCollisionManager under the pair rules of the cube manager's
-// interface (filter bits, margins that grow the boxes, a pair predicate, no object paired with
-// itself), so that the library's entry points over any FCL manager (queries.h: collideAll,
-// overlappingPairs, collidePairs, minimumDistance) answer its queries as they answer the cube
-// manager's: one code path for both backends, FCL's tree deciding the candidate pairs.
+// backend="fcl": FCL's DynamicAABBTreeCollisionManager under the library's pair rules. The rules
+// live in a cube manager that holds the same objects for their rules only (registered, never set
+// up nor queried): filter bits, margins and excluded pairs are set and read there, and each pair
+// FCL's tree finds is handed on only if that manager's pairPasses lets it pair, so that the
+// library's entry points over any FCL manager (queries.h: collideAll, overlappingPairs,
+// collidePairs, minimumDistance) answer its queries as they answer the cube manager's: one code
+// path for both backends, FCL's tree deciding the candidate pairs.
 
+#include <cube_collision/cube_collision_manager.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 
-#include <cstdint>
-#include <functional>
-#include <unordered_map>
-#include <utility>
 #include <vector>
 
 namespace cubepy {
@@ -20,20 +19,17 @@ class FclBackend final : public fcl::BroadPhaseCollisionManagerd {
  public:
   using Obj = fcl::CollisionObjectd;
 
-  // Rules, as CubeCollisionManager's (setFilter, filter, setMargin, margin, setPairFilter).
-  void setFilter(Obj* obj, std::uint64_t category, std::uint64_t mask);
-  /// {category, mask}; the default bits for an object not registered here.
-  std::pair<std::uint64_t, std::uint64_t> filter(const Obj* obj) const;
-  /// The manager-wide margin: every box of an object without its own grown by it.
+  /// The rules object: filter bits, margins and excluded pairs of the objects registered here,
+  /// set and read there (margins through setMargin below, which also grows FCL's boxes).
+  cube::CubeCollisionManagerd& rules() { return rules_; }
+  const cube::CubeCollisionManagerd& rules() const { return rules_; }
+  /// The manager-wide margin, then every box grown by it.
   void setMargin(double margin);
-  /// obj's own margin (registered objects only).
+  /// obj's own margin (registered objects only), then its box grown by it.
   void setMargin(Obj* obj, double margin);
-  /// obj's own margin, else the manager-wide one (also for objects not registered here).
-  double margin(const Obj* obj) const;
-  /// Asked for each pair whose bits pass, within this manager's queries; empty: none.
-  void setPairFilter(std::function<bool(Obj*, Obj*)> keep) { keep_ = std::move(keep); }
 
-  // Registration: each box is the object's AABB grown by its margin.
+  // Registration, in FCL's tree and in the rules object: each box in FCL's tree is the object's
+  // AABB grown by its margin.
   void registerObjects(const std::vector<Obj*>& objs) override;
   void registerObject(Obj* obj) override;
   void unregisterObject(Obj* obj) override;
@@ -46,8 +42,8 @@ class FclBackend final : public fcl::BroadPhaseCollisionManagerd {
   bool empty() const override { return tree_.empty(); }
   size_t size() const override { return tree_.size(); }
 
-  // FCL's tree's queries, each pair handed on only if the rules let it pair. Against a manager
-  // of another kind, each of its objects is asked of the tree (FCL's tree takes another
+  // FCL's tree's queries, each pair handed on only if the rules object lets it pair. Against a
+  // manager of another kind, each of its objects is asked of the tree (FCL's tree takes another
   // manager only of its own type); pairs come as (object here, object there).
   void collide(Obj* obj, void* cdata, fcl::CollisionCallBack<double> cb) const override;
   void distance(Obj* obj, void* cdata, fcl::DistanceCallBack<double> cb) const override;
@@ -59,17 +55,11 @@ class FclBackend final : public fcl::BroadPhaseCollisionManagerd {
                 fcl::DistanceCallBack<double> cb) const override;
 
  private:
-  struct Rule {
-    std::uint64_t category = 1, mask = ~std::uint64_t(0);
-    double margin = -1;  // < 0: the manager-wide one
-  };
   struct Gate;
   void grow(Obj* obj) const;
 
   fcl::DynamicAABBTreeCollisionManagerd tree_;
-  std::unordered_map<const Obj*, Rule> rules_;
-  std::function<bool(Obj*, Obj*)> keep_;
-  double margin_ = 0;
+  cube::CubeCollisionManagerd rules_;
 };
 
 }  // namespace cubepy

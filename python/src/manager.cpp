@@ -100,54 +100,31 @@ const Entry* Manager::byGeometry(const fcl::CollisionGeometryd* g) const {
   return it == by_geometry_.end() ? nullptr : it->second;
 }
 
-bool Manager::isExcluded(const Entry* a, const Entry* b) const {
-  // The cube backend's excluded pairs are its manager's, decided in its walks.
-  if (cube_) return cube_->isExcluded(a->obj.get(), b->obj.get());
-  if (!a->exclusions || !b->exclusions) return false;
-  auto [lo, hi] = excluded_.equal_range(key(a, b));
-  for (auto it = lo; it != hi; ++it)
-    if ((it->second.first == a && it->second.second == b) ||
-        (it->second.first == b && it->second.second == a))
-      return true;
-  return false;
-}
-
 std::pair<std::uint64_t, std::uint64_t> Manager::filterOf(const Entry& e) const {
-  return rules([&](auto& r) { return r.filter(e.obj.get()); });
+  return rules().filter(e.obj.get());
 }
 
 double Manager::marginOf(const Entry* e) const {
-  const fcl::CollisionObjectd* o = e ? e->obj.get() : nullptr;
-  return rules([&](auto& r) { return r.margin(o); });
+  return rules().margin(e ? e->obj.get() : nullptr);
 }
 
 std::vector<std::pair<std::string, std::string>> Manager::excludedPairs() const {
   std::vector<std::pair<std::string, std::string>> out;
-  if (cube_)
-    for (const auto& [a, b] : cube_->excludedPairs())
-      out.emplace_back(entryOf(a)->name, entryOf(b)->name);
-  else
-    for (const auto& [k, p] : excluded_) out.emplace_back(p.first->name, p.second->name);
+  for (const auto& [a, b] : rules().excludedPairs())
+    out.emplace_back(entryOf(a)->name, entryOf(b)->name);
   std::sort(out.begin(), out.end());
   return out;
 }
 
-void Manager::setPairFilter(
-    std::function<bool(fcl::CollisionObjectd*, fcl::CollisionObjectd*)> keep) {
-  rules([&](auto& r) { r.setPairFilter(std::move(keep)); });
-}
-
-void Manager::installPredicate() {
-  if (cube_) return;  // the cube manager's excluded pairs need no predicate
-  if (excluded_.empty()) {
-    setPairFilter({});
-    return;
-  }
-  setPairFilter([this](fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
-    const Entry* ea = entryOf(a);
-    const Entry* eb = entryOf(b);
-    return !(ea && eb && ea->exclusions && eb->exclusions && isExcluded(ea, eb));
-  });
+void Manager::applyMargin(fcl::CollisionObjectd* obj, double margin) {
+  if (cube_ && obj)
+    cube_->setMargin(obj, margin);
+  else if (cube_)
+    cube_->setMargin(margin);
+  else if (obj)
+    fcl_->setMargin(obj, margin);
+  else
+    fcl_->setMargin(margin);
 }
 
 void Manager::add(std::vector<NewObject> objects, const char* what) {
@@ -201,10 +178,8 @@ void Manager::add(std::vector<NewObject> objects, const char* what) {
   for (std::size_t i = 0; i < made.size(); ++i) {
     const NewObject& o = objects[i];
     fcl::CollisionObjectd* obj = made[i]->obj.get();
-    rules([&](auto& r) {
-      if (o.category != 1 || o.mask != ~std::uint64_t(0)) r.setFilter(obj, o.category, o.mask);
-      if (o.margin >= 0) r.setMargin(obj, o.margin);
-    });
+    if (o.category != 1 || o.mask != ~std::uint64_t(0)) rules().setFilter(obj, o.category, o.mask);
+    if (o.margin >= 0) applyMargin(obj, o.margin);
   }
   if (!cube_ && raw.size() == 1)
     bp_->update(raw[0]);  // FCL rebalances its tree incrementally, as after any update
@@ -231,17 +206,7 @@ void Manager::remove(const std::string& name) {
   Entry* e = find(name);
   bp_->unregisterObject(e->obj.get());
   if (!cube_) bp_->setup();
-  // The cube manager forgot the object's excluded pairs as it unregistered it.
-  if (e->exclusions)
-    for (auto it = excluded_.begin(); it != excluded_.end();) {
-      if (it->second.first == e || it->second.second == e) {
-        const Entry* other = it->second.first == e ? it->second.second : it->second.first;
-        const_cast<Entry*>(other)->exclusions--;
-        it = excluded_.erase(it);
-      } else {
-        ++it;
-      }
-    }
+  // The rules object forgot the object's bits, margin and excluded pairs as it unregistered it.
   if (e->own_margin) --own_margins_;
   if (e->geometry->kind == "mesh") --meshes_;
   if (e->geometry->kind == "plane" || e->geometry->kind == "halfspace") --planes_;
@@ -250,7 +215,6 @@ void Manager::remove(const std::string& name) {
   const auto it = entries_.find(name);
   dead = std::move(it->second);
   entries_.erase(it);
-  installPredicate();
 }
 
 void Manager::setTransforms(const std::vector<std::string>& names,
@@ -287,7 +251,7 @@ void Manager::setFilter(const std::string& name, std::uint64_t category, std::ui
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
   Entry* e = find(name);
-  rules([&](auto& r) { r.setFilter(e->obj.get(), category, mask); });
+  rules().setFilter(e->obj.get(), category, mask);
 }
 
 void Manager::excludePair(const std::string& a, const std::string& b, bool on, const char* where) {
@@ -297,38 +261,14 @@ void Manager::excludePair(const std::string& a, const std::string& b, bool on, c
   Entry* ea = find(a);
   Entry* eb = find(b);
   if (ea == eb) throw py::value_error(std::string(where) + ": an object never pairs with itself");
-  if (cube_) {
-    cube_->excludePair(ea->obj.get(), eb->obj.get(), on);
-    return;
-  }
-  const bool present = isExcluded(ea, eb);
-  if (on && !present) {
-    excluded_.emplace(key(ea, eb), std::make_pair(ea, eb));
-    ea->exclusions++;
-    eb->exclusions++;
-  } else if (!on && present) {
-    auto [lo, hi] = excluded_.equal_range(key(ea, eb));
-    for (auto it = lo; it != hi; ++it)
-      if ((it->second.first == ea && it->second.second == eb) ||
-          (it->second.first == eb && it->second.second == ea)) {
-        excluded_.erase(it);
-        break;
-      }
-    ea->exclusions--;
-    eb->exclusions--;
-  }
-  installPredicate();
+  rules().excludePair(ea->obj.get(), eb->obj.get(), on);
 }
 
 void Manager::clearExcluded(const char* where) {
   noCallback(where);
   py::gil_scoped_release nogil;
   std::unique_lock lock(mutex);
-  if (cube_)
-    for (const auto& [a, b] : cube_->excludedPairs()) cube_->excludePair(a, b, false);
-  excluded_.clear();
-  for (auto& [n, e] : entries_) e->exclusions = 0;
-  installPredicate();
+  for (const auto& [a, b] : rules().excludedPairs()) rules().excludePair(a, b, false);
 }
 
 void Manager::setMargin(double margin, const std::string* name) {
@@ -338,11 +278,11 @@ void Manager::setMargin(double margin, const std::string* name) {
   std::unique_lock lock(mutex);
   if (name) {
     Entry* e = find(*name);
-    rules([&](auto& r) { r.setMargin(e->obj.get(), margin); });
+    applyMargin(e->obj.get(), margin);
     if (!e->own_margin) ++own_margins_;
     e->own_margin = true;
   } else {
-    rules([&](auto& r) { r.setMargin(margin); });
+    applyMargin(nullptr, margin);
   }
 }
 

@@ -1,13 +1,13 @@
 #pragma once
 
 // The Python manager: named objects over a broadphase (the cube manager, or FCL's dynamic AABB
-// tree under the same pair rules for backend="fcl", fcl_backend.h), which keeps the objects'
-// filter bits and margins: queries and pickling read them there.
+// tree under the same pair rules for backend="fcl", fcl_backend.h). The objects' filter bits,
+// margins and excluded pairs live in one rules object, a cube manager (the broadphase itself, or
+// the FCL backend's): queries and pickling read them there.
 
 #include <cube_collision/cube_collision_manager.h>
 #include <fcl/narrowphase/collision_object.h>
 
-#include <functional>
 #include <memory>
 #include <shared_mutex>
 #include <stdexcept>
@@ -71,11 +71,9 @@ struct Entry {
   std::uint64_t seq = 0;  ///< registration number: order of names, pickling, ties
   GeometryPtr geometry;   ///< what the user gave (its FCL geometry may be cloned into obj)
   std::unique_ptr<Object> obj;
-  /// Whether set_margin(name=) gave it a margin of its own (the broadphase keeps the value; it
-  /// answers an object's margin, not whether it is its own, which pickling keeps).
+  /// Whether set_margin(name=) gave it a margin of its own (the rules object keeps the value;
+  /// it answers an object's margin, not whether it is its own, which pickling keeps).
   bool own_margin = false;
-  int exclusions = 0;  ///< how many excluded pairs name it (the FCL backend's; the cube
-                       ///< backend's are its manager's, CubeCollisionManager::excludePair)
 };
 
 /// Reads or writes on a manager from any Python thread: queries take it shared, mutations
@@ -118,7 +116,7 @@ class Manager {
   }
   /// The name of the object whose (possibly cloned) FCL geometry is g, or null.
   const Entry* byGeometry(const fcl::CollisionGeometryd* g) const;
-  /// {category, mask} of an object, as the broadphase keeps them.
+  /// {category, mask} of an object, as the rules object keeps them.
   std::pair<std::uint64_t, std::uint64_t> filterOf(const Entry& e) const;
   /// An object's margin (its own, else the manager-wide one); null: the manager-wide one.
   double marginOf(const Entry* e) const;
@@ -133,23 +131,16 @@ class Manager {
 
   fcl::BroadPhaseCollisionManagerd& broadphase() const { return *bp_; }
   cube::CubeCollisionManagerd* cube() const { return cube_; }
+  /// The rules object: the cube manager that keeps the objects' filter bits, margins and
+  /// excluded pairs (the broadphase itself, or the FCL backend's).
+  cube::CubeCollisionManagerd& rules() const { return cube_ ? *cube_ : fcl_->rules(); }
 
   mutable std::shared_mutex mutex;
 
  private:
-  static std::uint64_t key(const Entry* a, const Entry* b) {
-    const auto x = std::min(a->seq, b->seq), y = std::max(a->seq, b->seq);
-    return x * 0x9E3779B97F4A7C15ull ^ (y + (x << 20));
-  }
-  /// f(broadphase) on the one that keeps the pair rules: the cube manager, or FCL's tree's
-  /// backend, which answer the same calls (setFilter, filter, setMargin, margin, setPairFilter).
-  template <class F>
-  decltype(auto) rules(F&& f) const {
-    return cube_ ? f(*cube_) : f(*fcl_);
-  }
-  bool isExcluded(const Entry* a, const Entry* b) const;
-  void installPredicate();
-  void setPairFilter(std::function<bool(fcl::CollisionObjectd*, fcl::CollisionObjectd*)> keep);
+  /// Sets obj's own margin (obj non-null) or the manager-wide one, growing the broadphase's
+  /// boxes: the rules object's setMargin, through the FCL backend for its tree.
+  void applyMargin(fcl::CollisionObjectd* obj, double margin);
 
   std::string backend_;
   int threads_;
@@ -158,8 +149,6 @@ class Manager {
   FclBackend* fcl_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Entry>> entries_;
   std::unordered_map<const fcl::CollisionGeometryd*, Entry*> by_geometry_;
-  // The FCL backend's excluded pairs (the cube backend's: CubeCollisionManager::excludePair).
-  std::unordered_multimap<std::uint64_t, std::pair<const Entry*, const Entry*>> excluded_;
   std::size_t own_margins_ = 0;
   std::size_t meshes_ = 0, planes_ = 0, convexes_ = 0;
   std::uint64_t next_seq_ = 0;

@@ -260,8 +260,8 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
             std::shared_lock lock(self.mutex);
             return self.excludedPairs();
           },
-          "The excluded pairs, sorted, as (name, name) tuples (on the cube backend each in the "
-          "order the objects were added).")
+          "The excluded pairs, sorted, as (name, name) tuples, each in the order the objects "
+          "were added.")
       // The former names, kept for existing code.
       .def(
           "ignore_pair",

@@ -260,6 +260,23 @@ def test_filters_and_excluded_pairs_equal_brute_force(backend):
     assert m.excluded_pairs == []
 
 
+def test_excluded_pairs_are_the_rules_objects_on_either_backend(backend):
+    """Both backends keep excluded pairs in the library's rules object: listed as (added first,
+    added later), forgotten with a removed object, which comes back excluded from nothing."""
+    scene = mixed_scene(12, 3)
+    m = build(scene, backend)
+    m.exclude_pair("o7", "o1")
+    m.exclude_pair("o4", "o10")
+    assert m.excluded_pairs == [("o1", "o7"), ("o4", "o10")]
+    m.remove_object("o7")
+    assert m.excluded_pairs == [("o4", "o10")]
+    name, geometry, transform = scene[7]
+    m.add_object(name, geometry, transform)
+    assert m.excluded_pairs == [("o4", "o10")]
+    kept = lambda a, b: tuple(sorted((a, b))) != ("o10", "o4")
+    assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene, kept)
+
+
 EXCLUDE_NAMES = ("exclude_pair", "include_pair", "excluded_pairs", "clear_excluded")
 ALIAS_NAMES = ("ignore_pair", "unignore_pair", "ignored_pairs", "clear_ignored")
 

@@ -189,6 +189,17 @@ CubeCollisionManager<S>::excludedPairs() const {
   return out;
 }
 
+template <typename S>
+bool CubeCollisionManager<S>::pairPasses(Object* a, Object* b, const Base* other) const {
+  if (a == nullptr || b == nullptr) fail("pairPasses", "null object");
+  // The side b is looked for as the queries look for it (manager_queries.cpp, againstManager).
+  const auto* cube = other == this ? nullptr : dynamic_cast<const CubeCollisionManager*>(other);
+  const detail::Broadphase<S>* there = cube != nullptr ? cube->core_.get() : nullptr;
+  const bool as_query = other != nullptr && other != this && cube == nullptr;
+  const detail::QueryScope scope(core_.get(), there);  // the pair filter is user code
+  return core_->pairPasses(a, b, there, as_query);
+}
+
 namespace {
 
 template <typename S>

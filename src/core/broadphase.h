@@ -239,6 +239,15 @@ class Broadphase {
   template <class Region>
   void search(Region& region, const Filter* bits = nullptr) const;
 
+  /// Whether the gate of this broadphase's queries lets the pair (a, b) reach a callback, were
+  /// their boxes to overlap: the gate the query builds (gate()), asked for this one pair, the
+  /// predicate called as that query calls it. a is registered here; b is, with `other`, an
+  /// object registered there (a query against that broadphase), else an object registered here
+  /// (a self query's pair, unless `as_query`) or a query object (an object query's: its bits
+  /// and exclusions this table's if registered here). False, with nothing asked, if a is not
+  /// registered here, b not in `other`, or a == b (no walk meets an object with itself).
+  bool pairPasses(Object* a, Object* b, const Broadphase* other, bool as_query) const;
+
   /// Registered objects in registration order.
   void objects(std::vector<Object*>& out) const { table_.objects(out); }
   /// Whether the next self-collide reads the pair list.

@@ -12,6 +12,19 @@
 namespace cube {
 namespace detail {
 
+namespace {
+
+// Room for `more` elements past v's size, at least doubling the capacity when it must grow:
+// batches of one object each (registerObjects of one object, as Python's add_object) would
+// otherwise copy the whole array at every registration.
+template <class V>
+void reserveMore(V& v, std::size_t more) {
+  const std::size_t want = v.size() + more;
+  if (want > v.capacity()) v.reserve(std::max(want, 2 * v.capacity()));
+}
+
+}  // namespace
+
 template <typename S>
 ObjectId ObjectTable<S>::find(const Object* obj) const {
   if (index_.empty()) return kNone;
@@ -99,21 +112,24 @@ ObjectId ObjectTable<S>::add(Object* obj) {
 
 template <typename S>
 void ObjectTable<S>::reserve(std::size_t n) {
-  grow(live_ + n);  // only ever grows
+  // Only ever grows, and then at least doubles, as add() does: sized for exactly one more
+  // object, a batch of one would put every live id again.
+  const std::size_t objects = live_ + n;
+  if (objects * 4 > index_.size() * 3) grow(std::max(objects, 2 * live_));
   const std::size_t fresh = n > free_.size() ? n - free_.size() : 0;
-  obj_.reserve(obj_.size() + fresh);
-  seq_.reserve(seq_.size() + fresh);
-  loc_.reserve(loc_.size() + fresh);
+  reserveMore(obj_, fresh);
+  reserveMore(seq_, fresh);
+  reserveMore(loc_, fresh);
   if (keeping_.load(std::memory_order_relaxed)) {
-    sphere_.reserve(sphere_.size() + fresh);
-    shape_.reserve(shape_.size() + fresh);
-    source_.reserve(source_.size() + fresh);
+    reserveMore(sphere_, fresh);
+    reserveMore(shape_, fresh);
+    reserveMore(source_, fresh);
   }
   if (!filter_.empty()) {
-    filter_.reserve(filter_.size() + fresh);
-    group_.reserve(group_.size() + fresh);
+    reserveMore(filter_, fresh);
+    reserveMore(group_, fresh);
   }
-  if (!margin_.empty()) margin_.reserve(margin_.size() + fresh);
+  if (!margin_.empty()) reserveMore(margin_, fresh);
 }
 
 template <typename S>

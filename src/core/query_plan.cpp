@@ -365,6 +365,50 @@ bool Broadphase<S>::distance(const Broadphase& other, void* data, DistanceFn<S> 
   return distanceRun(&b, data, fn, best, stats);
 }
 
+template <typename S>
+bool Broadphase<S>::pairPasses(Object* a, Object* b, const Broadphase* other, bool as_query) const {
+  const ObjectId x = table_.find(a);
+  if (x == kNone || a == b) return false;
+  const auto passed = [](const auto&, const auto&) { return true; };
+  const auto self_id = [](ObjectId i) { return i; };
+  Exclusions room;
+  if (other != nullptr) {
+    const ObjectId y = other->table_.find(b);
+    if (y == kNone) return false;
+    // The gate of the query against `other`, its exclusions read through one-entry id maps
+    // (each side of the pair at position 0, as collideMoving re-indexes its movers) rather than
+    // otherSide()'s maps over every id. The bits read the tables' own ids; a gate against
+    // another broadphase orients nothing, so finish() reads ids for the exclusions only.
+    const ObjectId a_here[1] = {x}, b_there[1] = {y};
+    const ObjectId b_here[1] = {table_.find(b)}, a_there[1] = {other->table_.find(a)};
+    Against side;
+    side.other = other;
+    side.here = b_here;
+    side.there = a_there;
+    const PairGate<S> g = gate(&side, room);
+    room.mine.a = a_here;
+    room.theirs.b = b_there;
+    struct At {
+      ObjectId position;
+      Object* obj;
+    };
+    return g.bitsPass(x, y) && g.finish(
+                                   At{0, a}, At{0, b}, [](const At& t) { return t.position; },
+                                   [](const At& t) { return t.obj; }, passed);
+  }
+  const ObjectId y = as_query ? kNone : table_.find(b);
+  const auto obj = [&](ObjectId i) { return i == kNone ? b : table_.object(i); };
+  if (y != kNone) {  // a self query's pair
+    const PairGate<S> g = gate(nullptr, room);
+    return g.bitsPass(x, y) && g.finish(x, y, self_id, obj, passed);
+  }
+  Against side;  // an object query's: b of no id, its bits and exclusions found by pointer
+  side.obj = b;
+  side.bits = filter(b);
+  const PairGate<S> g = gate(&side, room);
+  return g.bitsPass(x, kNone) && g.finish(x, kNone, self_id, obj, passed);
+}
+
 namespace {
 
 // A 30-bit Morton code of a point within [lo, hi] (10 bits a coordinate); non-finite: 0.

@@ -1,6 +1,6 @@
 #pragma once
 
-// What the pair rule tests share (test_pair_filters.cpp, test_margins.cpp,
+// What the pair rule tests share (test_pair_filters.cpp, test_margins.cpp, test_pair_passes.cpp,
 // test_canonical_pairs.cpp, test_excluded_pairs.cpp): filter bits drawn at random and set on a
 // manager, brute force over every pair that the bits let through, and the scenes they run on.
 
