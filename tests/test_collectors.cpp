@@ -114,8 +114,9 @@ TYPED_TEST(Collectors, AllContactsFedAnyWayEqualsFclCollideInTurn) {
     const auto pairs = overlapping(sc);
     for (const auto& request : requests<S>()) {
       const Sequential<S> want(pairs, request);
-      if (request.num_max_contacts > 100)
+      if (request.num_max_contacts > 100) {
         ASSERT_GT(want.colliding.size(), 10u) << "the scene must collide";
+      }
       std::mt19937 rng(5);
       for (int mix = 0; mix < 6; ++mix) {
         fcl::CollisionResult<S> got;

@@ -354,8 +354,9 @@ TEST(ContinuousEdges, LongEdgesAnswerAsTheRule) {
         EXPECT_EQ(got, ruleAnswer(w, body, poses.data(), bounds.data(), e.states, order, self))
             << "edge " << i;
         colliding += got != cube::kNoIndex;
-        if (order == cube::MotionOrder::path && got == cube::kNoIndex)
+        if (order == cube::MotionOrder::path && got == cube::kNoIndex) {
           EXPECT_FALSE(fineContact(w, body, e, self)) << "edge " << i;
+        }
       }
   }
   EXPECT_GT(colliding, 0u);
