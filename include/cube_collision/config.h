@@ -54,12 +54,11 @@ struct Config {
 
   /// With UpdatePolicy::automatic: rebuild when the total surface area of the cubes per object
   /// exceeds this multiple of its value right after the last build (must be > 1). Trade-off: a
-  /// low value rebuilds often (a build costs about as much as 10 to 20 refits); a high value
-  /// lets queries slow down on a stale tree. In the drift benchmark (benchmarks/bench_drift.cpp)
-  /// 1.1 to 1.5 were within 5% of each other and 1.25 was the fastest; benchmarks/README.md has the
-  /// figures. With keep_pairs, a self-collide after small motions reads the pair list instead
-  /// of walking, and higher values paid off for update + self-collide, at the cost of
-  /// object queries on a looser tree.
+  /// low value rebuilds often (a build costs many refits); a high value lets queries slow down
+  /// on a stale tree. The default is where the drift benchmark (benchmarks/bench_drift.cpp, its
+  /// table in benchmarks/README.md) found update + queries fastest. With keep_pairs, a
+  /// self-collide after small motions reads the pair list instead of walking, so higher values
+  /// can pay off for update + self-collide, at the cost of object queries on a looser tree.
   double rebuild_threshold = 1.25;
 
   /// Objects whose AABB has a coordinate beyond +-unbounded_limit (or infinite: planes,

@@ -86,23 +86,21 @@ template <typename S>
 struct NarrowPhaseOptions {
   /// Threads for the narrow phase: 0 (or less) = hardwareThreads(), 1 = this thread only.
   /// Results are the same for every count. A count is a ceiling: a parallel region is opened
-  /// only for large work (a collide that has seen more than a thousand candidate pairs' work, a
-  /// mesh or an octree counting more; the self-collide of a CubeCollisionManager with 4,096
-  /// objects or more in its cubes; a pair list of 128 pairs' work or more), and then with the count
-  /// less the other threads runnable on the machine at that moment, at least one. The cache is
-  /// always looked up on the calling thread. A collide that stops at its first contact
-  /// (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any count, never more
-  /// often than on one thread; minimumDistance without a cache runs on the calling thread
-  /// (queries.h says why).
-  /// A large self-collide runs on the threads from its first pair: collideAll(manager) of a
-  /// CubeCollisionManager with at least 4,096 objects in its cubes and per-object volumes, on
-  /// more than one thread, for a request that may take more than one contact, without a cache,
-  /// a pair predicate or Config::canonical_pairs. Its walk is cut into tasks (as split_walk's),
-  /// each task's pairs answered on the thread that walked it; the calling thread merges the
-  /// tasks in the serial walk's order, so the contacts and colliding pairs are the same. A task
-  /// is skipped when its predecessors that have run hold num_max_contacts contacts. So a request
-  /// that fills its budget early may call FCL for pairs after its stop (those of tasks started
-  /// before the budget was seen full), and `stats` counts the pairs of every task that ran.
+  /// only for work large enough to pay for it (thresholds in docs/pipeline.md#threads), and then
+  /// with the count less the other threads runnable on the machine at that moment, at least one.
+  /// The cache is always looked up on the calling thread. A collide that stops at its first
+  /// contact (num_max_contacts == 1, FCL's default) calls FCL one pair at a time on any count,
+  /// never more often than on one thread; minimumDistance without a cache runs on the calling
+  /// thread (queries.h says why).
+  /// A large self-collide (collideAll(manager) of a CubeCollisionManager with per-object
+  /// volumes, on more than one thread, for a request that may take more than one contact,
+  /// without a cache, a pair predicate or Config::canonical_pairs) runs on the threads from its
+  /// first pair: its walk is cut into tasks, each task's pairs answered on the thread that
+  /// walked it, and the calling thread merges the tasks in the serial walk's order, so the
+  /// contacts and colliding pairs are the same. A task is skipped when its predecessors that
+  /// have run hold num_max_contacts contacts. So a request that fills its budget early may call
+  /// FCL for pairs after its stop (those of tasks started before the budget was seen full), and
+  /// `stats` counts the pairs of every task that ran.
   int threads = 0;
   /// Answers pairs whose objects did not move from their last answer; nullptr: no cache.
   NarrowPhaseCache<S>* cache = nullptr;
@@ -117,14 +115,13 @@ struct NarrowPhaseOptions {
   /// it pays where narrow-phase calls dominate (meshes, a robot against a world), not for large
   /// scenes of simple shapes.
   bool last_hit_first = false;
-  /// collideAll (self-collide) only: a CubeCollisionManager with at least 4,096 objects in its
-  /// cubes splits its broadphase walk too, into at least 64 subwalks taken by the threads; the
-  /// candidate pairs are handed over on this thread in the serial walk's order, so the results
-  /// are the same. Off by default: the walk is about 1% of a collideAll with the narrow phase,
-  /// and on 2 cores handing every pair over costs about what the serial walk saves (see
-  /// benchmarks/README.md). For machines with many idle cores and walks of 100,000 objects or more.
-  /// A self-collide that the threads answer task by task (see `threads`) splits its walk
-  /// whatever this says.
+  /// collideAll (self-collide) only: a large CubeCollisionManager (docs/pipeline.md#threads)
+  /// splits its broadphase walk too, into subwalks taken by the threads; the candidate pairs
+  /// are handed over on this thread in the serial walk's order, so the results are the same.
+  /// Trade-off: the walk is a small part of a collideAll with the narrow phase, and handing
+  /// every pair over costs about what a split walk saves on few cores; for machines with many
+  /// idle cores and very large scenes (benchmarks/README.md measures it). A self-collide that the
+  /// threads answer task by task (see `threads`) splits its walk whatever this says.
   bool split_walk = false;
   /// collideAll and collideMerged only: if set, it is cleared and then given every pair that
   /// put at least one contact into the returned result, once, in the order of its first contact
