@@ -265,7 +265,10 @@ std::vector<std::size_t> checkMotions(
 //    margins (link margin + raise + the object's margin; for two links both margins and both
 //    raises). A contact anywhere inside an interval makes at least one of its two states fail,
 //    and so does a link within its margins of an object anywhere inside an interval: exactly,
-//    up to the accuracy of FCL's own fcl::collide and fcl::distance on the states.
+//    up to the accuracy of FCL's own fcl::collide and fcl::distance on the states. (A mesh
+//    against a box, sphere, capsule or cylinder may be found apart by fcl::collide against that
+//    primitive grown by more than an eighth beyond the margins: the same answer within that
+//    accuracy.)
 //  - it is conservative: a state may fail though nothing is touched on the motion (the check
 //    sees each link grown by half its larger bound in every direction).
 // The answer per edge is the index within the edge of its first state, in the visiting order,
@@ -280,7 +283,7 @@ std::vector<std::size_t> checkMotions(
 // kinematics (the overloads that take them). Cost: runs of an edge's states share the world's
 // walk as in checkMotions, each state with its own raised margins; a state's check with raised
 // margins meets more candidate pairs, and a pair within the raised margins but apart costs
-// fcl::distance on top of fcl::collide (on meshes, a walk of their BVH): per state, from about the
+// FCL calls the records do not settle (on meshes, walks of their BVH): per state, from about the
 // discrete check's cost where the raises are small against the gaps between links and objects, to
 // many times it where they are not; computing SE(3) bounds reads the neighbours' poses.
 
