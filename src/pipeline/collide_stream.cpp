@@ -31,9 +31,8 @@ namespace {
 // what their FCL call weighs beyond 1, read from the records' kinds (workOf(flags)): threads
 // share FCL's calls only, so closed-form shape pairs stay on the calling thread.
 // Pairs answered at once go in blocks too (answerSerialBlock) among this many objects or more,
-// whose records, objects and geometries (about 500 bytes an object) outgrow this machine's 1 MB
-// L2: among 1,000 thin boxes, all in cache, the blocks' bookkeeping made a self-collide 1.15x
-// slower.
+// whose records, objects and geometries (about 500 bytes an object) outgrow a 1 MB L2: below
+// that, all in cache, the blocks' bookkeeping costs a self-collide more than it saves.
 constexpr std::size_t kBlockMinObjects = 4096;
 
 // The cache, then the judge on the objects: kCached with the entry, or the judge's answer. On
