@@ -212,7 +212,7 @@ template <bool Self, typename S, class Policy>
 // next multiple of 8 (the kernels read whole blocks of 4 or 8; no box value could be relied on
 // to overlap nothing, as an infinite box overlaps every one, so the caller drops the padding's
 // bits). Returns the number of slots gathered; `tested` gets the number of reach tests. Inline:
-// out of line, its call and spills were 2% of a 32-object self-collide.
+// out of line, its call and spills weigh on small self-collides.
 template <typename S>
 [[gnu::always_inline]] inline std::uint32_t gatherLive(const View<S>& v, const Node* reach,
                                                        std::uint32_t (&slot)[kAllPairsMax],

@@ -99,8 +99,8 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   ++stats_.candidate_pairs;
   // With volumes the judge runs here, before the cache (its cheaper part costs less than a
   // lookup). With a cache: the cheaper part, the lookup, and the rest only for a pair the cache
-  // does not hold (then kept with the cache's answers: it costs more than a lookup). A motion loop
-  // of 1,000 clustered shapes took 1.19x the time with the whole cull before each lookup.
+  // does not hold (then kept with the cache's answers: it costs more than a lookup). The whole
+  // cull before each lookup slowed motion loops of clustered shapes.
   const auto cull = [&] { return judge_.collide(*va, *vb); };
   const auto loose = [&] { return judge_.collideLoose(*va, *vb); };
   const auto tight = [&] { return judge_.collideTight(*va, *vb); };
@@ -173,8 +173,8 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
   }
   // In chunks: the cache is looked up here (and the cull on volumes runs here: a pair it proves
   // apart takes no place in the chunk), the rest of the cull and FCL run in the chunk, on the
-  // threads. (Culling in the chunk instead made a clustered self-collide of 1,000 shapes 1.07x
-  // slower: every culled pair then paid a slot and the merge.)
+  // threads. (Culling in the chunk instead slowed clustered self-collides: every culled pair
+  // then paid a slot and the merge.)
   Answer judged = va == nullptr ? Answer::kComputed : cache_ != nullptr ? loose() : cull();
   CollideEntry<S>* cached = cache_ != nullptr && judged == Answer::kComputed
                                 ? cache_->collide.find(*cache_, a, b)
@@ -332,8 +332,8 @@ void CollideStream<S>::flush() {
     // Threads only for work that pays for waking them (thread_policy.h).
     const int threads = pending_work_ >= kParallelMinWork ? threads_ : 1;
     // Blocks of pending pairs, whose memory is fetched together (cullBlock), but at least 8
-    // a thread: a chunk of 64 mesh pairs in 4 blocks of 16 left a thread idle (1,000 meshes on
-    // two threads, 1.17x the time of pairs handed out one by one).
+    // a thread: a chunk of 64 mesh pairs in 4 blocks of 16 left a thread idle, slower than
+    // pairs handed out one by one.
     const std::size_t n_pending = pending_.size();
     const std::size_t block =
         std::clamp<std::size_t>(n_pending / (8 * std::size_t(threads)), 1, kBlock);
