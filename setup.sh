@@ -11,8 +11,9 @@ packages=(build-essential cmake pkg-config libfcl-dev libccd-dev libeigen3-dev l
           python3-dev python3-numpy python3-pybind11 pybind11-dev python3-pytest
           python3-distributed python3-venv)
 # CI's ThreadSanitizer stage (.ci/run) builds with clang and LLVM's OpenMP runtime, whose Archer
-# tool tells ThreadSanitizer about OpenMP's synchronisation (GCC's libgomp is not instrumented).
-[ "${1:-demo}" = test ] && packages+=(clang libomp-dev)
+# tool tells ThreadSanitizer about OpenMP's synchronisation (GCC's libgomp is not instrumented);
+# CI builds with Ninja.
+[ "${1:-demo}" = test ] && packages+=(clang libomp-dev ninja-build)
 
 missing=()
 for p in "${packages[@]}"; do

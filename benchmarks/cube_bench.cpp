@@ -42,6 +42,9 @@
 
 // Set by the cases registered from other files (bench_*.cpp) when a correctness check fails.
 bool g_extra_failed = false;
+// --smoke (ctest's run): every check as always, but no untimed probe that only serves the
+// timings (bench_batch.cpp's choice of the faster way to drive FCL).
+bool g_smoke = false;
 
 namespace {
 
@@ -1361,6 +1364,15 @@ int main(int argc, char** argv) {
   const int load = cube::scenes::BusyLoad::takeArgument(argc, argv, "--load");
   const int load_seconds = cube::scenes::BusyLoad::takeArgument(argc, argv, "--load_seconds");
   const cube::scenes::BusyLoad busy(load, load_seconds > 0 ? load_seconds : 1800);
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--smoke")
+      g_smoke = true;
+    else
+      argv[kept++] = argv[i];
+  }
+  argc = kept;
+  argv[argc] = nullptr;
   if (load > 0) benchmark::AddCustomContext("busy_processes", std::to_string(load));
   registerAll();
   benchmark::Initialize(&argc, argv);
