@@ -760,32 +760,48 @@ class StateChecker {
         !(reach < std::numeric_limits<S>::infinity()))
       return false;
     const fcl::CollisionGeometry<S>& g = *shape->collisionGeometry();
-    std::shared_ptr<fcl::CollisionGeometry<S>> grown;
+    fcl::CollisionObject<S>* placed;
     switch (shape->getNodeType()) {
       case fcl::GEOM_BOX:
-        grown = std::make_shared<fcl::Box<S>>(static_cast<const fcl::Box<S>&>(g).side +
-                                              fcl::Vector3<S>::Constant(S(2) * reach));
+        placed = grown(0, fcl::Box<S>(static_cast<const fcl::Box<S>&>(g).side +
+                                      fcl::Vector3<S>::Constant(S(2) * reach)));
         break;
       case fcl::GEOM_SPHERE:
-        grown =
-            std::make_shared<fcl::Sphere<S>>(static_cast<const fcl::Sphere<S>&>(g).radius + reach);
+        placed = grown(1, fcl::Sphere<S>(static_cast<const fcl::Sphere<S>&>(g).radius + reach));
         break;
       case fcl::GEOM_CAPSULE: {
         const auto& x = static_cast<const fcl::Capsule<S>&>(g);
-        grown = std::make_shared<fcl::Capsule<S>>(x.radius + reach, x.lz);
+        placed = grown(2, fcl::Capsule<S>(x.radius + reach, x.lz));
         break;
       }
       case fcl::GEOM_CYLINDER: {
         const auto& x = static_cast<const fcl::Cylinder<S>&>(g);
-        grown = std::make_shared<fcl::Cylinder<S>>(x.radius + reach, x.lz + S(2) * reach);
+        placed = grown(3, fcl::Cylinder<S>(x.radius + reach, x.lz + S(2) * reach));
         break;
       }
       default:
         return false;
     }
-    const fcl::CollisionObject<S> placed(grown, shape->getTransform());
+    placed->setTransform(shape->getTransform());
+    placed->computeAABB();
     fcl::CollisionResult<S> result;
-    return fclCollide(&placed, mesh, request_, result) == 0;
+    return fclCollide(placed, mesh, request_, result) == 0;
+  }
+
+  // The checker's one primitive of a kind (slot k), made on first use and given `wanted`'s
+  // dimensions: a pair within a raised margin allocates nothing.
+  template <typename Shape>
+  fcl::CollisionObject<S>* grown(int k, const Shape& wanted) {
+    if (!grown_[k]) {
+      auto shape = std::make_shared<Shape>(wanted);
+      grown_shapes_[k] = shape.get();
+      grown_[k] = std::make_unique<fcl::CollisionObject<S>>(shape);
+      return grown_[k].get();
+    }
+    Shape& shape = *static_cast<Shape*>(grown_shapes_[k]);
+    shape = wanted;
+    shape.computeLocalAABB();
+    return grown_[k].get();
   }
 
   S pairDistance(const Object& a, const Object& b) {
@@ -908,6 +924,8 @@ class StateChecker {
   VolumeShape built_shape_{};
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
   std::size_t bad_link_ = 0;
+  std::unique_ptr<fcl::CollisionObject<S>> grown_[4];  // box, sphere, capsule, cylinder
+  fcl::CollisionGeometry<S>* grown_shapes_[4] = {};
   AnyHit<Candidate> any_;           // a check for any contact
   FirstInOrder<Candidate> first_;   // a check for the first pair in Candidate's order
   std::vector<Candidate> pending_;  // pairs for FCL; its room kept between states
