@@ -74,15 +74,8 @@ TYPED_TEST(Culling, PairJudgeNeverAnswersAgainstFcl) {
       if (!fclCanMeasure(na, nb)) continue;
       fcl::CollisionObject<S> a(ga), b(gb);
       for (int rep = 0; rep < 30; ++rep) {
-        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
-        b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng)));
-        a.computeAABB();
-        b.computeAABB();
-        cube::detail::VolumeSphere sa, sb;
-        cube::detail::VolumeShape ha, hb;
-        cube::detail::buildVolume(a, sa, ha);
-        cube::detail::buildVolume(b, sb, hb);
-        const Records ra{&sa, &ha}, rb{&sb, &hb};
+        const PairRecords records = poseAtRandom(a, b, rng, u);
+        const Records ra = records.a(), rb = records.b();
         const bool hit = collides(a, b);
         fcl::DistanceResult<S> res;
         const S d = fcl::distance(&a, &b, distance_request, res);
@@ -131,7 +124,6 @@ TYPED_TEST(Culling, PairJudgeNeverAnswersAgainstFcl) {
 // and never one that FCL finds within the margin.
 TYPED_TEST(Culling, WithinMarginSettlesRoundPairsTheirBoxesLeaveOpen) {
   using S = TypeParam;
-  using cube::detail::Records;
   using cube::detail::Verdict;
   const fcl::CollisionRequest<S> request;
   const fcl::DistanceRequest<S> distance_request;
@@ -148,23 +140,16 @@ TYPED_TEST(Culling, WithinMarginSettlesRoundPairsTheirBoxesLeaveOpen) {
     for (const auto& [nb, gb] : round)
       for (int rep = 0; rep < 400; ++rep) {
         fcl::CollisionObject<S> a(ga), b(gb);
-        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
-        b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng)));
-        a.computeAABB();
-        b.computeAABB();
-        cube::detail::VolumeSphere sa, sb;
-        cube::detail::VolumeShape ha, hb;
-        cube::detail::buildVolume(a, sa, ha);
-        cube::detail::buildVolume(b, sb, hb);
+        const PairRecords records = poseAtRandom(a, b, rng, u);
         const S m = S(margin(rng));
-        const cube::detail::VolumeGap boxes =
-            cube::detail::separationOf(sa, ha, sb, hb, float(judge.rate()), float(m));
+        const cube::detail::VolumeGap boxes = cube::detail::separationOf(
+            records.sa, records.ha, records.sb, records.hb, float(judge.rate()), float(m));
         if (boxes.lower_bound > float(m) + boxes.margin) continue;  // the boxes settle it
         fcl::DistanceResult<S> res;
         const S d = fcl::distance(&a, &b, distance_request, res);
         if (!(d > S(2) * m)) continue;  // only pairs well beyond the margin
         ++boxes_open;
-        const Verdict v = judge.withinMargin(Records{&sa, &ha}, Records{&sb, &hb}, m);
+        const Verdict v = judge.withinMargin(records.a(), records.b(), m);
         ASSERT_NE(v, Verdict::kTouching) << na << " vs " << nb << " rep " << rep;
         settled += v == Verdict::kApart;
       }
@@ -187,10 +172,7 @@ TYPED_TEST(Culling, SeparationIsALowerBoundOnFclDistance) {
       if (!fclCanMeasure(na, nb)) continue;
       fcl::CollisionObject<S> a(ga), b(gb);
       for (int rep = 0; rep < 40; ++rep) {
-        a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
-        b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(u(rng), u(rng), u(rng)));
-        a.computeAABB();
-        b.computeAABB();
+        const PairRecords records = poseAtRandom(a, b, rng, u);
         fcl::DistanceRequest<S> req;
         fcl::DistanceResult<S> res;
         const S d = fcl::distance(&a, &b, req, res);
@@ -201,13 +183,10 @@ TYPED_TEST(Culling, SeparationIsALowerBoundOnFclDistance) {
         informative += sep.lower_bound >= d / 2;
         // The same from the float records (the pipeline's bound), with the boxes looked at
         // (enough 0) and without (enough infinite).
-        cube::detail::VolumeSphere sa, sb;
-        cube::detail::VolumeShape ha, hb;
-        cube::detail::buildVolume(a, sa, ha);
-        cube::detail::buildVolume(b, sb, hb);
         const float rate = cube::detail::volumeMarginRate(S(req.distance_tolerance));
         for (const float enough : {0.f, std::numeric_limits<float>::infinity()}) {
-          const auto gap = cube::detail::separationOf(sa, ha, sb, hb, rate, enough);
+          const auto gap = cube::detail::separationOf(records.sa, records.ha, records.sb,
+                                                      records.hb, rate, enough);
           ASSERT_LE(double(gap.lower_bound) - double(gap.margin), double(d))
               << na << " vs " << nb << " rep " << rep << " (records)";
           if (enough > 0.f) records_informative += gap.lower_bound >= d / 2;

@@ -28,12 +28,6 @@ namespace {
 
 using namespace pair_rules;
 
-template <typename S>
-void expectValid(const CubeCollisionManager<S>& m) {
-  std::string why;
-  EXPECT_TRUE(m.validate(&why)) << why;
-}
-
 using PairSet = std::set<Pair<double>>;
 
 bool isIn(const PairSet& excluded, Obj<double>* a, Obj<double>* b) {

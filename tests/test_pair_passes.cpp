@@ -7,11 +7,9 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <map>
-#include <random>
-#include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "support/oracle.h"
@@ -20,65 +18,6 @@
 namespace {
 
 using namespace pair_rules;
-
-template <typename S>
-void expectValid(const CubeCollisionManager<S>& m) {
-  std::string why;
-  EXPECT_TRUE(m.validate(&why)) << why;
-}
-
-// One manager's rules as drawn: bits per object, excluded pairs (unordered), and the pair filter
-// it is given (keep), which counts its calls.
-template <typename S>
-struct Rules {
-  std::map<Obj<S>*, Bits> bits;
-  std::set<Pair<S>> excluded;
-  const std::map<const Obj<S>*, int>* number = nullptr;  // every object's number, for keep
-  bool asymmetric = false;
-  mutable int calls = 0;
-
-  bool keep(Obj<S>* a, Obj<S>* b) const {
-    const int x = number->at(a), y = number->at(b);
-    return ((asymmetric ? 2 * x : x) + y) % 5 != 0;
-  }
-  bool isExcluded(Obj<S>* a, Obj<S>* b) const { return excluded.count(unordered(a, b)) != 0; }
-  /// Bits for an object registered in this manager (the default otherwise).
-  Bits bitsOf(Obj<S>* o) const { return pair_rules::bitsOf(bits, o); }
-};
-
-// Draws bits, excluded pairs (a third of the overlapping pairs and as many random ones) and
-// installs a counting pair filter on m, whose objects are `objs`.
-template <typename S>
-void drawRules(CubeCollisionManager<S>& m, const std::vector<Obj<S>*>& objs, Rules<S>& rules,
-               std::uint32_t seed) {
-  rules.bits = randomBits(m, objs, seed);
-  std::mt19937 rng(seed + 1);
-  for (const auto& p : cube::oracle::bruteSelfPairs(objs))
-    if (rng() % 3 == 0) rules.excluded.insert(p);
-  for (std::size_t k = 0; k < objs.size() / 2; ++k) {
-    Obj<S>* a = objs[rng() % objs.size()];
-    Obj<S>* b = objs[rng() % objs.size()];
-    if (a != b) rules.excluded.insert(unordered(a, b));
-  }
-  for (const auto& p : rules.excluded) {
-    m.excludePair(p.first, p.second);
-    expectValid(m);
-  }
-  const Rules<S>* r = &rules;
-  m.setPairFilter([r](Obj<S>* a, Obj<S>* b) {
-    ++r->calls;
-    return r->keep(a, b);
-  });
-}
-
-// Every object of the scenes numbered in creation order (registration order where registered).
-template <typename S>
-std::map<const Obj<S>*, int> numbered(const std::vector<std::vector<Obj<S>*>>& lists) {
-  std::map<const Obj<S>*, int> out;
-  for (const auto& list : lists)
-    for (Obj<S>* o : list) out.emplace(o, int(out.size()));
-  return out;
-}
 
 // A collide's callbacks as (first, second) pairs, sorted.
 template <typename S, class Query>
@@ -100,19 +39,17 @@ bool bruteSelf(const Rules<S>& r, Obj<S>* a, Obj<S>* b, bool canonical) {
 
 template <typename S>
 void checkSelfPairs(std::uint32_t seed) {
-  auto sc = scene<S>(160, seed);
-  const auto objs = sc.pointers();
-  const auto number = numbered<S>({objs});
+  const RulesScene<S> world(160, seed);
+  const auto& objs = world.objs;
   for (const bool canonical : {false, true}) {
     SCOPED_TRACE(canonical ? "canonical_pairs, an asymmetric pair filter" : "walk order");
     cube::Config cfg;
     cfg.canonical_pairs = canonical;
-    CubeCollisionManager<S> m(cfg);
-    m.registerObjects(objs);
-    Rules<S> rules;
-    rules.number = &number;
-    rules.asymmetric = canonical;  // walk order asks either order: only a symmetric one agrees
-    drawRules(m, objs, rules, seed + (canonical ? 10 : 0));
+    // An asymmetric pair filter under canonical_pairs only: walk order asks either order, and
+    // only a symmetric one agrees.
+    RuledManager<S> ruled(world, objs, seed + (canonical ? 10 : 0), canonical, cfg);
+    CubeCollisionManager<S>& m = ruled.manager;
+    Rules<S>& rules = ruled.rules;
     std::size_t passing = 0, held = 0;
     for (Obj<S>* a : objs)
       for (Obj<S>* b : objs) {
@@ -148,20 +85,16 @@ TEST(PairPasses, SelfPairsFollowBitsExclusionsAndPairFilter) {
 }
 
 TEST(PairPasses, QueryObjectsPairAsCollideWithTheObjectPairsThem) {
-  auto sc = scene<double>(200, 45);
-  auto qs = scene<double>(30, 46);
-  const auto objs = sc.pointers();
-  const auto number = numbered<double>({objs, qs.pointers()});
-  CubeCollisionManager<double> m;
-  m.registerObjects(objs);
-  Rules<double> rules;
-  rules.number = &number;
-  drawRules(m, objs, rules, 47);
+  const RulesScene<double> world(200, 45, 30, 46);
+  const auto& objs = world.objs;
+  RuledManager<double> ruled(world, objs, 47);
+  CubeCollisionManager<double>& m = ruled.manager;
+  const Rules<double>& rules = ruled.rules;
   // Registered objects as query objects (their bits and exclusions), and objects of no manager
   // (the default bits, nothing excluded).
-  std::vector<Obj<double>*> queries(objs.begin(), objs.begin() + 40);
+  std::vector<Obj<double>*> queries = world.slice(0, 40);
   const std::size_t registered = queries.size();
-  for (Obj<double>* q : qs.pointers()) queries.push_back(q);
+  for (Obj<double>* q : world.others) queries.push_back(q);
   std::size_t overlapping = 0;
   for (std::size_t i = 0; i < queries.size(); ++i) {
     Obj<double>* q = queries[i];
@@ -183,20 +116,15 @@ TEST(PairPasses, QueryObjectsPairAsCollideWithTheObjectPairsThem) {
 }
 
 TEST(PairPasses, ObjectsOfAnotherCubeManagerPairAsTheManagerQueryPairsThem) {
-  auto sc = scene<double>(300, 51);
-  const auto objs = sc.pointers();
+  const RulesScene<double> world(300, 51);
+  const auto& objs = world.objs;
   // Objects 120-199 are registered in both managers: each manager's exclusions reach them.
-  const std::vector<Obj<double>*> one(objs.begin(), objs.begin() + 200);
-  const std::vector<Obj<double>*> two(objs.begin() + 120, objs.end());
-  const auto number = numbered<double>({objs});
-  CubeCollisionManager<double> m1, m2;
-  m1.registerObjects(one);
-  m2.registerObjects(two);
-  Rules<double> r1, r2;
-  r1.number = r2.number = &number;
-  r2.asymmetric = true;
-  drawRules(m1, one, r1, 53);
-  drawRules(m2, two, r2, 57);
+  const auto one = world.slice(0, 200), two = world.slice(120, 300);
+  RuledManager<double> ruled1(world, one, 53), ruled2(world, two, 57, true);
+  CubeCollisionManager<double>& m1 = ruled1.manager;
+  CubeCollisionManager<double>& m2 = ruled2.manager;
+  const Rules<double>& r1 = ruled1.rules;
+  const Rules<double>& r2 = ruled2.rules;
   const auto check = [&](CubeCollisionManager<double>& here, const Rules<double>& rh,
                          const std::vector<Obj<double>*>& as, CubeCollisionManager<double>& there,
                          const Rules<double>& rt, const std::vector<Obj<double>*>& bs) {
@@ -226,16 +154,11 @@ TEST(PairPasses, ObjectsOfAnotherCubeManagerPairAsTheManagerQueryPairsThem) {
 }
 
 TEST(PairPasses, ObjectsOfAnotherKindOfManagerPairAsQueryObjects) {
-  auto sc = scene<double>(300, 61);
-  const auto objs = sc.pointers();
-  const std::vector<Obj<double>*> one(objs.begin(), objs.begin() + 200);
-  const std::vector<Obj<double>*> two(objs.begin() + 120, objs.end());
-  const auto number = numbered<double>({objs});
-  CubeCollisionManager<double> m;
-  m.registerObjects(one);
-  Rules<double> rules;
-  rules.number = &number;
-  drawRules(m, one, rules, 63);
+  const RulesScene<double> world(300, 61);
+  const auto one = world.slice(0, 200), two = world.slice(120, 300);
+  RuledManager<double> ruled(world, one, 63);
+  CubeCollisionManager<double>& m = ruled.manager;
+  const Rules<double>& rules = ruled.rules;
   fcl::DynamicAABBTreeCollisionManager<double> other;
   other.registerObjects(two);
   other.setup();

@@ -2,7 +2,8 @@
 
 // What the tests of the culling in front of the narrow phase share (test_culling_*.cpp): one
 // typed suite over its files, one geometry of every kind FCL's narrow phase takes, the pairs of
-// kinds FCL 0.7 can answer, random rotations, and the cull the pipeline runs on its records.
+// kinds FCL 0.7 can answer, random rotations and poses, the records the pipeline keeps of a pair
+// and the cull it runs on them.
 
 #include <fcl/broadphase/broadphase_bruteforce.h>
 #include <fcl/geometry/bvh/BVH_model.h>
@@ -115,16 +116,43 @@ S defaultTolerance() {
   return S(fcl::CollisionRequest<S>().gjk_tolerance);
 }
 
+// The float records the object tables keep of two objects (buildVolume), as the cull and the
+// pair judge read them.
+struct PairRecords {
+  cube::detail::VolumeSphere sa, sb;
+  cube::detail::VolumeShape ha, hb;
+  cube::detail::Records a() const { return {&sa, &ha}; }
+  cube::detail::Records b() const { return {&sb, &hb}; }
+};
+
+template <typename S>
+PairRecords recordsOf(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b) {
+  PairRecords r;
+  cube::detail::buildVolume(a, r.sa, r.ha);
+  cube::detail::buildVolume(b, r.sb, r.hb);
+  return r;
+}
+
+// A random pose of a pair, drawn from rng: a turned at random about the origin, b turned at
+// random about a centre whose coordinates come from `centre`; both boxes computed. Returns the
+// pair's records.
+template <typename S>
+PairRecords poseAtRandom(fcl::CollisionObject<S>& a, fcl::CollisionObject<S>& b, std::mt19937& rng,
+                         std::uniform_real_distribution<double>& centre) {
+  a.setTransform(randomRotation<S>(rng), fcl::Vector3<S>::Zero());
+  b.setTransform(randomRotation<S>(rng), fcl::Vector3<S>(centre(rng), centre(rng), centre(rng)));
+  a.computeAABB();
+  b.computeAABB();
+  return recordsOf(a, b);
+}
+
 // The cull the pipeline runs on the object tables' float records (buildVolume, verdictOf): it
 // must keep every promise surelyApart and surelyTouching keep.
 template <typename S>
 cube::detail::Verdict volumeVerdict(const fcl::CollisionObject<S>& a,
                                     const fcl::CollisionObject<S>& b, bool prove) {
-  cube::detail::VolumeSphere sa, sb;
-  cube::detail::VolumeShape ha, hb;
-  cube::detail::buildVolume(a, sa, ha);
-  cube::detail::buildVolume(b, sb, hb);
-  return cube::detail::verdictOf(sa, ha, sb, hb,
+  const PairRecords r = recordsOf(a, b);
+  return cube::detail::verdictOf(r.sa, r.ha, r.sb, r.hb,
                                  cube::detail::volumeMarginRate(defaultTolerance<S>()), prove);
 }
 
