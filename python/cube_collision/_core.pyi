@@ -127,6 +127,8 @@ class CollisionManager:
     def include_pair(self, name_a: str, name_b: str) -> None:
         """Undoes exclude_pair."""
     def clear_excluded(self) -> None: ...
+    def pair_passes(self, name_a: str, name_b: str) -> bool:
+        """Whether the internal queries test and report this pair once the boxes overlap."""
     def ignore_pair(self, name_a: str, name_b: str) -> None:
         """Alias of exclude_pair."""
     def unignore_pair(self, name_a: str, name_b: str) -> None:

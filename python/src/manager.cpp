@@ -116,6 +116,12 @@ std::vector<std::pair<std::string, std::string>> Manager::excludedPairs() const 
   return out;
 }
 
+bool Manager::pairPasses(const std::string& a, const std::string& b) const {
+  Object* oa = find(a)->obj.get();
+  Object* ob = find(b)->obj.get();
+  return rules().pairPasses(oa, ob);
+}
+
 void Manager::applyMargin(fcl::CollisionObjectd* obj, double margin) {
   if (cube_ && obj)
     cube_->setMargin(obj, margin);

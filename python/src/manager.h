@@ -128,6 +128,10 @@ class Manager {
   std::size_t planes() const { return planes_; }
   std::size_t convexes() const { return convexes_; }
   std::vector<std::pair<std::string, std::string>> excludedPairs() const;
+  /// Whether the queries over this manager's own pairs hand the pair of objects a and b on once
+  /// their boxes (grown by their margins) overlap: the rules object's pairPasses (filter bits,
+  /// excluded pairs). False for a == b. UnknownName for an unknown name (a's first).
+  bool pairPasses(const std::string& a, const std::string& b) const;
 
   fcl::BroadPhaseCollisionManagerd& broadphase() const { return *bp_; }
   cube::CubeCollisionManagerd* cube() const { return cube_; }

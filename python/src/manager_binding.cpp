@@ -262,6 +262,20 @@ bits. KeyError for an unknown name; TypeError for a negative or too large int.)d
           },
           "The excluded pairs, sorted, as (name, name) tuples, each in the order the objects "
           "were added.")
+      .def(
+          "pair_passes",
+          [](const Manager& self, py::handle a, py::handle b) {
+            const std::string na = nameOfArg(a), nb = nameOfArg(b);
+            std::shared_lock lock(self.mutex);
+            return self.pairPasses(na, nb);
+          },
+          py::arg("name_a"), py::arg("name_b"), R"doc(
+Whether the queries over this manager's own pairs (in_collision_internal,
+min_distance_internal) test and report this pair once the two objects' boxes, each grown by its
+margin, overlap: True if their filter bits pass (set_filter) and the pair is not excluded
+(exclude_pair), decided where the queries decide it, on either backend. Either order names the
+pair; False for the same name twice. KeyError for an unknown name, TypeError for a non-str
+name.)doc")
       // The former names, kept for existing code.
       .def(
           "ignore_pair",

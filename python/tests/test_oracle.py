@@ -277,6 +277,57 @@ def test_excluded_pairs_are_the_rules_objects_on_either_backend(backend):
     assert m.in_collision_internal(return_names=True)[1] == brute_colliding(scene, kept)
 
 
+def test_pair_passes_is_whether_the_internal_query_reports_an_overlapping_pair(backend):
+    """pair_passes(a, b) over every ordered pair of objects all around the origin (so that every
+    pair collides), under random filter bits and excluded pairs: true exactly for the pairs
+    in_collision_internal reports, and for those the bits and exclusions let through."""
+    rng = np.random.default_rng(17)
+    scene = []
+    for i in range(24):
+        size = rng.uniform(0.4, 1.0)
+        g = [cc.box(*rng.uniform(0.4, 1.0, 3)), cc.sphere(size / 2),
+             cc.capsule(size / 4, size), cc.cylinder(size / 3, size)][i % 4]
+        centre = rng.uniform(-0.05, 0.05, 3)
+        scene.append((f"o{i}", g, scenes.pose(scenes.random_rotation(rng), centre)))
+    names = [n for n, _, _ in scene]
+    every = set(itertools.combinations(sorted(names), 2))
+    m = build(scene, backend)
+    assert m.in_collision_internal(return_names=True)[1] == every  # every pair overlaps
+    assert all(m.pair_passes(a, b) for a, b in every)
+    bits = {}
+    for name in names:
+        if rng.integers(4) == 0:
+            bits[name] = (1, cc.ALL_BITS)  # the default, left as it is
+            continue
+        bits[name] = (1 << int(rng.integers(4)), int(rng.integers(16)))
+        m.set_filter(name, *bits[name])
+    excluded = {p for p in sorted(every) if rng.integers(3) == 0}
+    for a, b in excluded:
+        if rng.integers(2):
+            a, b = b, a  # either order names the pair
+        m.exclude_pair(a, b)
+
+    def allowed(a, b):
+        (ca, ma), (cb, mb) = bits[a], bits[b]
+        return bool(ca & mb) and bool(cb & ma) and tuple(sorted((a, b))) not in excluded
+
+    reported = m.in_collision_internal(return_names=True)[1]
+    passing = 0
+    for a in names:
+        assert not m.pair_passes(a, a)
+        for b in names:
+            if a == b:
+                continue
+            got = m.pair_passes(a, b)
+            assert got == (tuple(sorted((a, b))) in reported), (a, b)
+            assert got == allowed(a, b), (a, b)
+            passing += got
+    # Both answers occur, for each reason a pair is held.
+    held_by_bits = [p for p in every if p not in excluded and not allowed(*p)]
+    assert passing > 0 and excluded and held_by_bits and reported
+    assert len(reported) < len(every)
+
+
 EXCLUDE_NAMES = ("exclude_pair", "include_pair", "excluded_pairs", "clear_excluded")
 ALIAS_NAMES = ("ignore_pair", "unignore_pair", "ignored_pairs", "clear_ignored")
 
