@@ -64,8 +64,10 @@ struct ObjectVisitor {
     if constexpr (Groups) {
       if (groupsPass(p, tree, child, tree, kNone) == 0) return false;
     }
+    // Prefetched only if taken: about half the children an object query tests are not.
+    if (!p.enter(n, qn, key)) return false;
     prefetchBelow(tree, n);
-    return p.enter(n, qn, key);
+    return true;
   }
   Step at(std::uint32_t cube, State) const {
     p.count.visit();
