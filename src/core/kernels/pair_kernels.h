@@ -142,6 +142,16 @@ inline std::uint64_t leafHitsPortable(const Item<S>* xs, std::uint32_t nx, const
   return hits;
 }
 
+/// leafHitsPortable<false>(xs, nx, &y, 1) against a prepared box y (one query object down a
+/// tree: its leaves are tested against the same box).
+template <typename S>
+inline std::uint64_t leafHitsOne(const Item<S>* xs, std::uint32_t nx, const FixedBox<S>& y) {
+  std::uint64_t hits = 0;
+  for (std::uint32_t i = 0; i < nx; ++i)
+    hits |= std::uint64_t(y.overlaps(xs[i].box)) << (kMaskLeaf * i);
+  return hits;
+}
+
 /// Each instruction set's table, or null where this build or this CPU lacks it (only
 /// pairKernels() calls these).
 template <typename S>
