@@ -496,6 +496,10 @@ TEST(BoxOps, Sse2EqualsPortableBitForBit) {
     }
     const Node na = nodeOf(a), nb = nodeOf(b);
     ASSERT_EQ(s2::overlap(a, b), pt::overlap(a, b)) << rep;
+    // A box prepared for an object query's leaves (FixedBox) tests as overlap does.
+    ASSERT_EQ(s2::FixedBox<double>(b).overlaps(a), pt::overlap(a, b)) << rep;
+    ASSERT_EQ(s2::FixedBox<double>(a).overlaps(b), pt::overlap(b, a)) << rep;
+    ASSERT_EQ(pt::FixedBox<double>(b).overlaps(a), pt::overlap(a, b)) << rep;
     ASSERT_EQ(s2::overlap(na, nb), pt::overlap(na, nb)) << rep;
     ASSERT_EQ(bits(s2::boxGap2(a, b)), bits(pt::boxGap2(a, b))) << rep;
     ASSERT_EQ(bits(s2::cubeGap2(na, nb)), bits(pt::cubeGap2(na, nb))) << rep;

@@ -113,8 +113,9 @@ bool isNull(const detail::CollideFn<S>& fn) {
 // The collides behind FCL's interface and the library's (manager_walks.h), after the cull of
 // Config::cull_pairs, if any, is installed.
 template <typename S>
-void runObjectCollide(const detail::Broadphase<S>& core, fcl::CollisionObject<S>* obj, void* cdata,
-                      detail::CollideFn<S> fn, QueryStats* stats) {
+[[gnu::always_inline]] inline void runObjectCollide(const detail::Broadphase<S>& core,
+                                                    fcl::CollisionObject<S>* obj, void* cdata,
+                                                    detail::CollideFn<S> fn, QueryStats* stats) {
   const Box<S> box = checkedQueryBox(obj, "collide");
   if (isNull(fn)) fail("collide", "null callback");
   if (core.size() == 0) return;  // checked, nothing to meet: skip the set-up of a walk
@@ -136,6 +137,9 @@ void runSelfCollide(const detail::Broadphase<S>& core, void* cdata, detail::Coll
 template <typename S>
 void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
+  // Without the cull, the user's callback straight: none of the cull's set-up in a short query.
+  if (!core_->config().cull_pairs)
+    return runObjectCollide(*core_, obj, cdata, detail::CollideFn<S>(callback), stats);
   CulledCallback<S> culled{cdata, callback};
   const auto fn = culled.install(core_->config().cull_pairs, cdata, core_->table(), nullptr);
   runObjectCollide(*core_, obj, cdata, fn, stats);

@@ -59,13 +59,17 @@ struct ObjectVisitor {
 
   static bool before(State x, State y) { return Policy::before(x, y); }
   bool worth(State key) const { return p.worth(key); }
-  bool enter(std::uint32_t child, int, State, State& key) const {
-    const Node& n = tree.nodes[child];
+  bool enter(std::uint32_t child, int which, State, State& key) const {
+    // From the first sibling (child - which): both siblings' addresses then differ by a
+    // constant, not each computed from its own 32-bit index.
+    const Node& n = (tree.nodes + (child - std::uint32_t(which)))[which];
     if constexpr (Groups) {
       if (groupsPass(p, tree, child, tree, kNone) == 0) return false;
     }
+    // Prefetched only if taken: about half the children an object query tests are not.
+    if (!p.enter(n, qn, key)) return false;
     prefetchBelow(tree, n);
-    return p.enter(n, qn, key);
+    return true;
   }
   Step at(std::uint32_t cube, State) const {
     p.count.visit();

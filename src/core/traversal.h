@@ -208,7 +208,8 @@ bool forSelfViews(const Scene<S>& scene, Run&& run) {
 /// against q, then the unbounded list against q. Empty views are not run: a walk's set-up is a
 /// measurable share of a small query (a 30-object manager against a 32-object one).
 template <typename S, class Run>
-bool forObjectViews(const Scene<S>& scene, const View<S>& q, Run&& run) {
+[[gnu::always_inline]] inline bool forObjectViews(const Scene<S>& scene, const View<S>& q,
+                                                  Run&& run) {
   if (q.root == kNone) return false;
   if (scene.cubes.root != kNone && run(scene.cubes, q, false)) return true;
   return scene.unbounded.root != kNone && run(scene.unbounded, q, false);

@@ -185,8 +185,13 @@ bool collideSmall(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys, std::u
                   const Policy& p, bool bits_pass = false) {
   countLeafTests<Self>(p, nx, ny);
   // Against a single object (a query) a batch kernel's set-up would cost more than the tests.
-  const std::uint64_t hits =
-      ny == 1 ? leafHitsPortable<Self>(xs, nx, ys, ny) : p.kernels->leafHits[Self](xs, nx, ys, ny);
+  std::uint64_t hits;
+  if constexpr (Self)
+    hits = ny == 1 ? leafHitsPortable<Self>(xs, nx, ys, ny)
+                   : p.kernels->leafHits[Self](xs, nx, ys, ny);
+  else
+    hits = ny == 1 ? leafHitsOne(xs, nx, FixedBox<S>(ys->box))
+                   : p.kernels->leafHits[Self](xs, nx, ys, ny);
   if (hits == 0) return false;
   return reportHits<false>(hits, xs, ys, p, bits_pass);
 }

@@ -23,6 +23,7 @@ namespace box_ops = portable;
 
 using box_ops::boxGap2;
 using box_ops::cubeGap2;
+using box_ops::FixedBox;
 using box_ops::floatBelow;
 using box_ops::fourToColumns;
 using box_ops::overlap;

@@ -60,6 +60,15 @@ inline bool overlap(const B& a, const B& b) {
          (a.lo[2] <= b.hi[2]) & (b.lo[2] <= a.hi[2]);
 }
 
+/// A box that many boxes are tested against (one query object down the leaves of a tree):
+/// overlaps(x) is overlap(x, box), bit for bit.
+template <typename S>
+struct FixedBox {
+  explicit FixedBox(const Box<S>& b) : box(b) {}
+  bool overlaps(const Box<S>& x) const { return overlap(x, box); }
+  Box<S> box;
+};
+
 /// Squared Euclidean gap between two boxes in type T (fcl::AABB::distance squared), summed in
 /// axis order. An axis whose difference is NaN (both boxes reaching the same infinity) counts
 /// as touching.

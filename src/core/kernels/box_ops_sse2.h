@@ -85,6 +85,34 @@ inline bool overlap(const Box<double>& a, const Box<double>& b) {
   return _mm_movemask_pd(_mm_and_pd(m0, m1)) == 3;
 }
 
+template <typename S>
+struct FixedBox : portable::FixedBox<S> {
+  using portable::FixedBox<S>::FixedBox;
+};
+
+/// FixedBox for double: its corners laid out as a tested box's six contiguous doubles are, in
+/// pairs (lo0 lo1) (lo2 hi0) (hi1 hi2), with the hi side's bounds negated, so that a test is
+/// three two-lane compares of the box as it lies in memory (-x <= -y is y <= x for every value,
+/// zeros and infinities included, and false with a NaN as y <= x is).
+template <>
+struct FixedBox<double> {
+  explicit FixedBox(const Box<double>& b)
+      : q01(_mm_loadu_pd(b.hi)),
+        q2(_mm_xor_pd(_mm_set_pd(b.lo[0], b.hi[2]), _mm_set_pd(-0.0, 0.0))),
+        q3(_mm_xor_pd(_mm_set_pd(b.lo[2], b.lo[1]), _mm_set1_pd(-0.0))) {}
+  bool overlaps(const Box<double>& x) const {
+    const __m128d flip_hi0 = _mm_set_pd(-0.0, 0.0);
+    const __m128d flip_both = _mm_set1_pd(-0.0);
+    const __m128d c1 = _mm_cmple_pd(_mm_loadu_pd(x.lo), q01);  // lo0 <= b.hi0, lo1 <= b.hi1
+    const __m128d c2 = _mm_cmple_pd(_mm_xor_pd(_mm_loadu_pd(x.lo + 2), flip_hi0), q2);
+    const __m128d c3 = _mm_cmple_pd(_mm_xor_pd(_mm_loadu_pd(x.hi + 1), flip_both), q3);
+    return _mm_movemask_pd(_mm_and_pd(_mm_and_pd(c1, c2), c3)) == 3;
+  }
+  __m128d q01;  // b.hi0, b.hi1
+  __m128d q2;   // b.hi2, -b.lo0
+  __m128d q3;   // -b.lo1, -b.lo2
+};
+
 inline double boxGap2(const Box<double>& a, const Box<double>& b) {
   const __m128d zero = _mm_setzero_pd();
   const __m128d x01 = _mm_sub_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.hi));

@@ -142,6 +142,20 @@ inline std::uint64_t leafHitsPortable(const Item<S>* xs, std::uint32_t nx, const
   return hits;
 }
 
+/// leafHitsPortable<false>(xs, nx, &y, 1) against a prepared box y (one query object down a
+/// tree: its leaves are tested against the same box).
+template <typename S>
+inline std::uint64_t leafHitsOne(const Item<S>* xs, std::uint32_t nx, const FixedBox<S>& y) {
+  const auto hits = [&](std::uint32_t n) {
+    std::uint64_t h = 0;
+    for (std::uint32_t i = 0; i < n; ++i)
+      h |= std::uint64_t(y.overlaps(xs[i].box)) << (kMaskLeaf * i);
+    return h;
+  };
+  // Full leaves (most of them) without a test of the count per object.
+  return nx == kMaskLeaf ? hits(kMaskLeaf) : hits(nx);
+}
+
 /// Each instruction set's table, or null where this build or this CPU lacks it (only
 /// pairKernels() calls these).
 template <typename S>
