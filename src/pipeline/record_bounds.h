@@ -71,10 +71,10 @@ inline T axisGap(const T (&R)[3][3], const T (&t)[3], const T* ea, const T* eb, 
                    std::fabs(tj) - (ea[0] * A[0][j] + ea[1] * A[1][j] + ea[2] * A[2][j]) - eb[j]);
   }
   if (gap > stop) return gap;
-  // Unrolled, every index is a constant and R, t and the extents stay in registers.
 #pragma GCC unroll 3
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+    // Both loops unrolled: every index a constant, no index arithmetic per axis.
 #pragma GCC unroll 3
     for (int j = 0; j < 3; ++j) {
       const T len2 = T(1) - R[i][j] * R[i][j];
