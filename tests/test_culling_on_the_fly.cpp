@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "pipeline/pair_volumes.h"
 #include "support/culling_kinds.h"
 
 namespace {
@@ -84,6 +85,69 @@ TYPED_TEST(Culling, ObjectsOfNoTableAreJudgedLevelByLevelAsFclAnswers) {
   EXPECT_GT(proved * 200, pairs) << proved << " of " << pairs;
   EXPECT_GT(not_beating * 10, pairs) << not_beating << " of " << pairs;
   EXPECT_GT(not_within * 10, pairs) << not_within << " of " << pairs;
+}
+
+// A query's pairs without records share each object's levels (PairVolumes::fly): built once, in
+// whatever order its pairs ask for them (a proof's ball inside before another pair's box gap, a
+// distance bound after a collide), they give every pair the verdict and the bound of levels built
+// for that pair alone. Objects whose ids share a place in the memo (ids 64 apart) get none
+// together, and an object that takes over a place gets its own levels there.
+TYPED_TEST(Culling, KeptLevelsJudgeEveryPairAsLevelsBuiltForItAlone) {
+  using S = TypeParam;
+  using cube::detail::ObjectId;
+  auto kinds = allKinds<S>();
+  const S tol = defaultTolerance<S>();
+  const cube::detail::PairJudge<S> loose(tol, false, true), proving(fcl::CollisionRequest<S>{});
+  const cube::detail::PairJudge<S> measuring{fcl::DistanceRequest<S>{}};
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(-1.2, 1.2), reach(0.0, 0.5);
+  std::uniform_int_distribution<std::size_t> pick(0, 2 * kinds.size() - 1);
+  // Two objects of each kind, close together, object i under id i (fewer than 64 objects).
+  std::vector<std::unique_ptr<fcl::CollisionObject<S>>> objs;
+  for (int copy = 0; copy < 2; ++copy)
+    for (const auto& kind : kinds) {
+      objs.push_back(std::make_unique<fcl::CollisionObject<S>>(kind.second));
+      objs.back()->setTransform(randomRotation<S>(rng),
+                                fcl::Vector3<S>(S(u(rng)), S(u(rng)), S(u(rng))));
+      objs.back()->computeAABB();
+    }
+  cube::detail::PairVolumes<S> volumes;
+  std::size_t judged = 0, shared_place = 0;
+  for (int rep = 0; rep < 3000; ++rep) {
+    const std::size_t i = pick(rng), j = pick(rng);
+    if (i == j) continue;
+    // Now and then object i under the id 64 above its neighbour's: the neighbour's place.
+    const ObjectId ii = rep % 7 == 0 ? ObjectId((i + 1) % objs.size() + 64) : ObjectId(i);
+    const ObjectId jj = ObjectId(j);
+    fcl::CollisionObject<S>&a = *objs[i], &b = *objs[j];
+    cube::detail::FlyVolumes<S>*fa, *fb;
+    volumes.fly(&a, ii, &b, jj, fa, fb);
+    if (ii % 64 == jj % 64) {  // one place
+      EXPECT_EQ(fa, nullptr);
+      EXPECT_EQ(fb, nullptr);
+      ++shared_place;
+      continue;
+    }
+    ASSERT_NE(fa, nullptr);
+    ASSERT_NE(fb, nullptr);
+    ++judged;
+    const auto what = ::testing::Message() << "pair " << i << ", " << j << " rep " << rep;
+    switch (rep % 3) {  // the judges in turn, so that each meets levels the others built
+      case 0:
+        EXPECT_EQ(proving.collide(*fa, *fb), proving.collide(a, b)) << what;
+        break;
+      case 1:
+        EXPECT_EQ(loose.collide(*fa, *fb), loose.collide(a, b)) << what;
+        break;
+      default: {
+        const S best = S(reach(rng));
+        EXPECT_EQ(measuring.mayBeat(*fa, *fb, best), measuring.mayBeat(a, b, best))
+            << what << " best " << best;
+      }
+    }
+  }
+  EXPECT_GT(judged, 2000u);
+  EXPECT_GT(shared_place, 0u);
 }
 
 // The records' float arithmetic squares differences of coordinates: an object whose centre or

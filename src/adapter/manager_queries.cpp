@@ -47,10 +47,16 @@ struct CulledCallback {
                    detail::ObjectId ib, void* self) {
     auto& c = *static_cast<CulledCallback*>(self);
     detail::Records ra, rb;
-    const bool records = c.volumes.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape);
-    const bool apart = c.judge.collide(*a, records ? &ra : nullptr, *b, records ? &rb : nullptr) ==
-                       detail::Answer::kApart;
-    return !apart && c.fn(a, b, c.data);
+    detail::Answer answer;
+    if (c.volumes.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape)) {
+      answer = c.judge.collide(ra, rb);  // a judge that culls
+    } else {
+      // Without records: the objects' levels, kept for the pairs still to come.
+      detail::FlyVolumes<S>*fa, *fb;
+      c.volumes.fly(a, ia, b, ib, fa, fb);
+      answer = fa != nullptr ? c.judge.collide(*fa, *fb) : c.judge.collide(*a, *b);
+    }
+    return answer != detail::Answer::kApart && c.fn(a, b, c.data);
   }
   // The walk's callback: this wrapper, on the tables whose ids the walk gives (side b null:
   // objects of no table), when culling is on; else the user's (a null one stays null, for the

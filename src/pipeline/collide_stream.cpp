@@ -39,10 +39,11 @@ constexpr std::size_t kBlockMinObjects = 4096;
 // the calling thread (a lookup compares and updates the objects' poses).
 template <typename S>
 Answer classify(CollideCache<S>* cache, const PairJudge<S>& judge, fcl::CollisionObject<S>* a,
-                fcl::CollisionObject<S>* b, CollideEntry<S>*& cached) {
+                fcl::CollisionObject<S>* b, FlyVolumes<S>* fa, FlyVolumes<S>* fb,
+                CollideEntry<S>*& cached) {
   cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
   if (cached != nullptr) return Answer::kCached;
-  return judge.collide(*a, *b);
+  return fa != nullptr ? judge.collide(*fa, *fb) : judge.collide(*a, *b);
 }
 
 }  // namespace
@@ -85,8 +86,13 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
   if (all_.full()) return true;
   if (!judge_.culls()) return pushJudged(a, b, nullptr, nullptr, false);
   Volumes va, vb;
-  if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape))
-    return pushJudged(a, b, nullptr, nullptr, false);
+  if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape)) {
+    // A pair answered at once is culled on the objects' kept levels; one for the chunk, on the
+    // threads, on its objects.
+    FlyVolumes<S>*fa = nullptr, *fb = nullptr;
+    if (serial_) volumes_.fly(a, ia, b, ib, fa, fb);
+    return pushJudged(a, b, nullptr, nullptr, false, fa, fb);
+  }
   // Records of the tables stay put for the query; those built for an object of no table are
   // rebuilt for the next such object: only the former wait in a block.
   return pushJudged(a, b, &va, &vb, ia != kNone && ib != kNone);
@@ -94,7 +100,8 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
 
 template <typename S>
 bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
-                                  const Volumes* va, const Volumes* vb, bool kept) {
+                                  const Volumes* va, const Volumes* vb, bool kept,
+                                  FlyVolumes<S>* fa, FlyVolumes<S>* fb) {
   if (all_.full()) return true;
   ++stats_.candidate_pairs;
   // With volumes the judge runs here, before the cache (its cheaper part costs less than a
@@ -135,7 +142,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
     Answer kind;
     bool refined = false;
     if (va == nullptr) {
-      kind = classify(cache_, judge_, a, b, cached);
+      kind = classify(cache_, judge_, a, b, fa, fb, cached);
     } else if (cache_ == nullptr) {
       kind = cull();
     } else {

@@ -20,33 +20,39 @@ float smallestReach(const VolumeBall<S>& ball) {
   return float(S(0.5) * (local.max_ - local.min_).minCoeff());
 }
 
-}  // namespace
-
+// An object's levels built for one pair alone: each level read at most once, so built when read,
+// with no note of it (FlyVolumes' interface, for the same verdicts).
 template <typename S>
-Verdict verdictOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
-                        float rate, bool prove) {
-  VolumeBall<S> ba, bb;
-  buildBall(a, ba);
-  buildBall(b, bb);
+struct PairLevels {
+  VolumeBall<S> ball;
+  VolumeShape shape;
+  explicit PairLevels(const fcl::CollisionObject<S>& o) { buildBall(o, ball); }
+  bool hasBox() { return buildBox(ball, shape); }
+  bool hasInner() { return buildInner(ball, shape); }
+};
+
+// The verdict and the bound on two objects' levels (PairLevels or FlyVolumes), each level
+// built only where the one before leaves the pair open.
+template <class Levels>
+[[gnu::always_inline]] inline Verdict verdictOnLevels(Levels& a, Levels& b, float rate,
+                                                      bool prove) {
+  const auto &ba = a.ball, &bb = b.ball;
   if (!(ba.sphere.r >= 0.f) || !(bb.sphere.r >= 0.f)) return Verdict::kUnknown;
   const SphereGap s = sphereGap(ba.sphere, ba.scale, bb.sphere, bb.scale, rate);
   if (s.gap > s.margin) return Verdict::kApart;
   if (!prove && ba.exact && bb.exact) return Verdict::kUnknown;  // the spheres were exact
-  VolumeShape ha, hb;
-  if (!buildBox(ba, ha) || !buildBox(bb, hb)) return Verdict::kUnknown;
-  const VolumeGap g = separationPastSpheres(s, ba.sphere, ha, bb.sphere, hb, 0.f);
+  if (!a.hasBox() || !b.hasBox()) return Verdict::kUnknown;
+  const VolumeGap g = separationPastSpheres(s, ba.sphere, a.shape, bb.sphere, b.shape, 0.f);
   if (g.lower_bound > g.margin) return Verdict::kApart;
-  if (!prove || !buildInner(ba, ha) || !buildInner(bb, hb)) return Verdict::kUnknown;
-  return innerBallsMeet(ba.sphere, ha, bb.sphere, hb, rate) ? Verdict::kTouching
-                                                            : Verdict::kUnknown;
+  if (!prove || !a.hasInner() || !b.hasInner()) return Verdict::kUnknown;
+  return innerBallsMeet(ba.sphere, a.shape, bb.sphere, b.shape, rate) ? Verdict::kTouching
+                                                                      : Verdict::kUnknown;
 }
 
-template <typename S>
-VolumeGap separationOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
-                             float rate, float enough) {
-  VolumeBall<S> ba, bb;
-  buildBall(a, ba);
-  buildBall(b, bb);
+template <class Levels>
+[[gnu::always_inline]] inline VolumeGap separationOnLevels(Levels& a, Levels& b, float rate,
+                                                           float enough) {
+  const auto &ba = a.ball, &bb = b.ball;
   if (!(ba.sphere.r >= 0.f) || !(bb.sphere.r >= 0.f))
     return {-std::numeric_limits<float>::infinity(), 0.f};
   const SphereGap s = sphereGap(ba.sphere, ba.scale, bb.sphere, bb.scale, rate);
@@ -57,15 +63,45 @@ VolumeGap separationOnTheFly(const fcl::CollisionObject<S>& a, const fcl::Collis
       !(s.centres - smallestReach(ba) - smallestReach(bb) > enough + s.margin))
     return {s.gap, s.margin};
   // separationOf reads no more than the boxes.
-  VolumeShape ha, hb;
-  if (!buildBox(ba, ha) || !buildBox(bb, hb)) return {s.gap, s.margin};
-  return separationPastSpheres(s, ba.sphere, ha, bb.sphere, hb, enough);
+  if (!a.hasBox() || !b.hasBox()) return {s.gap, s.margin};
+  return separationPastSpheres(s, ba.sphere, a.shape, bb.sphere, b.shape, enough);
+}
+
+}  // namespace
+
+template <typename S>
+Verdict verdictOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                        float rate, bool prove) {
+  PairLevels<S> la(a), lb(b);
+  return verdictOnLevels(la, lb, rate, prove);
+}
+
+template <typename S>
+Verdict verdictOnTheFly(FlyVolumes<S>& a, FlyVolumes<S>& b, float rate, bool prove) {
+  return verdictOnLevels(a, b, rate, prove);
+}
+
+template <typename S>
+VolumeGap separationOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
+                             float rate, float enough) {
+  PairLevels<S> la(a), lb(b);
+  return separationOnLevels(la, lb, rate, enough);
+}
+
+template <typename S>
+VolumeGap separationOnTheFly(FlyVolumes<S>& a, FlyVolumes<S>& b, float rate, float enough) {
+  return separationOnLevels(a, b, rate, enough);
 }
 
 template Verdict verdictOnTheFly<double>(const fcl::CollisionObject<double>&,
                                          const fcl::CollisionObject<double>&, float, bool);
 template Verdict verdictOnTheFly<float>(const fcl::CollisionObject<float>&,
                                         const fcl::CollisionObject<float>&, float, bool);
+template VolumeGap separationOnTheFly<double>(FlyVolumes<double>&, FlyVolumes<double>&, float,
+                                              float);
+template VolumeGap separationOnTheFly<float>(FlyVolumes<float>&, FlyVolumes<float>&, float, float);
+template Verdict verdictOnTheFly<double>(FlyVolumes<double>&, FlyVolumes<double>&, float, bool);
+template Verdict verdictOnTheFly<float>(FlyVolumes<float>&, FlyVolumes<float>&, float, bool);
 template VolumeGap separationOnTheFly<double>(const fcl::CollisionObject<double>&,
                                               const fcl::CollisionObject<double>&, float, float);
 template VolumeGap separationOnTheFly<float>(const fcl::CollisionObject<float>&,

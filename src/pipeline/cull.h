@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "core/volume.h"
@@ -184,12 +185,44 @@ template <typename S>
 Verdict verdictOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
                         float rate, bool prove);
 
+/// One object's records built on the fly and kept, each level built the first time a verdict
+/// reads it (the sphere at start(), the box and the ball inside on demand): a query that meets an
+/// object in several pairs builds them once (PairVolumes' memo). Valid while the object stays as
+/// it was at start().
+template <typename S>
+struct FlyVolumes {
+  VolumeBall<S> ball;
+  VolumeShape shape;
+  std::int8_t box;    // -1: not built yet; else buildBox's answer
+  std::int8_t inner;  // the same for buildInner (after the box)
+  void start(const fcl::CollisionObject<S>& o) {
+    buildBall(o, ball);
+    box = inner = -1;
+  }
+  bool hasBox() {
+    if (box < 0) box = buildBox(ball, shape) ? 1 : 0;
+    return box != 0;
+  }
+  bool hasInner() {
+    if (inner < 0) inner = buildInner(ball, shape) ? 1 : 0;
+    return inner != 0;
+  }
+};
+
+/// verdictOnTheFly on two objects' kept levels (a and b distinct), building what it reads.
+template <typename S>
+Verdict verdictOnTheFly(FlyVolumes<S>& a, FlyVolumes<S>& b, float rate, bool prove);
+
 /// separationOf for two objects of no table, on records built as verdictOnTheFly builds them:
 /// the spheres' gap where it exceeds enough + margin or both objects are spheres, else
 /// separationOf on the spheres and boxes (all it reads).
 template <typename S>
 VolumeGap separationOnTheFly(const fcl::CollisionObject<S>& a, const fcl::CollisionObject<S>& b,
                              float rate, float enough);
+
+/// separationOnTheFly on two objects' kept levels (a and b distinct), building what it reads.
+template <typename S>
+VolumeGap separationOnTheFly(FlyVolumes<S>& a, FlyVolumes<S>& b, float rate, float enough);
 
 /// separationOnTheFly for FCL's `tolerance` (volumeMarginRate), in S: a lower bound on the
 /// objects' distance (-infinity when unknown) and the margin it must beat a distance by.
@@ -233,6 +266,13 @@ extern template Verdict verdictOnTheFly<double>(const fcl::CollisionObject<doubl
                                                 const fcl::CollisionObject<double>&, float, bool);
 extern template Verdict verdictOnTheFly<float>(const fcl::CollisionObject<float>&,
                                                const fcl::CollisionObject<float>&, float, bool);
+extern template Verdict verdictOnTheFly<double>(FlyVolumes<double>&, FlyVolumes<double>&, float,
+                                                bool);
+extern template Verdict verdictOnTheFly<float>(FlyVolumes<float>&, FlyVolumes<float>&, float, bool);
+extern template VolumeGap separationOnTheFly<double>(FlyVolumes<double>&, FlyVolumes<double>&,
+                                                     float, float);
+extern template VolumeGap separationOnTheFly<float>(FlyVolumes<float>&, FlyVolumes<float>&, float,
+                                                    float);
 extern template VolumeGap separationOnTheFly<double>(const fcl::CollisionObject<double>&,
                                                      const fcl::CollisionObject<double>&, float,
                                                      float);

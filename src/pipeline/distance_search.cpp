@@ -38,32 +38,37 @@ template <typename S>
 DistanceSearch<S>::~DistanceSearch() = default;
 
 template <typename S>
-bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist) {
-  return offer(a, nullptr, b, nullptr, dist);
-}
-
-template <typename S>
-bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
-                             ObjectId ib, S& dist) {
-  Records ra, rb;
-  if (!volumes_.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape))
-    return offer(a, nullptr, b, nullptr, dist);
-  return offer(a, &ra, b, &rb, dist);
-}
-
-template <typename S>
-bool DistanceSearch<S>::offer(fcl::CollisionObject<S>* a, const Records* ra,
-                              fcl::CollisionObject<S>* b, const Records* rb, S& dist) {
+template <class MayBeat>
+bool DistanceSearch<S>::offer(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist,
+                              MayBeat&& may_beat) {
   ++stats_.candidate_pairs;
   // A pair that cannot beat the best distance so far would leave the result as it is.
   if (closest_.bound() > 0) {
-    if (judge_.mayBeat(*a, ra, *b, rb, closest_.bound()))
+    if (may_beat(closest_.bound()))
       answer(a, b);
     else
       ++stats_.culled;
   }
   dist = closest_.bound();  // read once: dist may alias it
   return dist <= 0;
+}
+
+template <typename S>
+bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist) {
+  return offer(a, b, dist, [&](S bound) { return judge_.mayBeat(*a, *b, bound); });
+}
+
+template <typename S>
+bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::CollisionObject<S>* b,
+                             ObjectId ib, S& dist) {
+  Records ra, rb;
+  if (volumes_.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape))
+    return offer(a, b, dist, [&](S bound) { return judge_.mayBeat(ra, rb, bound); });
+  // Without records: the objects' levels, kept for the pairs still to come.
+  FlyVolumes<S>*fa, *fb;
+  volumes_.fly(a, ia, b, ib, fa, fb);
+  if (fa == nullptr) return push(a, b, dist);
+  return offer(a, b, dist, [&](S bound) { return judge_.mayBeat(*fa, *fb, bound); });
 }
 
 template <typename S>

@@ -55,9 +55,10 @@ class DistanceSearch {
 
  private:
   struct Slot;
-  // The one path of both pushes: ra, rb the pair's records (null: the judge reads the objects).
-  bool offer(fcl::CollisionObject<S>* a, const Records* ra, fcl::CollisionObject<S>* b,
-             const Records* rb, S& dist);
+  // The one path of both pushes: `may_beat(bound)` the judge on whatever the pair has (records,
+  // kept levels, the objects), asked only while the bound is positive.
+  template <class MayBeat>
+  bool offer(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, S& dist, MayBeat&& may_beat);
   void flush();
   // After the bound let the pair through: FCL, or the batch.
   void answer(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b);

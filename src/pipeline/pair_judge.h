@@ -76,9 +76,10 @@ class PairJudge {
     if (!cull_) return Answer::kComputed;
     return answerOf(verdictOnTheFly(a, b, rate_, prove_));
   }
-  /// On the records where both sides have them (ra, rb not null), else on the objects.
-  Answer collide(const Object& a, const Records* ra, const Object& b, const Records* rb) const {
-    return ra != nullptr && rb != nullptr && cull_ ? collide(*ra, *rb) : collide(a, b);
+  /// On records built on the fly and kept (PairVolumes::fly), building the levels it reads.
+  Answer collide(FlyVolumes<S>& a, FlyVolumes<S>& b) const {
+    if (!cull_) return Answer::kComputed;
+    return answerOf(verdictOnTheFly(a, b, rate_, prove_));
   }
 
   // ---- A distance search: false when FCL's distance of the pair would exceed `best`, the
@@ -95,10 +96,10 @@ class PairJudge {
     const VolumeGap g = separationOnTheFly(a, b, rate_, enoughOf(best));
     return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
-  /// On the records where both sides have them, else on the objects.
-  bool mayBeat(const Object& a, const Records* ra, const Object& b, const Records* rb,
-               S best) const {
-    return ra != nullptr && rb != nullptr ? mayBeat(*ra, *rb, best) : mayBeat(a, b, best);
+  /// On records built on the fly and kept (PairVolumes::fly), building the levels it reads.
+  bool mayBeat(FlyVolumes<S>& a, FlyVolumes<S>& b, S best) const {
+    const VolumeGap g = separationOnTheFly(a, b, rate_, enoughOf(best));
+    return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
 
   // ---- Within a margin: whether the pair can be within `m` (>= 0, the sum of the objects'

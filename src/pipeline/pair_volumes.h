@@ -3,9 +3,14 @@
 // Where the narrow-phase streams (collide_stream.h, distance_search.h) find the tight volumes of a
 // pair's objects.
 
+#include <cstdint>
+#include <memory>
+
 #include "core/geometry.h"
+#include "core/pair_gate.h"
 #include "core/volume.h"
 #include "cube_collision/narrow_phase.h"
+#include "pipeline/cull.h"
 
 namespace cube {
 namespace detail {
@@ -40,6 +45,27 @@ class PairVolumes {
           ObjectId ib, const VolumeSphere*& sa, const VolumeShape*& ha, const VolumeSphere*& sb,
           const VolumeShape*& hb) {
     return side(0, a, ia, sa, ha) && side(1, b, ib, sb, hb);
+  }
+  /// For a pair `of` gives no records: the two objects' records built on the fly (the sphere at
+  /// once, the rest as a verdict reads it), kept in a small memo for the rest of the query (by id,
+  /// else by address), so that an object met in several pairs is built once. Both null when the
+  /// two would take the same place in the memo (then the judge builds them for the pair alone).
+  /// The entries stay valid until the next call.
+  void fly(const fcl::CollisionObject<S>* a, ObjectId ia, const fcl::CollisionObject<S>* b,
+           ObjectId ib, FlyVolumes<S>*& fa, FlyVolumes<S>*& fb) {
+    const std::size_t pa = flyPlace(a, ia), pb = flyPlace(b, ib);
+    if (pa == pb) {
+      fa = fb = nullptr;
+      return;
+    }
+    if (!fly_) {
+      // Made once per query, on its first pair without records: queries that never have one
+      // pay nothing.
+      fly_ = std::make_unique<FlyMemo>();
+      for (auto& k : fly_->key) k = nullptr;
+    }
+    fa = &flyEntry(pa, a);
+    fb = &flyEntry(pb, b);
   }
   /// The tables' records of ids ia and ib (neither kNone), as `of` gives them; false if a table
   /// keeps none. Reads only: any number of threads at once.
@@ -77,10 +103,31 @@ class PairVolumes {
     return true;
   }
 
+  // The memo of fly(): direct-mapped, an object's place its id (dense in small tables) or, for
+  // an object of no table, its address, each modulo kFly.
+  static constexpr std::size_t kFly = 64;
+  struct FlyMemo {
+    const fcl::CollisionObject<S>* key[kFly];
+    FlyVolumes<S> volumes[kFly];
+  };
+  static std::size_t flyPlace(const fcl::CollisionObject<S>* o, ObjectId id) {
+    return (id != kNone ? std::size_t(id) : hashKey(reinterpret_cast<std::uintptr_t>(o))) &
+           (kFly - 1);
+  }
+  FlyVolumes<S>& flyEntry(std::size_t place, const fcl::CollisionObject<S>* o) {
+    FlyVolumes<S>& v = fly_->volumes[place];
+    if (fly_->key[place] != o) {
+      v.start(*o);
+      fly_->key[place] = o;
+    }
+    return v;
+  }
+
   const VolumeSphere* spheres_[2] = {nullptr, nullptr};
   const VolumeShape* shapes_[2] = {nullptr, nullptr};
   std::size_t objects_ = 0;
   Built built_[2];
+  std::unique_ptr<FlyMemo> fly_;
 };
 
 }  // namespace detail
