@@ -4,7 +4,8 @@
 # each commit and the ratios.
 #   bash benchmarks/compare.sh BASE [HEAD]      (HEAD defaults to the work tree as it is)
 # CUBE_COMPARE_FILTER (default: every cube case but the drift study), CUBE_COMPARE_ROUNDS
-# (default 5) and CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) set the work;
+# (default 5), CUBE_COMPARE_MIN_TIME (default 0.05 s per case and round) and
+# CUBE_COMPARE_WARMUP (default 0.05 s per case and round, untimed: see "Why a warm-up") set the work;
 # CUBE_COMPARE_REUSE=1 runs the binaries of the last run again without building.
 # CUBE_COMPARE_LAYOUTS=K (default 1) links each side K times, with 0, 16, 32, ... bytes of
 # padding ahead of its code, and times every layout in every round: see "Why layouts".
@@ -33,6 +34,11 @@
 # each round runs layout l of both sides back to back, and a paired ratio compares equal
 # paddings; the table adds each side's spread (slowest over fastest layout median).
 #
+# Why a warm-up: a case whose iteration takes milliseconds (a build of 100,000 objects) runs two or
+# three iterations in the timed window, and each fresh process's heap still grows during them:
+# page faults whose count differs between two binaries of the same allocations by how their
+# allocator's arenas happen to fall. Untimed iterations ahead of the window take those faults.
+#
 # Why a confirmation: on this shared machine a case's two sides can drift apart for minutes, and
 # among a hundred cases a few read more than 5% slower by chance in any run (benchmarks/README.md
 # summarises runs of one binary against itself). A case that is really slower stays slower with more rounds; one
@@ -46,6 +52,7 @@ base=${1:?usage: compare.sh BASE [HEAD]}
 head=${2:-}
 rounds=${CUBE_COMPARE_ROUNDS:-5}
 min_time=${CUBE_COMPARE_MIN_TIME:-0.05}
+warmup=${CUBE_COMPARE_WARMUP:-0.05}
 filter=${CUBE_COMPARE_FILTER:-^[^d].*/cube(/manual_time)?$}
 work=${CUBE_COMPARE_DIR:-/tmp/cube-compare}
 layouts=${CUBE_COMPARE_LAYOUTS:-1}
@@ -101,11 +108,11 @@ echo "layouts: $layouts"
 
 echo "confirmation rounds: $confirm"
 
-python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$work" "$layouts" "$confirm" \
+python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$warmup" "$work" "$layouts" "$confirm" \
   "${CUBE_COMPARE_OUT:-}" "${CUBE_COMPARE_TITLE:-compare.sh ${base} against ${head:-the work tree}}" \
   "$base" "${head:-the work tree}" "${CUBE_COMPARE_REUSE:-0}" <<'EOF'
 import datetime, json, re, statistics, subprocess, sys
-(before, after, pattern, rounds, min_time, work, layouts, confirm, out_path, title, base_rev,
+(before, after, pattern, rounds, min_time, warmup, work, layouts, confirm, out_path, title, base_rev,
  head_rev, reuse) = sys.argv[1:]
 rounds, layouts, confirm = int(rounds), int(layouts), int(confirm)
 
@@ -140,7 +147,8 @@ def literal(name):
 
 def run(side, layout, name):
     out = subprocess.run([bins[side][layout], f"--benchmark_filter=^{literal(name)}$",
-                          f"--benchmark_min_time={min_time}", "--benchmark_format=json"],
+                          f"--benchmark_min_time={min_time}",
+                          f"--benchmark_min_warmup_time={warmup}", "--benchmark_format=json"],
                          check=True, capture_output=True, text=True).stdout
     rows = [b for b in json.loads(out)["benchmarks"]
             if b.get("run_type") != "aggregate" and "error_occurred" not in b]
@@ -213,8 +221,8 @@ if missing:
     say("cases in one binary only: " + ", ".join(missing))
 if out_path:
     settings = " ".join(f"CUBE_COMPARE_{k}={v}" for k, v in (
-        ("ROUNDS", rounds), ("MIN_TIME", min_time), ("LAYOUTS", layouts), ("CONFIRM", confirm),
-        ("REUSE", reuse), ("FILTER", "'" + pattern + "'")))
+        ("ROUNDS", rounds), ("MIN_TIME", min_time), ("WARMUP", warmup), ("LAYOUTS", layouts),
+        ("CONFIRM", confirm), ("REUSE", reuse), ("FILTER", "'" + pattern + "'")))
     head = [f"# {title}", "",
             f"- before: {base_rev}; after: {head_rev}",
             "- timing: paired" + (f", {layouts} layouts" if layouts > 1 else ""),

@@ -39,10 +39,13 @@ constexpr std::size_t kBlockMinObjects = 4096;
 // the calling thread (a lookup compares and updates the objects' poses).
 template <typename S>
 Answer classify(CollideCache<S>* cache, const PairJudge<S>& judge, fcl::CollisionObject<S>* a,
-                fcl::CollisionObject<S>* b, FlyVolumes<S>* fa, FlyVolumes<S>* fb,
+                ObjectId ia, fcl::CollisionObject<S>* b, ObjectId ib, PairVolumes<S>* kept,
                 CollideEntry<S>*& cached) {
   cached = cache != nullptr ? cache->collide.find(*cache, a, b) : nullptr;
   if (cached != nullptr) return Answer::kCached;
+  // The kept levels only now: a pair the cache answers builds none.
+  FlyVolumes<S>*fa = nullptr, *fb = nullptr;
+  if (kept != nullptr) kept->fly(a, ia, b, ib, fa, fb);
   return fa != nullptr ? judge.collide(*fa, *fb) : judge.collide(*a, *b);
 }
 
@@ -89,9 +92,7 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
   if (!volumes_.of(a, ia, b, ib, va.sphere, va.shape, vb.sphere, vb.shape)) {
     // A pair answered at once is culled on the objects' kept levels; one for the chunk, on the
     // threads, on its objects.
-    FlyVolumes<S>*fa = nullptr, *fb = nullptr;
-    if (serial_) volumes_.fly(a, ia, b, ib, fa, fb);
-    return pushJudged(a, b, nullptr, nullptr, false, fa, fb);
+    return pushJudged(a, b, nullptr, nullptr, false, ia, ib, serial_);
   }
   // Records of the tables stay put for the query; those built for an object of no table are
   // rebuilt for the next such object: only the former wait in a block.
@@ -100,8 +101,8 @@ bool CollideStream<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Collis
 
 template <typename S>
 bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b,
-                                  const Volumes* va, const Volumes* vb, bool kept,
-                                  FlyVolumes<S>* fa, FlyVolumes<S>* fb) {
+                                  const Volumes* va, const Volumes* vb, bool kept, ObjectId ia,
+                                  ObjectId ib, bool fly) {
   if (all_.full()) return true;
   ++stats_.candidate_pairs;
   // With volumes the judge runs here, before the cache (its cheaper part costs less than a
@@ -142,7 +143,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
     Answer kind;
     bool refined = false;
     if (va == nullptr) {
-      kind = classify(cache_, judge_, a, b, fa, fb, cached);
+      kind = classify(cache_, judge_, a, ia, b, ib, fly ? &volumes_ : nullptr, cached);
     } else if (cache_ == nullptr) {
       kind = cull();
     } else {

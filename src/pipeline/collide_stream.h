@@ -84,11 +84,11 @@ class CollideStream final : public TaskSink<S> {
   using Volumes = Records;
   // kept: va and vb are records of the tables (valid for the whole query), which may wait in a
   // block of pairs answered together (answerSerialBlock).
-  // fa, fb (both or neither): a pair without records culled on its objects' kept levels
+  // fly: a pair without records (ids ia, ib) culled on its objects' kept levels
   // (PairVolumes::fly) where the pair is answered at once.
   bool pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, const Volumes* va,
-                  const Volumes* vb, bool kept, FlyVolumes<S>* fa = nullptr,
-                  FlyVolumes<S>* fb = nullptr);
+                  const Volumes* vb, bool kept, ObjectId ia = kNone, ObjectId ib = kNone,
+                  bool fly = false);
   // The cull of the pairs pairs[index[k]] into slots[index[k]], k < n (at most kBlock), where
   // the slot says, then a prefetch of what FCL reads first for those it leaves. Any thread.
   void cullBlock(const std::size_t* index, std::size_t n, const ObjectPair<S>* pairs,

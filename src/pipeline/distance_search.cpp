@@ -64,11 +64,13 @@ bool DistanceSearch<S>::push(fcl::CollisionObject<S>* a, ObjectId ia, fcl::Colli
   Records ra, rb;
   if (volumes_.of(a, ia, b, ib, ra.sphere, ra.shape, rb.sphere, rb.shape))
     return offer(a, b, dist, [&](S bound) { return judge_.mayBeat(ra, rb, bound); });
-  // Without records: the objects' levels, kept for the pairs still to come.
-  FlyVolumes<S>*fa, *fb;
-  volumes_.fly(a, ia, b, ib, fa, fb);
-  if (fa == nullptr) return push(a, b, dist);
-  return offer(a, b, dist, [&](S bound) { return judge_.mayBeat(*fa, *fb, bound); });
+  // Without records: the objects' levels, kept for the pairs still to come, and built only for
+  // a pair the search still judges.
+  return offer(a, b, dist, [&](S bound) {
+    FlyVolumes<S>*fa, *fb;
+    volumes_.fly(a, ia, b, ib, fa, fb);
+    return fa != nullptr ? judge_.mayBeat(*fa, *fb, bound) : judge_.mayBeat(*a, *b, bound);
+  });
 }
 
 template <typename S>

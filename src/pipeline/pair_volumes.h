@@ -4,7 +4,6 @@
 // pair's objects.
 
 #include <cstdint>
-#include <memory>
 
 #include "core/geometry.h"
 #include "core/pair_gate.h"
@@ -22,9 +21,8 @@ namespace detail {
 template <typename S>
 class PairVolumes {
  public:
-  // User-provided, so that value-initialisation does not zero the two records of built_ (about
-  // 200 bytes, a `rep stos` on every query that installs the cull): they are written before
-  // they are read.
+  // User-provided, so that value-initialisation does not zero the two records of built_ or the
+  // memo (about 8 KB, a `rep stos` on every query): each is written before it is read.
   PairVolumes() {}  // NOLINT(modernize-use-equals-default)
   /// The tables' records (ObjectTable::spheres(), shapes()); null: that table keeps none.
   /// `objects`: how many objects the tables hold together (a self query's once).
@@ -58,11 +56,11 @@ class PairVolumes {
       fa = fb = nullptr;
       return;
     }
-    if (!fly_) {
-      // Made once per query, on its first pair without records: queries that never have one
-      // pay nothing.
-      fly_ = std::make_unique<FlyMemo>();
-      for (auto& k : fly_->key) k = nullptr;
+    if (!fly_ready_) {
+      // Emptied on the query's first pair without records: queries that never have one pay
+      // nothing, and the volumes need no clearing (an entry is built before it is read).
+      for (auto& k : fly_.key) k = nullptr;
+      fly_ready_ = true;
     }
     fa = &flyEntry(pa, a);
     fb = &flyEntry(pb, b);
@@ -115,10 +113,10 @@ class PairVolumes {
            (kFly - 1);
   }
   FlyVolumes<S>& flyEntry(std::size_t place, const fcl::CollisionObject<S>* o) {
-    FlyVolumes<S>& v = fly_->volumes[place];
-    if (fly_->key[place] != o) {
+    FlyVolumes<S>& v = fly_.volumes[place];
+    if (fly_.key[place] != o) {
       v.start(*o);
-      fly_->key[place] = o;
+      fly_.key[place] = o;
     }
     return v;
   }
@@ -127,7 +125,10 @@ class PairVolumes {
   const VolumeShape* shapes_[2] = {nullptr, nullptr};
   std::size_t objects_ = 0;
   Built built_[2];
-  std::unique_ptr<FlyMemo> fly_;
+  // In place, not on the heap: a query of a small manager (one object against 32) is a few
+  // microseconds, and an allocation per query was a large part of it.
+  bool fly_ready_ = false;
+  FlyMemo fly_;
 };
 
 }  // namespace detail
