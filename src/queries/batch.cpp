@@ -51,6 +51,7 @@ std::size_t checkedStates(const Links<S>& links, const std::vector<fcl::Transfor
 // The states of an edge of n states in `order`: rank r visits state visit[r].
 void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visit) {
   visit.clear();
+  visit.reserve(n);
   if (order == MotionOrder::path || n < 2) {
     for (std::size_t i = 0; i < n; ++i) visit.push_back(i);
     return;
@@ -175,6 +176,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     std::size_t count;
   };
   std::vector<Run> runs;
+  runs.reserve(5 * edges + states / kRun);  // at most 5 per edge and one per kRun states past them
   for (std::size_t e = 0; e < edges; ++e) {
     const std::size_t begin = edge_starts[e];
     const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;

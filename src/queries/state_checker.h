@@ -20,6 +20,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -90,17 +91,29 @@ class StateChecker {
         body_(links.view),
         judge_(request_),
         distance_judge_(distance_request_) {
-    slots_.reset(new Slot[links.size()]);  // default-initialized: the records written before read
-    for (std::size_t l = 0; l < links.size(); ++l) slots_[l].source = links.source[l];
-    self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
-    self_gate_.excluded_n = links.size();
-    margin_ = links.margin.data();
-    objects_.reset(new ObjectStorage[links.size()]);  // raw room: constructed on first use
-    close_.resize(body_.leafCount());
-    // The per-link numbers in one block (a batch of one state makes a checker for itself).
+    // The per-link arrays in one block: a batch of one state makes a checker for itself, and
+    // each allocation of a kilobyte or more costs the allocator a sweep of its freed chunks.
     const std::size_t n = links.size();
-    numbers_.reset(new S[20 * n]);  // written before read
-    S* next = numbers_.get();
+    const std::size_t leaves = body_.leafCount();
+    const std::size_t slot_at = 0;
+    const std::size_t object_at = roundUp(slot_at + n * sizeof(Slot), alignof(ObjectStorage));
+    const std::size_t number_at = roundUp(object_at + n * sizeof(ObjectStorage), alignof(S));
+    const std::size_t flag_at = number_at + 20 * n * sizeof(S);
+    block_.reset(new Chunk[(flag_at + leaves + n + sizeof(Chunk) - 1) / sizeof(Chunk)]);
+    unsigned char* base = block_[0].bytes;
+    slots_ = reinterpret_cast<Slot*>(base + slot_at);
+    for (std::size_t l = 0; l < n; ++l) {
+      new (&slots_[l]) Slot;  // the records written before read
+      slots_[l].source = links.source[l];
+    }
+    self_gate_.excluded = links.excluded.data();  // the pairs BodySet::excludePair rules out
+    self_gate_.excluded_n = n;
+    margin_ = links.margin.data();
+    objects_ = reinterpret_cast<ObjectStorage*>(base + object_at);  // constructed on first use
+    close_ = base + flag_at;
+    need_ = close_ + leaves;
+    std::fill(close_, need_ + n, std::uint8_t(0));
+    S* next = reinterpret_cast<S*>(base + number_at);  // written before read
     for (int d = 0; d < 3; ++d) {
       c_[d] = next;
       h_[d] = next + n;
@@ -112,7 +125,6 @@ class StateChecker {
     }
     grow_ = next;
     far_ = next + n;
-    need_.resize(n);
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
     eager_objects_ = bool(world.predicate());
   }
@@ -874,10 +886,17 @@ class StateChecker {
   const PairJudge<S> judge_;           // a pair's contact, or within its margins
   const PairJudge<S> distance_judge_;  // whether a pair can lower the clearance
   std::uint64_t state_ = 0;
-  std::unique_ptr<Slot[]> slots_;
+  // The block of the per-link arrays below (slots_, objects_, the numbers, close_, need_).
+  struct alignas(std::max({alignof(Slot), alignof(LinkObject<S>), alignof(S)})) Chunk {
+    unsigned char bytes[64];
+  };
+  static std::size_t roundUp(std::size_t at, std::size_t to) { return (at + to - 1) / to * to; }
+  std::unique_ptr<Chunk[]> block_;
+  static_assert(std::is_trivially_destructible<Slot>::value, "the block's release ends them");
+  Slot* slots_ = nullptr;
   // Per link, in the state at hand: the posed local AABB per coordinate (centre, half
   // extents), the cull's rate times its scale, the walked box.
-  std::unique_ptr<S[]> numbers_;  // the room of the arrays below, n numbers each
+  // The per-link numbers, n each: the block's.
   S* c_[3];
   S* h_[3];
   S* lo_[3];
@@ -893,11 +912,11 @@ class StateChecker {
   // Per link: the margins of the state checked (its links' margins, or raised_margins_' entries
   // of the state in its run).
   const S* margin_ = nullptr;
-  std::vector<S> raised_margins_;    // per state of the run and link: its raised margin
-  bool raised_ = false;              // the run's margins are raised
-  std::vector<std::uint8_t> close_;  // per leaf of the links' tree: its links took part
-  std::vector<std::uint8_t> need_;   // per link: placed in each state
-  S* at_lo_[3];                      // per link and coordinate: its positions' box over the run
+  std::vector<S> raised_margins_;  // per state of the run and link: its raised margin
+  bool raised_ = false;            // the run's margins are raised
+  std::uint8_t* close_ = nullptr;  // per leaf of the links' tree: its links took part (block)
+  std::uint8_t* need_ = nullptr;   // per link: placed in each state (block)
+  S* at_lo_[3];                    // per link and coordinate: its positions' box over the run
   S* at_hi_[3];
   S* far_;  // per link: its positions' largest coordinate
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;
@@ -919,7 +938,7 @@ class StateChecker {
   struct alignas(LinkObject<S>) ObjectStorage {
     unsigned char bytes[sizeof(LinkObject<S>)];
   };
-  std::unique_ptr<ObjectStorage[]> objects_;  // LinkObjects, constructed on first use
+  ObjectStorage* objects_ = nullptr;  // the block's room for LinkObjects, made on first use
   VolumeSphere built_sphere_{};
   VolumeShape built_shape_{};
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
