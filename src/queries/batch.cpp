@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -82,15 +83,24 @@ namespace {
 template <typename S>
 struct MotionScratch {
   StateChecker<S> checker;
-  std::vector<fcl::Transform3<S>> poses;
+  std::vector<fcl::Transform3<S>> poses;  // reserved for a run; states made as they are written
   std::vector<S> raise;
   // `run_states`: the most states of a run (0: poses are not written here); `continuous`: room
   // for the raises of a run.
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states,
                 bool continuous)
       : checker(world, links),
-        poses(run_states * links.size()),
-        raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {}
+        raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {
+    poses.reserve(run_states * links.size());
+  }
+  // Room for the links' poses of the j-th state of a run (j < run_states). Made on first use: an
+  // edge that collides early reads a few of its states, and making a run's room at once wrote
+  // every pose of it.
+  fcl::Transform3<S>* room(std::size_t j, std::size_t links) {
+    assert((j + 1) * links <= poses.capacity());  // no reallocation: earlier rooms stay put
+    if (poses.size() < (j + 1) * links) poses.resize((j + 1) * links);
+    return poses.data() + j * links;
+  }
 };
 
 // checkStates over `states` states whose poses pose_at(scratch, state, j) gives (the j-th state
@@ -477,7 +487,7 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const std::vector<std::size_t> starts{0};
   return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
                                  [&](auto& scratch, std::size_t state, std::size_t j) {
-                                   fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+                                   fcl::Transform3<S>* at = scratch.room(j, links.size());
                                    pose_of(state, at);
                                    return at;
                                  })[0];
@@ -498,7 +508,7 @@ std::vector<StateResult<S>> checkStates(
   detail::checkStateRuns(core, links, states, options,
                          std::min(detail::StateChecker<S>::kGroupStates, states), out,
                          [&](auto& scratch, std::size_t state, std::size_t j) {
-                           fcl::Transform3<S>* room = scratch.poses.data() + j * n;
+                           fcl::Transform3<S>* room = scratch.room(j, n);
                            pose_of(state, room);
                            return room;
                          });
@@ -527,7 +537,7 @@ std::vector<std::size_t> checkMotions(
                  "edge_starts must start at 0 and increase strictly within the states");
   return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
                                  true, [&](auto& scratch, std::size_t state, std::size_t j) {
-                                   fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+                                   fcl::Transform3<S>* at = scratch.room(j, links.size());
                                    pose_of(state, at);
                                    return at;
                                  });
@@ -546,7 +556,7 @@ std::vector<std::size_t> checkMotions(
   return detail::firstCollisions(
       detail::coreOf(world), links, states, edge_starts, order, options, true,
       [&](auto& scratch, std::size_t state, std::size_t j) {
-        fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+        fcl::Transform3<S>* at = scratch.room(j, links.size());
         pose_of(state, at);
         return at;
       },
@@ -568,7 +578,7 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   return detail::firstCollisions(
       detail::coreOf(world), links, states, starts, order, options, true,
       [&](auto& scratch, std::size_t state, std::size_t j) {
-        fcl::Transform3<S>* at = scratch.poses.data() + j * links.size();
+        fcl::Transform3<S>* at = scratch.room(j, links.size());
         pose_of(state, at);
         return at;
       },
