@@ -118,6 +118,11 @@ class BodyView {
       std::copy(leaf.hi, leaf.hi + 3, leaf_alone_[k].hi);
     }
   }
+  /// Every leaf's bounds as leafView walks them (refitLeaf of each): for a state whose walks
+  /// take the leaves one by one, view() is stale until the next refit().
+  void refitLeaves() {
+    for (std::size_t k = 0; k < leaf_count_; ++k) refitLeaf(k);
+  }
   /// Leaf k's bounds as leafView(k) walks them, from its objects' boxes alone: the rest of the
   /// tree keeps its bounds (view() is stale until the next refit()).
   void refitLeaf(std::size_t k) {

@@ -261,7 +261,11 @@ class StateChecker {
       if (!place(poses, 0, n)) return kBadPose;
       if (!shared_) {
         for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = walkedBox(l);
-        body_.refit();
+        // search() walks the world leaf by leaf; only the self pairs walk the whole tree.
+        if (self)
+          body_.refit();
+        else
+          body_.refitLeaves();
       }
     } else {
       // The links that met nothing in the run are not placed; their poses are still checked
