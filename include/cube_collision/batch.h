@@ -207,8 +207,8 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// once the answer is known: on one thread, for an answer at place r of `order`, at most
 /// max(5, 2 r + 3) states are computed (with `threads` > 1, a few more may be, and their answers
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
-/// pose array is made: the call's memory is the visiting order, 16 bytes a state (up to 32
-/// while it is made), and the poses of one run (32 states) per thread. Throws
+/// pose array is made: the call's memory is the visiting order, 24 bytes a state (40 while it
+/// is made), and room for the poses of one run (32 states) per thread. Throws
 /// std::invalid_argument for an empty body set, a null function or BatchOptions::continuous set
 /// (SE(3) bounds need every state's poses: the overload with motion bounds checks continuously)
 /// (before any work), and as checkMotion for a NaN or infinite pose; an exception from pose_of
