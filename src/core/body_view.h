@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <new>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -66,11 +67,11 @@ class BodyView {
                 [&](std::uint32_t a, std::uint32_t b) { return nodes[a].first < nodes[b].first; });
     }
     layOut(std::uint32_t(nodes.size()), n, std::uint32_t(leaves.size()));
-    std::copy(nodes.begin(), nodes.end(), nodes_);
-    std::copy(items.begin(), items.end(), items_);
-    std::copy(leaves.begin(), leaves.end(), leaves_);
+    std::uninitialized_copy(nodes.begin(), nodes.end(), nodes_);
+    std::uninitialized_copy(items.begin(), items.end(), items_);
+    std::uninitialized_copy(leaves.begin(), leaves.end(), leaves_);
     for (std::uint32_t k = 0; k < leaf_count_; ++k) {
-      leaf_alone_[k] = nodes_[leaves_[k]];
+      new (&leaf_alone_[k]) Node(nodes_[leaves_[k]]);
       leaf_alone_[k].first = 0;
     }
   }
