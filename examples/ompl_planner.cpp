@@ -4,11 +4,12 @@
 // computeAABB, world->collide(link) link by link on FCL's DynamicAABBTreeCollisionManager, a
 // robot manager's self-collide, OMPL's DiscreteMotionValidator over that checker). Same
 // problems, same seeds: identical answers give identical exploration, so the example checks that
-// both found the very same paths, and prints the planning times. A third run per problem checks
-// the edges continuously (cube::checkMotion with motion bounds from the arm's kinematics: an edge
-// is valid only if no link can touch anything between its states), same seeds; its paths differ
-// (it refuses edges the discrete check accepts), so the example checks every path it found, and
-// the discrete runs' too, on a subdivision 100 times finer with FCL, and prints the counts.
+// both found the very same paths, and prints the planning times, each checker's time inside its
+// checks and the planner's own time (the rest). A third run per problem checks the edges
+// continuously (cube::checkMotion with motion bounds from the arm's kinematics: an edge is valid
+// only if no link can touch anything between its states), same seeds; its paths differ (it
+// refuses edges the discrete check accepts), so the example checks every path it found, and the
+// discrete runs' too, on a subdivision 100 times finer with FCL, and prints the counts.
 //
 // Usage: ompl_planner [world objects] [problems] [threads] [object size scale] [--load N]
 //                     [--resolution R] [--refine F]
