@@ -100,14 +100,18 @@ struct Config {
   /// their axis, and capsules and boxes inside spheres, boxes, capsules and cylinders) in float
   /// records per object, so that the pipeline (queries.h, batch.h) and Config::cull_pairs bound a
   /// candidate pair by reading two records instead of two FCL objects and their geometries. They
-  /// are built only when needed: by the first such query of a manager that holds 256 objects or
-  /// more (or by the registration that brings a manager those queries have asked to 256), from
-  /// the objects as they are then (one pass over the objects, counted by the "first" case of
+  /// are built only when needed: by the first such query of a manager, from the objects as they
+  /// are then (one pass over the objects, counted by the "first" case of
   /// benchmarks/instructions.sh); a manager used only through FCL's interface with its own
-  /// callbacks never builds them. Once built, registration and update(obj) / update(objects) build
-  /// an object's records from the geometry and the transform; update() places them anew for each
-  /// object whose box changed (reading its geometry again only if its local AABB changed) or whose
-  /// transform no longer rounds to the same floats (a rotation may leave FCL's box as it was). So
+  /// callbacks never builds them. Once built, registration builds an object's records from the
+  /// geometry and the transform. In a manager of 256 objects or more, update(obj) /
+  /// update(objects) build them again too, and update() places them anew for each object whose
+  /// box changed (reading its geometry again only if its local AABB changed). In a smaller one
+  /// (a robot's links, which move at every step) an update that moves an object leaves its
+  /// records stale instead, and its pairs are culled from the object as without records, until
+  /// an update() finds its box standing and builds them again. Either way update() places them
+  /// anew for an object whose transform no longer rounds to the same floats (a rotation may leave
+  /// FCL's box as it was). So
   /// move objects, update, then query, as for the boxes; and after changing a geometry in place in
   /// a way that leaves its local AABB as it was (another radius of a capsule of the same box, the
   /// cost density), name its object to update(obj). CubeCollisionManager::dropVolumes() frees

@@ -84,8 +84,7 @@ void ObjectTable<S>::wantVolumes() const {
   const std::lock_guard<std::mutex> lock(volume_build_);
   wanted_.store(true, std::memory_order_relaxed);
   // The table itself is not const (the manager owns it); only this build writes from a query.
-  if (!keeping_.load(std::memory_order_relaxed) && live_ >= kVolumeMinObjects)
-    const_cast<ObjectTable*>(this)->startKeeping();
+  if (!keeping_.load(std::memory_order_relaxed)) const_cast<ObjectTable*>(this)->startKeeping();
 }
 
 template <typename S>

@@ -21,11 +21,13 @@
 namespace cube {
 namespace detail {
 
-/// Fewer objects than this keep no per-object volumes (ObjectTable::keepVolumes): a robot's
-/// links move at every step, and building their records in each update() cost more than the
-/// cull saved (a 30-link robot's update() grew more than its query shrank); the pipeline
-/// builds the volumes of such objects during the query, each at most once.
-inline constexpr std::size_t kVolumeMinObjects = 256;
+/// Fewer objects than this do not rebuild an object's volumes when an update moves it: its record
+/// is marked stale (isStale), the pipeline culls its pairs from the object, as for an object of
+/// no table, and update() builds it again once it finds the object standing. A robot's links move
+/// at every step, and rebuilding their records in each update() cost more than the cull saved (a
+/// 30-link robot's update() grew more than its query shrank); a small world that stands keeps
+/// its records, so that its queries read them.
+inline constexpr std::size_t kVolumeRebuildMinObjects = 256;
 
 /// The map's hash of a pointer (a 64-bit finalizer: pointers differ mostly in middle bits).
 inline std::size_t hashPointer(const void* p) {
@@ -109,37 +111,48 @@ class ObjectTable {
   /// Whether the table may keep the volumes below (Config::tight_volumes). Set before the
   /// first registration.
   void keepVolumes(bool on) { volumes_ = on; }
-  /// Asks for the volumes below: from now until dropVolumes() or clear() they are kept whenever
-  /// the table holds kVolumeMinObjects objects or more (if keepVolumes), built here if they are
-  /// not yet. The one const member that writes: the pipeline's queries, which take the manager
-  /// as const, call it before they read spheres(); concurrent callers wait for the one that
-  /// builds, and queries that never call it read nothing it writes.
+  /// Asks for the volumes below: from now until dropVolumes() or clear() they are kept (if
+  /// keepVolumes), built here if they are not yet. The one const member that writes: the pipeline's
+  /// queries, which take the manager as const, call it before they read spheres(); concurrent
+  /// callers wait for the one that builds, and queries that never call it read nothing it writes.
   void wantVolumes() const;
   /// Stops keeping the volumes and frees them, until the next wantVolumes().
   void dropVolumes();
   /// Per id: the tight volumes of the object as of its registration or its last refresh
-  /// (refreshVolume), for the cull; null while not kept. Entries of free ids are stale.
+  /// (refreshVolume), or a stale record (isStale: the object moved in a table below
+  /// kVolumeRebuildMinObjects), for the cull; null while not kept. Entries of free ids are stale.
   const VolumeSphere* spheres() const {
     return keeping_.load(std::memory_order_acquire) ? sphere_.data() : nullptr;
   }
   const VolumeShape* shapes() const {
     return keeping_.load(std::memory_order_acquire) ? shape_.data() : nullptr;
   }
-  /// Rebuilds a live id's volumes from its object's geometry and transform.
+  /// A live id's object changed in a way the caller does not know (update(obj) names it): its
+  /// volumes rebuilt from its geometry and transform, or marked stale (a small table).
   void rebuildVolume(ObjectId id) {
-    if (keeping_.load(std::memory_order_relaxed))
+    if (!keeping_.load(std::memory_order_relaxed)) return;
+    if (rebuildsOnMotion())
       detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    else
+      sphere_[id].r = kStaleRadius;
   }
-  /// Places them anew for the object's transform (its geometry read again only if its local
-  /// AABB changed): an object moved.
+  /// Its object moved: its volumes placed anew for the transform (its geometry read again only if
+  /// its local AABB changed), or marked stale (a small table).
   void moveVolume(ObjectId id) {
-    if (keeping_.load(std::memory_order_relaxed))
+    if (!keeping_.load(std::memory_order_relaxed)) return;
+    if (rebuildsOnMotion())
       detail::moveVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    else
+      sphere_[id].r = kStaleRadius;
   }
-  /// Places them anew if its object's transform changed since (update() calls it for every
-  /// object whose box stands: a rotation may leave FCL's box of an object as it was).
+  /// Its object's box stands (update() calls it for every such object): its volumes placed anew
+  /// if its transform changed since (a rotation may leave FCL's box as it was), built again if
+  /// they are stale.
   void refreshVolume(ObjectId id) {
-    if (keeping_.load(std::memory_order_relaxed))
+    if (!keeping_.load(std::memory_order_relaxed)) return;
+    if (isStale(sphere_[id]))
+      detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    else
       detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
   }
 
@@ -160,6 +173,7 @@ class ObjectTable {
     return next_seq_++;
   }
   void renumber();
+  bool rebuildsOnMotion() const { return live_ >= kVolumeRebuildMinObjects; }
   void startKeeping();          // allocates and builds the volumes of every live id
   void reserve(std::size_t n);  // room for n more ids: the map and the per-id arrays
   // A fresh or recycled id for obj, not yet in the map. Inline: addBatch calls it per entry.
@@ -181,8 +195,8 @@ class ObjectTable {
   std::vector<VolumeShape> shape_;
   std::vector<VolumeSource> source_;  // per id: what its volumes were built from
   bool volumes_ = true;               // Config::tight_volumes
-  // The three above are kept (else empty): volumes_, wanted_, and kVolumeMinObjects live ids
-  // at once since they were wanted. Atomic: wantVolumes() publishes them to concurrent queries.
+  // The three above are kept (else empty) while volumes_ and wanted_. Atomic: wantVolumes()
+  // publishes them to concurrent queries.
   std::atomic<bool> keeping_{false};
   mutable std::atomic<bool> wanted_{false};  // asked for by a query since the last drop
   mutable std::mutex volume_build_;          // one wantVolumes() builds, the others wait
@@ -247,10 +261,9 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
   }
   if (!filter_.empty()) ++group_users_[0];
   ++live_;
+  // Built whatever the table's size: a registration happens once, motion at every step.
   if (keeping_.load(std::memory_order_relaxed))
-    rebuildVolume(id);
-  else if (volumes_ && live_ >= kVolumeMinObjects && wanted_.load(std::memory_order_relaxed))
-    startKeeping();
+    detail::rebuildVolume(*obj, source_[id], sphere_[id], shape_[id]);
   return id;
 }
 

@@ -28,6 +28,13 @@ struct VolumeSphere {
 static_assert(sizeof(VolumeSphere) == 16, "four spheres per cache line");
 /// No volumes: the cull leaves the pair to FCL.
 inline constexpr VolumeSphere kNoVolume{{0.f, 0.f, 0.f}, -1.f};
+/// A kept record whose object moved since it was built (ObjectTable, below
+/// kVolumeRebuildMinObjects): its radius. Negative, so that a reader that does not look for it
+/// sees a record without volumes and leaves the pair to FCL.
+inline constexpr float kStaleRadius = -2.f;
+inline bool isStale(const VolumeSphere& s) {
+  return s.r == kStaleRadius;
+}
 /// The largest coordinate or size (VolumeShape::scale) of an object with volumes: the cull's float
 /// arithmetic squares differences of coordinates, which must stay below float's range.
 inline constexpr float kVolumeMaxScale = 1e18f;

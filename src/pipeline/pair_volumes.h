@@ -38,7 +38,8 @@ class PairVolumes {
   /// caches, which makes fetching them ahead pay.
   std::size_t objects() const { return objects_; }
   /// The records of objects a (id ia) and b (id ib), into the four pointers; false if a table
-  /// keeps none (a manager below kVolumeMinObjects): the pair is culled from the objects.
+  /// keeps none or a record is stale (an object that moved in a small table): the pair is culled
+  /// from the objects.
   bool of(const fcl::CollisionObject<S>* a, ObjectId ia, const fcl::CollisionObject<S>* b,
           ObjectId ib, const VolumeSphere*& sa, const VolumeShape*& ha, const VolumeSphere*& sb,
           const VolumeShape*& hb) {
@@ -74,7 +75,7 @@ class PairVolumes {
     ha = shapes_[0] + ia;
     sb = spheres_[1] + ib;
     hb = shapes_[1] + ib;
-    return true;
+    return !isStale(*sa) && !isStale(*sb);
   }
 
  private:
@@ -89,7 +90,7 @@ class PairVolumes {
       if (spheres_[k] == nullptr) return false;
       sphere = spheres_[k] + id;
       shape = shapes_[k] + id;
-      return true;
+      return !isStale(*sphere);
     }
     Built& e = built_[k];
     if (e.obj != o) {

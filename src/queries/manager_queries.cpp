@@ -93,8 +93,8 @@ detail::DistanceFn<S> distanceIds() {
 }
 
 // The stream's walk through a cube manager: with ids, so that the cull reads the object tables'
-// volumes (a table too small to keep them, kVolumeMinObjects, leaves its pairs to the cull from
-// the objects). False (nothing done) for any other kind of manager, or with
+// volumes (a stale record, kVolumeRebuildMinObjects, leaves its pairs to the cull from the
+// objects). False (nothing done) for any other kind of manager, or with
 // Config::tight_volumes off.
 template <typename S, class Stream, class Fn, class Run>
 bool walkWithIds(const fcl::BroadPhaseCollisionManager<S>& manager,

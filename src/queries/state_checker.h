@@ -719,9 +719,10 @@ class StateChecker {
     return hits.complete();
   }
 
-  // The world object's records: the table's, or built here (a world that keeps none).
+  // The world object's records: the table's, or built here (a world that keeps none, or a stale
+  // record: an object that moved in a small world).
   void worldRecords(const Object& w, ObjectId iw, const VolumeSphere*& s, const VolumeShape*& h) {
-    if (world_spheres_ != nullptr) {
+    if (world_spheres_ != nullptr && !isStale(world_spheres_[iw])) {
       s = world_spheres_ + iw;
       h = world_shapes_ + iw;
       return;
