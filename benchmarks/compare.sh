@@ -12,6 +12,8 @@
 # CUBE_COMPARE_CONFIRM=C (default: as many as CUBE_COMPARE_ROUNDS) gives every case that reads
 # more than 5% slower after the rounds (by the ratio of medians or the median paired ratio) C
 # more rounds, and judges it on all of them: see "Why a confirmation".
+# CUBE_COMPARE_MALLOC=fixed runs both sides with glibc's mmap and trim thresholds fixed at 256 MiB
+# (GLIBC_TUNABLES) instead of its dynamic ones: see "Why fixed thresholds".
 # CUBE_COMPARE_OUT=FILE also writes the report (the table and the counts) to FILE, headed by the
 # two revisions, the settings, the date and the load average at the start and the end; keep it
 # as benchmarks/results/compare-NAME.md, named by what it compares. CUBE_COMPARE_TITLE sets its
@@ -39,6 +41,14 @@
 # page faults whose count differs between two binaries of the same allocations by how their
 # allocator's arenas happen to fall. Untimed iterations ahead of the window take those faults.
 #
+# Why fixed thresholds: glibc moves its mmap threshold up to the largest block freed so far and
+# trims the heap's top above twice that, so where a query grows a large vector (FCL's contacts:
+# tens of thousands in a motion loop) whether each growth takes fresh pages from the kernel
+# depends on the order the process's earlier blocks happened to be freed in. The same binary
+# then runs a case at two speeds from run to run (a clustered 10,000-object motion loop: 22 or
+# 26-39 ms, with page faults 35,000 or 51,000, by the output format asked for alone). Fixed
+# thresholds take that out of both sides; a difference that remains is the code's.
+#
 # Why a confirmation: on this shared machine a case's two sides can drift apart for minutes, and
 # among a hundred cases a few read more than 5% slower by chance in any run (benchmarks/README.md
 # summarises runs of one binary against itself). A case that is really slower stays slower with more rounds; one
@@ -53,6 +63,11 @@ head=${2:-}
 rounds=${CUBE_COMPARE_ROUNDS:-5}
 min_time=${CUBE_COMPARE_MIN_TIME:-0.05}
 warmup=${CUBE_COMPARE_WARMUP:-0.05}
+malloc=${CUBE_COMPARE_MALLOC:-default}
+case "$malloc" in
+  default | fixed) ;;
+  *) echo "CUBE_COMPARE_MALLOC: default or fixed, not $malloc" >&2; exit 2 ;;
+esac
 filter=${CUBE_COMPARE_FILTER:-^[^d].*/cube(/manual_time)?$}
 work=${CUBE_COMPARE_DIR:-/tmp/cube-compare}
 layouts=${CUBE_COMPARE_LAYOUTS:-1}
@@ -107,13 +122,18 @@ echo "after:  ${head:-work tree} ($after)"
 echo "layouts: $layouts"
 
 echo "confirmation rounds: $confirm"
+echo "allocator thresholds: $malloc"
+# For the timed runs only (the builds above ran as usual).
+if [ "$malloc" = fixed ]; then
+  export GLIBC_TUNABLES=glibc.malloc.mmap_threshold=268435456:glibc.malloc.trim_threshold=268435456
+fi
 
 python3 - "$before" "$after" "$filter" "$rounds" "$min_time" "$warmup" "$work" "$layouts" "$confirm" \
   "${CUBE_COMPARE_OUT:-}" "${CUBE_COMPARE_TITLE:-compare.sh ${base} against ${head:-the work tree}}" \
-  "$base" "${head:-the work tree}" "${CUBE_COMPARE_REUSE:-0}" <<'EOF'
+  "$base" "${head:-the work tree}" "${CUBE_COMPARE_REUSE:-0}" "$malloc" <<'EOF'
 import datetime, json, re, statistics, subprocess, sys
 (before, after, pattern, rounds, min_time, warmup, work, layouts, confirm, out_path, title, base_rev,
- head_rev, reuse) = sys.argv[1:]
+ head_rev, reuse, malloc) = sys.argv[1:]
 rounds, layouts, confirm = int(rounds), int(layouts), int(confirm)
 
 def loadavg():
@@ -222,7 +242,8 @@ if missing:
 if out_path:
     settings = " ".join(f"CUBE_COMPARE_{k}={v}" for k, v in (
         ("ROUNDS", rounds), ("MIN_TIME", min_time), ("WARMUP", warmup), ("LAYOUTS", layouts),
-        ("CONFIRM", confirm), ("REUSE", reuse), ("FILTER", "'" + pattern + "'")))
+        ("CONFIRM", confirm), ("REUSE", reuse), ("MALLOC", malloc),
+        ("FILTER", "'" + pattern + "'")))
     head = [f"# {title}", "",
             f"- before: {base_rev}; after: {head_rev}",
             "- timing: paired" + (f", {layouts} layouts" if layouts > 1 else ""),
