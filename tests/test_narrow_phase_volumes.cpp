@@ -38,7 +38,10 @@ TYPED_TEST(NarrowPhase, VolumesFollowWhatUpdateSees) {
           if (how == 1) m.update(o);
           if (how == 2) m.update(std::vector<fcl::CollisionObject<S>*>{o});
         };
+        // Every query starts from a valid manager: each mutation before it left one.
         const auto collides = [&] {
+          std::string why;
+          EXPECT_TRUE(m.validate(&why)) << why;
           fcl::CollisionRequest<S> req;
           return cube::collideAll<S>(m, req, cube::NarrowPhaseOptions<S>{1}).isCollision();
         };

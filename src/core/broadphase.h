@@ -414,16 +414,21 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
   // refit every cube in one pass, which costs about as much as refitting 1/32 of the paths.
   const std::size_t path_limit = std::max<std::size_t>(8, tree_.size() / 32);
   std::size_t refits = 0;
-  // Margins are rare: without them the loop reads no per-id margin.
-  const auto pass = [&](Item<S>* items, std::uint32_t n, BoxKind home, auto margins) {
+  // Margins are rare: without them the loop reads no per-id margin. Stale records too (a small
+  // table's): without them the loop looks for none.
+  const auto pass = [&](Item<S>* items, std::uint32_t n, BoxKind home, auto margins, auto stale) {
     for (std::uint32_t p = 0; p < n; ++p) {
       Item<S>& it = items[p];
       if (it.obj == nullptr) continue;
       Box<S> b;  // here, not outside the loop: kept in registers, not stored for every object
       read(it.obj, b);
       if constexpr (decltype(margins)::value) b = grown(b, it.id);
-      if (sameBox(it.box, b)) {       // unmoved: same kind, nothing to refit
-        table_.refreshVolume(it.id);  // but a rotation may keep the box
+      if (sameBox(it.box, b)) {  // unmoved: same kind, nothing to refit
+        // But a rotation may keep the box.
+        if constexpr (decltype(stale)::value)
+          table_.refreshStaleVolume(it.id);
+        else
+          table_.refreshVolume(it.id);
         continue;
       }
       table_.moveVolume(it.id);
@@ -440,14 +445,19 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
       }
     }
   };
-  const auto passes = [&](auto margins) {
-    pass(tree_.slots(), tree_.slotCount(), BoxKind::finite, margins);
-    pass(unbounded_.data(), std::uint32_t(unbounded_.size()), BoxKind::unbounded, margins);
+  const auto passes = [&](auto margins, auto stale) {
+    pass(tree_.slots(), tree_.slotCount(), BoxKind::finite, margins, stale);
+    pass(unbounded_.data(), std::uint32_t(unbounded_.size()), BoxKind::unbounded, margins, stale);
   };
-  if (any_margin_)
-    passes(std::true_type{});
+  const bool stale = table_.anyStale();
+  if (any_margin_ && stale)
+    passes(std::true_type{}, std::true_type{});
+  else if (any_margin_)
+    passes(std::true_type{}, std::false_type{});
+  else if (stale)
+    passes(std::false_type{}, std::true_type{});
   else
-    passes(std::false_type{});
+    passes(std::false_type{}, std::false_type{});
   if (refits > path_limit) tree_.refitAll();
   for (const auto& [id, box] : crossers) {
     Object* const obj = table_.object(id);

@@ -75,7 +75,24 @@ void ObjectTable<S>::startKeeping() {
   source_.assign(obj_.size(), VolumeSource{});
   for (ObjectId id = 0; id < obj_.size(); ++id)
     if (obj_[id] != nullptr) detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  stale_ = 0;
   keeping_.store(true, std::memory_order_release);
+}
+
+template <typename S>
+void ObjectTable<S>::rebuildStale(ObjectId id) {
+  --stale_;
+  detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+}
+
+template <typename S>
+void ObjectTable<S>::moveKept(ObjectId id) {
+  if (!rebuildsOnMotion())
+    markStale(id);
+  else if (stale_ != 0 && isStale(sphere_[id]))
+    rebuildStale(id);  // a stale record's geometry part may be out of date too
+  else
+    detail::moveVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
 }
 
 template <typename S>
@@ -91,6 +108,7 @@ template <typename S>
 void ObjectTable<S>::dropVolumes() {
   keeping_.store(false, std::memory_order_relaxed);
   wanted_.store(false, std::memory_order_relaxed);
+  stale_ = 0;
   // Swapped out: assigning {} would keep the capacity.
   std::vector<VolumeSphere>().swap(sphere_);
   std::vector<VolumeShape>().swap(shape_);
@@ -149,6 +167,10 @@ void ObjectTable<S>::remove(ObjectId id) {
   index_[hole] = 0;
   leaveGroup(id);
   if (id < excluded_count_.size() && excluded_count_[id] != 0) dropExcluded(id);
+  if (stale_ != 0 && keeping_.load(std::memory_order_relaxed) && isStale(sphere_[id])) {
+    --stale_;
+    sphere_[id] = kNoVolume;  // a free id's record counts as no one's
+  }
   obj_[id] = nullptr;
   loc_[id] = kNone;
   free_.push_back(id);
@@ -370,6 +392,7 @@ void ObjectTable<S>::clear() {
   loc_ = {};
   keeping_.store(false, std::memory_order_relaxed);
   wanted_.store(false, std::memory_order_relaxed);
+  stale_ = 0;
   sphere_ = {};
   shape_ = {};
   source_ = {};
@@ -439,13 +462,14 @@ bool ObjectTable<S>::validate(std::string* why) const {
   }
   std::vector<std::uint32_t> seqs;
   std::vector<std::uint32_t> users(group_filter_.size(), 0);
-  std::size_t mixed = 0;
+  std::size_t mixed = 0, stale = 0;
   for (ObjectId id = 0; id < obj_.size(); ++id) {
     if (obj_[id] == nullptr) {
       if (!is_free[id]) return msg << "object table: id " << id << " lost", fail();
       continue;
     }
     ++live;
+    stale += keeping_ && isStale(sphere_[id]) ? 1 : 0;
     if (find(obj_[id]) != id) return msg << "object table: map misses id " << id, fail();
     if (seq_[id] >= next_seq_) return msg << "object table: id " << id << " seq ahead", fail();
     seqs.push_back(seq_[id]);
@@ -473,6 +497,9 @@ bool ObjectTable<S>::validate(std::string* why) const {
   if (std::adjacent_find(seqs.begin(), seqs.end()) != seqs.end())
     return msg << "object table: two objects share a registration number", fail();
   if (live != live_) return msg << "object table: live count " << live_ << " != " << live, fail();
+  if (stale != stale_)
+    return msg << "object table: " << stale_ << " stale records counted, " << stale << " found",
+           fail();
   std::size_t entries = 0;
   for (std::uint32_t e : index_) entries += e != 0;
   if (entries != live_) return msg << "object table: map holds " << entries << " entries", fail();

@@ -120,7 +120,8 @@ class ObjectTable {
   void dropVolumes();
   /// Per id: the tight volumes of the object as of its registration or its last refresh
   /// (refreshVolume), or a stale record (isStale: the object moved in a table below
-  /// kVolumeRebuildMinObjects), for the cull; null while not kept. Entries of free ids are stale.
+  /// kVolumeRebuildMinObjects), for the cull; null while not kept. Entries of free ids are no
+  /// one's.
   const VolumeSphere* spheres() const {
     return keeping_.load(std::memory_order_acquire) ? sphere_.data() : nullptr;
   }
@@ -132,26 +133,31 @@ class ObjectTable {
   void rebuildVolume(ObjectId id) {
     if (!keeping_.load(std::memory_order_relaxed)) return;
     if (rebuildsOnMotion())
-      detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+      rebuildNow(id);
     else
-      sphere_[id].r = kStaleRadius;
+      markStale(id);
   }
   /// Its object moved: its volumes placed anew for the transform (its geometry read again only if
   /// its local AABB changed), or marked stale (a small table).
   void moveVolume(ObjectId id) {
-    if (!keeping_.load(std::memory_order_relaxed)) return;
-    if (rebuildsOnMotion())
-      detail::moveVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
-    else
-      sphere_[id].r = kStaleRadius;
+    if (keeping_.load(std::memory_order_relaxed)) moveKept(id);
   }
+  /// Whether some live id's records are stale: update() asks once, before its loop (records
+  /// that go stale in the loop are of objects it has passed), and calls refreshStaleVolume
+  /// instead of refreshVolume if so.
+  bool anyStale() const { return stale_ != 0; }
   /// Its object's box stands (update() calls it for every such object): its volumes placed anew
-  /// if its transform changed since (a rotation may leave FCL's box as it was), built again if
-  /// they are stale.
+  /// if its transform changed since (a rotation may leave FCL's box as it was). No record of the
+  /// table is stale.
   void refreshVolume(ObjectId id) {
+    if (keeping_.load(std::memory_order_relaxed))
+      detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  }
+  /// The same, and built again if they are stale.
+  void refreshStaleVolume(ObjectId id) {
     if (!keeping_.load(std::memory_order_relaxed)) return;
     if (isStale(sphere_[id]))
-      detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+      rebuildStale(id);
     else
       detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
   }
@@ -174,6 +180,17 @@ class ObjectTable {
   }
   void renumber();
   bool rebuildsOnMotion() const { return live_ >= kVolumeRebuildMinObjects; }
+  void rebuildNow(ObjectId id) {
+    stale_ -= isStale(sphere_[id]) ? 1 : 0;
+    detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  }
+  // Out of line: update()'s loop stays as small as it was without stale records.
+  void rebuildStale(ObjectId id);
+  void moveKept(ObjectId id);
+  void markStale(ObjectId id) {
+    stale_ += isStale(sphere_[id]) ? 0 : 1;
+    sphere_[id].r = kStaleRadius;
+  }
   void startKeeping();          // allocates and builds the volumes of every live id
   void reserve(std::size_t n);  // room for n more ids: the map and the per-id arrays
   // A fresh or recycled id for obj, not yet in the map. Inline: addBatch calls it per entry.
@@ -200,6 +217,7 @@ class ObjectTable {
   std::atomic<bool> keeping_{false};
   mutable std::atomic<bool> wanted_{false};  // asked for by a query since the last drop
   mutable std::mutex volume_build_;          // one wantVolumes() builds, the others wait
+  std::size_t stale_ = 0;                    // live ids whose records are stale (isStale)
   // The properties most managers never set are allocated by their first use (then kept until
   // clear()): 25 bytes per id that registration and memory would otherwise pay for nothing.
   std::vector<Filter> filter_;              // per id: filter bits; empty: all default
