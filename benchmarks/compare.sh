@@ -45,9 +45,10 @@
 # trims the heap's top above twice that, so where a query grows a large vector (FCL's contacts:
 # tens of thousands in a motion loop) whether each growth takes fresh pages from the kernel
 # depends on the order the process's earlier blocks happened to be freed in. The same binary
-# then runs a case at two speeds from run to run (a clustered 10,000-object motion loop: 22 or
-# 26-39 ms, with page faults 35,000 or 51,000, by the output format asked for alone). Fixed
-# thresholds take that out of both sides; a difference that remains is the code's.
+# then runs a case at two speeds by the output format asked for alone (a clustered 10,000-object
+# motion loop: one binary 22 ms with JSON output and 26-39 ms with the console's, another the
+# other way round). Fixed thresholds take that out of both sides; a difference that remains is
+# the code's.
 #
 # Why a confirmation: on this shared machine a case's two sides can drift apart for minutes, and
 # among a hundred cases a few read more than 5% slower by chance in any run (benchmarks/README.md
