@@ -110,11 +110,11 @@ struct Config {
   /// (a robot's links, which move at every step) an update that moves an object leaves its
   /// records stale instead, and its pairs are culled from the object as without records, until
   /// an update() finds its box standing and builds them again. Either way update() places them
-  /// anew for an object whose transform no longer rounds to the same floats (a rotation may leave
-  /// FCL's box as it was). So
-  /// move objects, update, then query, as for the boxes; and after changing a geometry in place in
-  /// a way that leaves its local AABB as it was (another radius of a capsule of the same box, the
-  /// cost density), name its object to update(obj). CubeCollisionManager::dropVolumes() frees
+  /// anew for an object whose box stands but whose transform no longer rounds to the same floats
+  /// (a rotation may leave FCL's box as it was). So move objects, update, then query, as for the
+  /// boxes; and after changing a geometry in place in a way that leaves its local AABB as it was
+  /// (another radius of a capsule of the same box, the cost density), name its object to
+  /// update(obj). CubeCollisionManager::dropVolumes() frees
   /// them. Trade-off, once built: memory per object, and update() reads every object's transform
   /// and registration builds the records, against a cull several times cheaper per candidate pair
   /// (figures in benchmarks/README.md). Off: the pipeline (and Config::cull_pairs) culls from the
