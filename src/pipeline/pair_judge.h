@@ -87,17 +87,20 @@ class PairJudge {
 
   /// On the pair's records: separationOf's bound, less its margin, against best.
   bool mayBeat(const Records& a, const Records& b, S best) const {
+    if (anyBeats(best)) return true;
     const VolumeGap g =
         separationOf(*a.sphere, *a.shape, *b.sphere, *b.shape, rate_, enoughOf(best));
     return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
   /// On records built on the fly, for a pair without records (separationOnTheFly).
   bool mayBeat(const Object& a, const Object& b, S best) const {
+    if (anyBeats(best)) return true;
     const VolumeGap g = separationOnTheFly(a, b, rate_, enoughOf(best));
     return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
   /// On records built on the fly and kept (PairVolumes::fly), building the levels it reads.
   bool mayBeat(FlyVolumes<S>& a, FlyVolumes<S>& b, S best) const {
+    if (anyBeats(best)) return true;
     const VolumeGap g = separationOnTheFly(a, b, rate_, enoughOf(best));
     return !(double(g.lower_bound) - double(g.margin) > double(best));
   }
@@ -131,6 +134,9 @@ class PairJudge {
   }
 
  private:
+  // No bound exceeds an infinite (or NaN) best: the records are not read for it (a search's
+  // first pair).
+  static bool anyBeats(S best) { return !(best < std::numeric_limits<S>::infinity()); }
   // A distance as separationOf's `enough` (infinite beyond floats).
   static float enoughOf(S best) {
     const double within = double(best);

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "core/kernels/record_gap.h"
 #include "core/volume.h"
 
 namespace cube {
@@ -30,7 +31,7 @@ inline float pointBox(const float* p, const VolumeSphere& s, const VolumeShape& 
 }
 
 // Record b's box seen from record a's: R[i][j] = a's axis i . b's axis j, t = b's centre in a's
-// frame (d = the centres' difference), what the separating-axis tests read.
+// frame (d = the centres' difference), what the inner boxes' separating-axis tests read.
 struct BoxFrame {
   float d[3], R[3][3], t[3];
 };
@@ -46,60 +47,10 @@ inline BoxFrame boxFrame(const VolumeSphere& sa, const VolumeShape& a, const Vol
   return f;
 }
 
-// The largest gap of two oriented boxes along the 15 axes of the separating-axis test (three
-// face normals of each, nine edge cross products, each gap divided by its axis' length; edge axes
-// only where positive), or the first one found above `stop` (the caller needs no more). R[i][j]:
-// a's axis i . b's axis j; t: b's centre in a's frame; ea, eb: half extents. |R| gets 16 ulps so
-// that rounding makes gaps smaller, never larger; the face axes come first (they separate most
-// pairs that are apart, and cost no square root). kRecords, for the float records: their axes
-// are orthonormal to a few ulps only, and dividing by an axis' length magnifies that error, so
-// edges below a length of 0.1 are left out and the others' slack loses 16 ulps of its terms
-// first; else (FCL's own transforms) edges below 1e-3 are left out.
-template <typename T, bool kRecords>
-inline T axisGap(const T (&R)[3][3], const T (&t)[3], const T* ea, const T* eb, T stop) {
-  constexpr T kUlps = T(16) * std::numeric_limits<T>::epsilon();
-  T A[3][3];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) A[i][j] = std::fabs(R[i][j]) + kUlps;
-  T gap = -std::numeric_limits<T>::infinity();
-  for (int i = 0; i < 3; ++i)
-    gap = std::max(gap,
-                   std::fabs(t[i]) - ea[i] - (eb[0] * A[i][0] + eb[1] * A[i][1] + eb[2] * A[i][2]));
-  for (int j = 0; j < 3; ++j) {
-    const T tj = t[0] * R[0][j] + t[1] * R[1][j] + t[2] * R[2][j];
-    gap = std::max(gap,
-                   std::fabs(tj) - (ea[0] * A[0][j] + ea[1] * A[1][j] + ea[2] * A[2][j]) - eb[j]);
-  }
-  if (gap > stop) return gap;
-#pragma GCC unroll 3
-  for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-    // Both loops unrolled: every index a constant, no index arithmetic per axis.
-#pragma GCC unroll 3
-    for (int j = 0; j < 3; ++j) {
-      const T len2 = T(1) - R[i][j] * R[i][j];
-      if (!(len2 >= (kRecords ? T(1e-2) : T(1e-6)))) continue;
-      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      // Axis: a's axis i cross b's axis j.
-      const T dist = std::fabs(t[i2] * R[i1][j] - t[i1] * R[i2][j]);
-      const T ra = ea[i1] * A[i2][j] + ea[i2] * A[i1][j];
-      const T rb = eb[j1] * A[i][j2] + eb[j2] * A[i][j1];
-      T slack = dist - ra - rb;
-      if constexpr (kRecords) slack -= kUlps * (std::fabs(t[i1]) + std::fabs(t[i2]) + ra + rb);
-      // A gap of 0 or less bounds nothing the callers use: no square root for it.
-      if (slack <= T(0)) continue;
-      gap = std::max(gap, slack / std::sqrt(len2));
-      if (gap > stop) return gap;
-    }
-  }
-  return gap;
-}
-
-// separation's box gap on the records (axisGap of their boxes).
+// separation's box gap on the records: the separating-axis test (core/kernels/record_gap.h).
 inline float boxGap(const VolumeSphere& sa, const VolumeShape& a, const VolumeSphere& sb,
                     const VolumeShape& b, float stop) {
-  const BoxFrame f = boxFrame(sa, a, sb, b);
-  return axisGap<float, true>(f.R, f.t, a.e, b.e, stop);
+  return recordBoxGap(sa, a, sb, b, stop);
 }
 
 // A capsule on a record's third axis: the segment from z - half to z + half along it (about the

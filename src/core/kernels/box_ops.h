@@ -3,8 +3,8 @@
 // The per-box operations the tree and the walks are made of (overlap, gaps, unions, outward
 // rounding), inlined where they are used. The instruction set is chosen here, once, at compile
 // time: SSE2 is x86-64's baseline, so no run-time choice is needed. This file, its two
-// implementations and the pair kernels (pair_kernels*.cpp) are the only places in the library
-// with intrinsics or instruction-set conditionals.
+// implementations, the records' box gap (record_gap*.h) and the pair kernels (pair_kernels*.cpp)
+// are the only places in the library with intrinsics or instruction-set conditionals.
 
 #if defined(__SSE2__)
 #include "core/kernels/box_ops_sse2.h"
