@@ -134,9 +134,10 @@ class PairJudge {
   }
 
  private:
-  // No bound exceeds an infinite (or NaN) best: the records are not read for it (a search's
-  // first pair).
-  static bool anyBeats(S best) { return !(best < std::numeric_limits<S>::infinity()); }
+  // A best beyond floats (FCL's results start at the largest S: a search's first pairs) or NaN:
+  // the pair goes to FCL without reading the records (a bound that overflowed floats must not
+  // cull it).
+  static bool anyBeats(S best) { return !(double(best) < double(FLT_MAX)); }
   // A distance as separationOf's `enough` (infinite beyond floats).
   static float enoughOf(S best) {
     const double within = double(best);
