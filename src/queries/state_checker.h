@@ -2,12 +2,9 @@
 
 // One thread's checker of the batched checks (queries/batch.cpp): the links placed for a state,
 // the world's walks through the core's query entries, the cull on the records, FCL on the rest.
-// Private to the library.
+// The walk a run of states shares is in state_group.h, a mesh against a grown primitive in
+// grown_shapes.h. Private to the library.
 
-#include <fcl/geometry/shape/box.h>
-#include <fcl/geometry/shape/capsule.h>
-#include <fcl/geometry/shape/cylinder.h>
-#include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/collision_request.h>
 #include <fcl/narrowphase/collision_result.h>
 #include <fcl/narrowphase/distance_request.h>
@@ -33,6 +30,7 @@
 #include "pipeline/fcl_narrow.h"
 #include "pipeline/pair_judge.h"
 #include "queries/body_links.h"
+#include "queries/grown_shapes.h"
 
 namespace cube {
 namespace detail {
@@ -57,23 +55,6 @@ class LinkObject final : public fcl::CollisionObject<S> {
 
 template <typename S>
 using Links = typename BodySet<S>::Links;
-
-/// A box that holds the walked box (placeBoxes: the posed local AABB grown by rate (1 + its
-/// largest coordinate and half extent) and by margin) of a link whose local AABB lies within
-/// `reach` of its origin, at any rotation and any position in [lo, hi] (`far`: the largest
-/// absolute coordinate there): the positions' box grown by reach, by twice the largest growth
-/// (rounding is far below it) and by the margin.
-template <typename S>
-Box<S> sweptBox(const fcl::Vector3<S>& lo, const fcl::Vector3<S>& hi, S far, S reach, S rate,
-                S margin) {
-  const S g = reach + S(2) * rate * (S(1) + far + reach) + margin;
-  Box<S> u;
-  for (int d = 0; d < 3; ++d) {
-    u.lo[d] = lo[d] - g;
-    u.hi[d] = hi[d] + g;
-  }
-  return u;
-}
 
 // One thread's checker: the links' objects, boxes and records for the state at hand, and the
 // walks of the world. Made once per thread and call; no allocation per state.
@@ -160,96 +141,7 @@ class StateChecker {
   /// objects) every state walks. The poses must stay until the last checkPlaced of the run.
   /// `extras` (null, or extras[j] as check()'s `extra` for state j): the states' raised margins.
   std::size_t placeGroup(const fcl::Transform3<S>* const* states, std::size_t count, bool self,
-                         const S* const* extras = nullptr) {
-    const std::size_t n = links_.size();
-    shared_ = false;
-    raised_ = extras != nullptr;
-    margin_ = links_.margin.data();
-    if (raised_) {
-      if (raised_margins_.empty()) raised_margins_.resize(kGroupStates * n);  // once, if ever
-      for (std::size_t j = 0; j < count; ++j)
-        for (std::size_t l = 0; l < n; ++l)
-          raised_margins_[j * n + l] = links_.margin[l] + extras[j][l];
-      margin_ = raised_margins_.data();
-    }
-    for (std::size_t j = 0; j < count; ++j) state_poses_[j] = states[j];
-    if (eager_objects_) return count;
-    const std::size_t all_count = count;
-    bool any = false, all = true;
-    const S* data[kGroupStates];  // each state's poses as numbers
-    for (std::size_t j = 0; j < count; ++j) data[j] = states[j]->data();
-    for (; count >= kGroupMinStates; count /= 2) {
-      all = true;
-      for (std::size_t k = 0; k < body_.leafCount(); ++k) {
-        close_[k] = closeTogether(data, count, body_.leafFirst(k), body_.leafSize(k));
-        any = any || close_[k];
-        all = all && close_[k];
-      }
-      if (any) break;
-    }
-    if (!any) return all_count;
-    // A box around each link of a close leaf over the states (sweptBox); an empty box for the
-    // links that walk state by state.
-    const S rate = S(judge_.rate());
-    for (std::size_t k = 0; k < body_.leafCount(); ++k)
-      for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l) {
-        Box<S>& u = body_.box(l);
-        if (close_[k]) {
-          u = sweptBox(fcl::Vector3<S>(at_lo_[0][l], at_lo_[1][l], at_lo_[2][l]),
-                       fcl::Vector3<S>(at_hi_[0][l], at_hi_[1][l], at_hi_[2][l]), far_[l],
-                       links_.reach[l], rate, runMargin(l, count));
-        } else {
-          for (int d = 0; d < 3; ++d) {
-            u.lo[d] = std::numeric_limits<S>::max();
-            u.hi[d] = std::numeric_limits<S>::lowest();
-          }
-        }
-      }
-    body_.refit();
-    shared_ = true;
-    self_shared_ = all;
-    gather_.clear();
-    if (world_.size() != 0)
-      world_.collide(body_.view(), links_.any_bits ? links_.bits.data() : nullptr, this,
-                     CollideFn<S>(&StateChecker::onGather), nullptr);
-    // Bucketed by link, in walk order within a link.
-    world_at_.assign(n + 1, 0);
-    for (const auto& g : gather_) ++world_at_[g.first + 1];
-    for (std::size_t l = 0; l < n; ++l) world_at_[l + 1] += world_at_[l];
-    world_pairs_.resize(gather_.size());
-    bucket_fill_.assign(world_at_.begin(), world_at_.end() - 1);
-    const Scene<S> scene = world_.scene();
-    for (const auto& g : gather_)
-      world_pairs_[bucket_fill_[g.first]++] = WorldPair{scene.item(g.second).box, g.second};
-    self_pairs_.clear();
-    if (self && self_shared_)
-      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onGatherSelf), this,
-                   true, 0, nullptr, &self_gate_);
-    dropApart(states, count);
-    // The links each state places: those that met something, those of leaves that walk, and
-    // every link when the self pairs walk state by state.
-    runs_.clear();
-    pair_links_.clear();
-    leaf_at_.resize(body_.leafCount() + 1);
-    for (std::size_t k = 0; k < body_.leafCount(); ++k) {
-      leaf_at_[k] = std::uint32_t(pair_links_.size());
-      for (std::uint32_t l = body_.leafFirst(k); l < body_.leafFirst(k) + body_.leafSize(k); ++l) {
-        const bool met = world_at_[l] != world_at_[l + 1];
-        if (close_[k] && met) pair_links_.push_back(l);
-        need_[l] = !close_[k] || (self && !self_shared_) || met;
-      }
-    }
-    leaf_at_[body_.leafCount()] = std::uint32_t(pair_links_.size());
-    for (const auto& [i, j] : self_pairs_) need_[i] = need_[j] = 1;
-    for (std::uint32_t l = 0; l < n; ++l)
-      if (need_[l]) {
-        if (!runs_.empty() && runs_.back().second == l)
-          ++runs_.back().second;
-        else
-          runs_.emplace_back(l, l + 1);
-      }
-    return count;
-  }
+                         const S* const* extras = nullptr);
 
   /// State j of the run placeGroup took last: as check() for its poses.
   int checkPlaced(std::size_t j, bool self, bool first_pair, bool clearance, StateResult<S>* out) {
@@ -382,98 +274,13 @@ class StateChecker {
   // search() on the pairs the group's walk found, each kept if the state's boxes overlap, for
   // the leaves of links that took part in it; the other leaves walk the world as search() does.
   template <class C>
-  bool searchShared(bool self) {
-    C& hits = this->hits<C>();
-    const std::size_t n = links_.size();
-    for (std::size_t k = 0; k < body_.leafCount() && !hits.found(); ++k) {
-      const std::uint32_t first = body_.leafFirst(k), end = first + body_.leafSize(k);
-      if (close_[k] && leaf_at_[k] == leaf_at_[k + 1]) continue;  // its links met nothing
-      pending_.clear();
-      if (close_[k]) {
-        for (std::uint32_t at = leaf_at_[k]; at < leaf_at_[k + 1]; ++at) {
-          const std::uint32_t l = pair_links_[at];
-          const Box<S> box = walkedBox(l);
-          for (std::uint32_t i = world_at_[l]; i < world_at_[l + 1]; ++i) {
-            const WorldPair& w = world_pairs_[i];
-            if (!overlap(box, w.box)) continue;
-            if (onWorld<C>(world_.table().object(w.id), w.id, nullptr, l, this)) return true;
-          }
-        }
-      } else if (world_.size() != 0) {
-        for (std::uint32_t l = first; l < end; ++l) body_.box(l) = walkedBox(l);
-        body_.refitLeaf(k);
-        world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
-                       CollideFn<S>(&StateChecker::onWorld<C>), nullptr);
-        if (hits.complete()) return true;
-      }
-      if (decidePending(hits)) return true;
-    }
-    if (self) {
-      pending_.clear();
-      if (self_shared_) {
-        for (const auto& [i, j] : self_pairs_)
-          if (overlap(walkedBox(i), walkedBox(j)) && onLinks<C>(nullptr, i, nullptr, j, this))
-            return true;
-      } else {
-        for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = walkedBox(l);
-        body_.refit();
-        collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this,
-                     true, 0, nullptr, &self_gate_);
-        if (hits.complete()) return true;
-      }
-      decidePending(hits);
-    }
-    return hits.found();
-  }
+  bool searchShared(bool self);
 
   // Drops the pairs the walk shared by the run met that stay apart in every state of it: a
   // link's records in the run's middle state grown by how far any point of it moves from there
   // (sweptRecords) are apart from the other's records by more than the pair's margin. A link
   // left with no pair is then not placed state by state.
-  void dropApart(const fcl::Transform3<S>* const* states, std::size_t count) {
-    const std::size_t n = links_.size(), mid = count / 2;
-    swept_.resize(n);  // room once
-    for (Swept& w : swept_) w.made = false;
-    const auto swept = [&](std::uint32_t l) -> const Swept* {
-      Swept& w = swept_[l];
-      if (!w.made) {
-        w.made = true;
-        w.usable = sweptRecords(states, count, mid, l, w.sphere, w.shape);
-      }
-      return w.usable ? &w : nullptr;
-    };
-    std::uint32_t kept = 0, begin = 0;
-    for (std::uint32_t l = 0; l < n; ++l) {
-      const std::uint32_t end = world_at_[l + 1];
-      world_at_[l] = kept;
-      const Swept* w = end > begin ? swept(l) : nullptr;
-      for (std::uint32_t i = begin; i < end; ++i) {
-        const WorldPair& p = world_pairs_[i];
-        if (w != nullptr) {
-          const VolumeSphere* s;
-          const VolumeShape* h;
-          worldRecords(*world_.table().object(p.id), p.id, s, h);
-          if (judge_.withinMargin(Records{&w->sphere, &w->shape}, Records{s, h},
-                                  runMargin(l, count) + world_.marginOf(p.id)) == Verdict::kApart)
-            continue;
-        }
-        world_pairs_[kept++] = p;
-      }
-      begin = end;
-    }
-    world_at_[n] = kept;
-    std::size_t self_kept = 0;
-    for (const auto& [i, j] : self_pairs_) {
-      const Swept* a = swept(i);
-      const Swept* b = a != nullptr ? swept(j) : nullptr;
-      if (b != nullptr &&
-          judge_.withinMargin(Records{&a->sphere, &a->shape}, Records{&b->sphere, &b->shape},
-                              runMargin(i, count) + runMargin(j, count)) == Verdict::kApart)
-        continue;
-      self_pairs_[self_kept++] = {i, j};
-    }
-    self_pairs_.resize(self_kept);
-  }
+  void dropApart(const fcl::Transform3<S>* const* states, std::size_t count);
 
   // Link l's records in state `ref` of the run's first `count`, grown by the farthest any point
   // of its local AABB moves from there in a state of the run (translation, plus the rotation's
@@ -481,29 +288,7 @@ class StateChecker {
   // Only what holds for the grown volume is kept (no inscribed ball, no cone bound); false
   // where the link has no records there or the bound is not finite.
   bool sweptRecords(const fcl::Transform3<S>* const* states, std::size_t count, std::size_t ref,
-                    std::uint32_t l, VolumeSphere& sphere, VolumeShape& shape) {
-    const fcl::Transform3<S>& at = states[ref][l];
-    double move = 0;
-    for (std::size_t j = 0; j < count; ++j) {
-      const fcl::Transform3<S>& p = states[j][l];
-      const double turn = double((p.linear() - at.linear()).norm());
-      const double shift = double((p.translation() - at.translation()).norm());
-      move = std::max(move, shift + double(links_.reach[l]) * turn);
-    }
-    if (!(move < double(kVolumeMaxScale))) return false;  // NaN too
-    if (!slots_[l].made) construct(l);
-    objectAt(l)->setTransform(at);
-    moveVolume(*objectAt(l), slots_[l].source, sphere, shape);
-    if (!(sphere.r >= 0.f)) return false;
-    // Outward: the sums in double, raised by far more than the float rounding's 2^-24.
-    const auto up = [move](float x) { return float((double(x) + move) * (1.0 + 1e-6)); };
-    sphere.r = up(sphere.r);
-    for (float& e : shape.e) e = up(e);
-    shape.scale = std::max(shape.scale, sphere.r);
-    shape.inner_r = 0.f;
-    shape.flags &= ~kVolumeCone;
-    return true;
-  }
+                    std::uint32_t l, VolumeSphere& sphere, VolumeShape& shape);
 
   typename Broadphase<S>::Probe probe(std::size_t l) {
     return typename Broadphase<S>::Probe{&object(std::uint32_t(l)), rateBox(l), margin_[l],
@@ -511,13 +296,7 @@ class StateChecker {
   }
 
   // Link l's largest margin over the first `count` states of the run (raised, or its own).
-  S runMargin(std::uint32_t l, std::size_t count) const {
-    if (!raised_) return links_.margin[l];
-    const std::size_t n = links_.size();
-    S m = raised_margins_[l];
-    for (std::size_t j = 1; j < count; ++j) m = std::max(m, raised_margins_[j * n + l]);
-    return m;
-  }
+  S runMargin(std::uint32_t l, std::size_t count) const;
 
   // Whether links first .. first + size - 1 lie close enough together over the states to share
   // a walk: each link's positions over the states span (extents summed over the links) less
@@ -525,31 +304,8 @@ class StateChecker {
   // within about kGroupSpread times one state's), and every position is finite. Keeps each
   // link's positions' box (at_lo_, at_hi_) and largest coordinate (far_).
   bool closeTogether(const S* const* states, std::size_t count, std::uint32_t first,
-                     std::uint32_t size) {
-    S extent = 0;
-    for (std::uint32_t l = first; l < first + size; ++l)
-      extent += S(2) * (links_.half_of[0][l] + links_.half_of[1][l] + links_.half_of[2][l]) +
-                S(6) * margin_[l];
-    const S limit = (kGroupSpread - S(1)) * extent;
-    // The first link alone, then the rest: states far apart (random samples) stop at the first.
-    if (!positionBoxes(states, count, first, 1, at_lo_, at_hi_) || !(spreadOf(first) <= limit))
-      return false;
-    if (size > 1 && !positionBoxes(states, count, first + 1, size - 1, at_lo_, at_hi_))
-      return false;
-    S spread = 0;
-    for (std::uint32_t l = first; l < first + size; ++l) {
-      spread += spreadOf(l);
-      S far = 0;
-      for (int d = 0; d < 3; ++d)
-        far = std::max({far, std::abs(at_lo_[d][l]), std::abs(at_hi_[d][l])});
-      far_[l] = far;
-    }
-    return spread <= limit;
-  }
-  S spreadOf(std::uint32_t l) const {
-    return (at_hi_[0][l] - at_lo_[0][l]) + (at_hi_[1][l] - at_lo_[1][l]) +
-           (at_hi_[2][l] - at_lo_[2][l]);
-  }
+                     std::uint32_t size);
+  S spreadOf(std::uint32_t l) const;
 
   // Links first .. first + count - 1 of the state posed by `poses` (the one selected): their
   // boxes, the boxes the walks test (walkedBox: the exact box of each posed local AABB grown by
@@ -754,7 +510,7 @@ class StateChecker {
       cap = m + m / S(8) + slack;
       // The grown primitive holds the primitive: clear of it, the pair neither touches nor
       // comes within m, and neither FCL call below is needed.
-      if (grownApart(a, b, cap)) return false;
+      if (grown_.apart(a, b, cap, request_)) return false;
     }
     fcl::CollisionResult<S> result;
     if (fclCollide(&a, &b, request_, result) > 0) return true;
@@ -763,62 +519,6 @@ class StateChecker {
     fcl::DistanceResult<S> capped;
     capped.min_distance = cap;
     return fclDistance(&a, &b, distance_request_, capped) <= m;
-  }
-
-  // For a mesh and a box, sphere, capsule or cylinder: whether the mesh stays clear of the
-  // primitive grown to hold every point within `reach` of it (its distance is then above reach).
-  // FCL's collision walks the mesh's BVH with cheaper tests than its distance does, and most
-  // pairs within a raised margin are farther apart than it.
-  bool grownApart(const Object& a, const Object& b, S reach) {
-    const Object* mesh = &a;
-    const Object* shape = &b;
-    if (mesh->getObjectType() != fcl::OT_BVH) std::swap(mesh, shape);
-    if (mesh->getObjectType() != fcl::OT_BVH || shape->getObjectType() != fcl::OT_GEOM ||
-        !(reach < std::numeric_limits<S>::infinity()))
-      return false;
-    const fcl::CollisionGeometry<S>& g = *shape->collisionGeometry();
-    fcl::CollisionObject<S>* placed;
-    switch (shape->getNodeType()) {
-      case fcl::GEOM_BOX:
-        placed = grown(0, fcl::Box<S>(static_cast<const fcl::Box<S>&>(g).side +
-                                      fcl::Vector3<S>::Constant(S(2) * reach)));
-        break;
-      case fcl::GEOM_SPHERE:
-        placed = grown(1, fcl::Sphere<S>(static_cast<const fcl::Sphere<S>&>(g).radius + reach));
-        break;
-      case fcl::GEOM_CAPSULE: {
-        const auto& x = static_cast<const fcl::Capsule<S>&>(g);
-        placed = grown(2, fcl::Capsule<S>(x.radius + reach, x.lz));
-        break;
-      }
-      case fcl::GEOM_CYLINDER: {
-        const auto& x = static_cast<const fcl::Cylinder<S>&>(g);
-        placed = grown(3, fcl::Cylinder<S>(x.radius + reach, x.lz + S(2) * reach));
-        break;
-      }
-      default:
-        return false;
-    }
-    placed->setTransform(shape->getTransform());
-    placed->computeAABB();
-    fcl::CollisionResult<S> result;
-    return fclCollide(placed, mesh, request_, result) == 0;
-  }
-
-  // The checker's one primitive of a kind (slot k), made on first use and given `wanted`'s
-  // dimensions: a pair within a raised margin allocates nothing.
-  template <typename Shape>
-  fcl::CollisionObject<S>* grown(int k, const Shape& wanted) {
-    if (!grown_[k]) {
-      auto shape = std::make_shared<Shape>(wanted);
-      grown_shapes_[k] = shape.get();
-      grown_[k] = std::make_unique<fcl::CollisionObject<S>>(shape);
-      return grown_[k].get();
-    }
-    Shape& shape = *static_cast<Shape*>(grown_shapes_[k]);
-    shape = wanted;
-    shape.computeLocalAABB();
-    return grown_[k].get();
   }
 
   S pairDistance(const Object& a, const Object& b) {
@@ -948,8 +648,7 @@ class StateChecker {
   VolumeShape built_shape_{};
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
   std::size_t bad_link_ = 0;
-  std::unique_ptr<fcl::CollisionObject<S>> grown_[4];  // box, sphere, capsule, cylinder
-  fcl::CollisionGeometry<S>* grown_shapes_[4] = {};
+  GrownShapes<S> grown_;            // a mesh against a primitive grown by a raised margin
   AnyHit<Candidate> any_;           // a check for any contact
   FirstInOrder<Candidate> first_;   // a check for the first pair in Candidate's order
   std::vector<Candidate> pending_;  // pairs for FCL; its room kept between states
@@ -957,3 +656,6 @@ class StateChecker {
 
 }  // namespace detail
 }  // namespace cube
+
+// The walks a run of states shares (placeGroup and what it calls).
+#include "queries/state_group.h"
