@@ -263,12 +263,19 @@ class StateChecker {
     }
     if (self) {
       pending_.clear();
-      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this, true,
-                   0, nullptr, &self_gate_);
-      if (hits.complete()) return true;
+      if (walkSelf<C>()) return true;
       decidePending(hits);
     }
     return hits.found();
+  }
+
+  // The links' self pairs over the whole links' tree into collector C; whether its answer is
+  // complete.
+  template <class C>
+  bool walkSelf() {
+    collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this, true, 0,
+                 nullptr, &self_gate_);
+    return hits<C>().complete();
   }
 
   // search() on the pairs the group's walk found, each kept if the state's boxes overlap, for

@@ -159,9 +159,7 @@ bool StateChecker<S>::searchShared(bool self) {
     } else {
       for (std::size_t l = 0; l < n; ++l) body_.box(std::uint32_t(l)) = walkedBox(l);
       body_.refit();
-      collideViews(body_.view(), body_.view(), CollideFn<S>(&StateChecker::onLinks<C>), this, true,
-                   0, nullptr, &self_gate_);
-      if (hits.complete()) return true;
+      if (walkSelf<C>()) return true;
     }
     decidePending(hits);
   }
