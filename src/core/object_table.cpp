@@ -99,7 +99,6 @@ template <typename S>
 void ObjectTable<S>::wantVolumes() const {
   if (!volumes_ || keeping_.load(std::memory_order_acquire)) return;
   const std::lock_guard<std::mutex> lock(volume_build_);
-  wanted_.store(true, std::memory_order_relaxed);
   // The table itself is not const (the manager owns it); only this build writes from a query.
   if (!keeping_.load(std::memory_order_relaxed)) const_cast<ObjectTable*>(this)->startKeeping();
 }
@@ -107,7 +106,6 @@ void ObjectTable<S>::wantVolumes() const {
 template <typename S>
 void ObjectTable<S>::dropVolumes() {
   keeping_.store(false, std::memory_order_relaxed);
-  wanted_.store(false, std::memory_order_relaxed);
   stale_ = 0;
   // Swapped out: assigning {} would keep the capacity.
   std::vector<VolumeSphere>().swap(sphere_);
@@ -391,7 +389,6 @@ void ObjectTable<S>::clear() {
   seq_ = {};
   loc_ = {};
   keeping_.store(false, std::memory_order_relaxed);
-  wanted_.store(false, std::memory_order_relaxed);
   stale_ = 0;
   sphere_ = {};
   shape_ = {};
@@ -445,8 +442,8 @@ bool ObjectTable<S>::validate(std::string* why) const {
   };
   const bool filters = !filter_.empty(), margins = !margin_.empty();
   if (seq_.size() != obj_.size() || loc_.size() != obj_.size() ||
-      (keeping_ && (!volumes_ || !wanted_ || sphere_.size() != obj_.size() ||
-                    shape_.size() != obj_.size() || source_.size() != obj_.size())) ||
+      (keeping_ && (!volumes_ || sphere_.size() != obj_.size() || shape_.size() != obj_.size() ||
+                    source_.size() != obj_.size())) ||
       (!keeping_ && !(sphere_.empty() && shape_.empty() && source_.empty())) ||
       (filters && (filter_.size() != obj_.size() || group_.size() != obj_.size())) ||
       (!filters && (!group_.empty() || !group_filter_.empty())) ||

@@ -212,12 +212,11 @@ class ObjectTable {
   std::vector<VolumeShape> shape_;
   std::vector<VolumeSource> source_;  // per id: what its volumes were built from
   bool volumes_ = true;               // Config::tight_volumes
-  // The three above are kept (else empty) while volumes_ and wanted_. Atomic: wantVolumes()
-  // publishes them to concurrent queries.
+  // The three above are kept (else empty) from a query's wantVolumes() to the next drop, only
+  // while volumes_. Atomic: wantVolumes() publishes them to concurrent queries.
   std::atomic<bool> keeping_{false};
-  mutable std::atomic<bool> wanted_{false};  // asked for by a query since the last drop
-  mutable std::mutex volume_build_;          // one wantVolumes() builds, the others wait
-  std::size_t stale_ = 0;                    // live ids whose records are stale (isStale)
+  mutable std::mutex volume_build_;  // one wantVolumes() builds, the others wait
+  std::size_t stale_ = 0;            // live ids whose records are stale (isStale)
   // The properties most managers never set are allocated by their first use (then kept until
   // clear()): 25 bytes per id that registration and memory would otherwise pay for nothing.
   std::vector<Filter> filter_;              // per id: filter bits; empty: all default
