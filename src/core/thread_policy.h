@@ -29,6 +29,11 @@ constexpr std::size_t kParallelMinWork = 128;
 // never leave the calling thread. For closed-form shape pairs a chunk's bookkeeping costs more than
 // a second thread saves; GJK pairs and meshes pay for it (answers.h's workOf weighs them).
 constexpr std::size_t kSerialWork = 1024;
+// ... and only while that work is at least 1/kMinCallShare of its candidate pairs: the threads
+// share FCL's calls only (the walk, the cull and the merge stay on the calling thread) and a
+// chunk costs each pair it holds more than an answer at once, so a query whose pairs the records
+// mostly settle (a clustered scene of shapes: many pairs, few FCL calls) stays on one thread.
+constexpr std::size_t kMinCallShare = 2;
 constexpr std::size_t kFirstChunkWork = 256;
 constexpr std::size_t kMaxChunkWork = 4096;
 

@@ -24,7 +24,8 @@ namespace {
 
 // A collide stream answers pairs at once on the calling thread until it has seen kSerialWork of
 // work (every candidate pair counts 1, an FCL call on a mesh or an octree kHeavyPairWork more),
-// then sizes its team (regionTeam, once) and, with more than one thread, gathers chunks of
+// and that work is at least 1/kMinCallShare of its candidate pairs (provedLarge), then sizes its
+// team (regionTeam, once) and, with more than one thread, gathers chunks of
 // kFirstChunkWork, doubling up to kMaxChunkWork (thread_policy.h sets them). Queries below
 // kSerialWork (most object queries, robot checks, small scenes of shapes) never open a region.
 // Pairs culled on the object tables' records (about 20 ns a pair, on this thread) count only
@@ -176,7 +177,7 @@ bool CollideStream<S>::pushJudged(fcl::CollisionObject<S>* a, fcl::CollisionObje
     }
     // A request that may stop at its first contact stays on this thread: a chunk would call FCL
     // for pairs after the stop. Others go to the threads once the query proves large.
-    if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork) leaveSerial();
+    if (provedLarge()) leaveSerial();
     return all_.full();
   }
   // In chunks: the cache is looked up here (and the cull on volumes runs here: a pair it proves
@@ -245,7 +246,13 @@ void CollideStream<S>::answerSerialBlock() {
     answerNow(b.block[k].first, b.block[k].second, s.kind);
   }
   // A request that may stop at its first contact stays on this thread (see pushJudged).
-  if (threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork) leaveSerial();
+  if (provedLarge()) leaveSerial();
+}
+
+template <typename S>
+bool CollideStream<S>::provedLarge() const {
+  return threads_ > 1 && request_.num_max_contacts > 1 && serial_work_ >= kSerialWork &&
+         serial_work_ * kMinCallShare >= stats_.candidate_pairs;
 }
 
 // The query proved large: chunks on the threads if the machine has room for them now, else the

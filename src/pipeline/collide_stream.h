@@ -95,7 +95,10 @@ class CollideStream final : public TaskSink<S> {
                  Slot* slots) const;
   static bool cacheable(const Slot& s);
   void answerSerialBlock();
-  // Past kSerialWork: sizes the team and leaves the serial mode if it has more than one thread.
+  // Whether the work answered at once shows a query the threads can share (thread_policy.h's
+  // kSerialWork and kMinCallShare).
+  bool provedLarge() const;
+  // Sizes the team and leaves the serial mode if it has more than one thread.
   void leaveSerial();
   void answerNow(fcl::CollisionObject<S>* a, fcl::CollisionObject<S>* b, Answer kind);
   void answerNow(const ObjectPair<S>& pair, Slot& slot);
