@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cube_collision/cube_collision_manager.h"
+#include "cube_collision/queries.h"
 #include "support/oracle.h"
 
 namespace {
@@ -139,6 +140,53 @@ TEST(BadInput, RegisterObjectsWithNaNRegistersNothingOfTheBatch) {
   EXPECT_NE(msg.find("entry #1"), std::string::npos) << msg;
   EXPECT_NE(msg.find("NaN"), std::string::npos) << msg;
   expectAnswersLikeNaive(m, {w[0]});
+}
+
+// The AABBs are read once, as the batch is registered: a NaN one late in a large batch undoes
+// what was read before it, on a manager that keeps its pipeline records and on an empty one
+// (where the batch would have been a build), and the same batch registers once it is mended.
+TEST(BadInput, RegisterObjectsWithNaNLateInALargeBatchUndoesEverythingItRead) {
+  World w(600);
+  const std::vector<Object*> all = w.all();
+  const std::vector<Object*> first(all.begin(), all.begin() + 100);
+  Manager kept;
+  kept.registerObjects(first);
+  fcl::CollisionRequest<S> request;
+  request.num_max_contacts = 100000;
+  const std::size_t before = cube::collideAll<S>(kept, request).numContacts();
+  ASSERT_GT(before, 0u);
+  Manager empty;
+  w.poison(400);
+  for (Manager* m : {&kept, &empty}) {
+    const std::string msg = messageOf([&] { m->registerObjects(all); });
+    EXPECT_NE(msg.find("entry #400"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("NaN"), std::string::npos) << msg;
+  }
+  expectAnswersLikeNaive(kept, first);
+  EXPECT_EQ(cube::collideAll<S>(kept, request).numContacts(), before);
+  expectAnswersLikeNaive(empty, {});
+  w.place(400, 0.9 * 400);
+  for (Manager* m : {&kept, &empty}) {
+    m->registerObjects(all);
+    expectAnswersLikeNaive(*m, all);
+  }
+  fcl::DefaultCollisionData<S> naive_data;
+  naive_data.request = request;
+  auto naive = cube::oracle::naiveOf(all);
+  naive.collide(&naive_data, fcl::DefaultCollisionFunction<S>);
+  EXPECT_EQ(cube::collideAll<S>(kept, request).numContacts(), naive_data.result.numContacts());
+}
+
+// Null entries are found before any AABB is read: a batch with a NaN entry before a null one
+// names the null one.
+TEST(BadInput, RegisterObjectsNamesANullEntryBeforeAnEarlierNaNOne) {
+  World w(4);
+  Manager m;
+  w.poison(1);
+  const std::string msg = messageOf([&] { m.registerObjects({w[0], w[1], w[2], nullptr}); });
+  EXPECT_NE(msg.find("entry #3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("null"), std::string::npos) << msg;
+  expectAnswersLikeNaive(m, {});
 }
 
 // Objects 0..4 in a row; object 1 gets a NaN AABB while 3 moves onto 0. The update must throw

@@ -43,7 +43,8 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   CubeCollisionManager& operator=(const CubeCollisionManager&) = delete;
 
   /// Registers each entry not yet registered, once. A null entry, or an unregistered one with a
-  /// NaN AABB, throws and registers none.
+  /// NaN AABB, throws and registers none; the message names the first null entry if there is
+  /// one, else the first NaN one.
   void registerObjects(const std::vector<Object*>& other_objs) override;
   /// Registers obj with its getAABB() of now. Throws if null or NaN; no effect if registered.
   void registerObject(Object* obj) override;

@@ -45,29 +45,25 @@ const Config& CubeCollisionManager<S>::config() const {
 template <typename S>
 void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_objs) {
   refuseInsideQuery(core_.get(), "registerObjects");
-  // Checked first, so that a bad entry registers nothing; the boxes are read again as the core
-  // registers them rather than held in an array of their own (48 bytes an object at the
-  // build's peak). Each AABB sits in an object of its own, out of cache in a large batch: both
-  // passes ask for a few ahead.
-  constexpr std::size_t kAhead = 8;
+  // Null entries first (the pointers alone); the AABBs are then read once, as the core
+  // registers them, and a NaN one undoes the batch (a pass of its own read each AABB twice, and
+  // an array of boxes would cost 48 bytes an object at the build's peak). Each AABB sits in an
+  // object of its own, out of cache in a large batch: ask for a few ahead.
   const std::size_t n = other_objs.size();
-  const auto ahead = [&](std::size_t i) {
-    if (i + kAhead < n && other_objs[i + kAhead] != nullptr)
-      __builtin_prefetch(&other_objs[i + kAhead]->getAABB());
-  };
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < n; ++i)
     if (other_objs[i] == nullptr)
       fail("registerObjects", "entry #" + std::to_string(i) + " is null; nothing registered");
-    ahead(i);
-    // A registered object is left alone, whatever its AABB says now (as registerObject does).
-    if (!isValid(boxOf(*other_objs[i])) && !core_->contains(other_objs[i]))
-      fail("registerObjects",
-           "entry #" + std::to_string(i) + " has a NaN AABB coordinate; nothing registered");
-  }
-  core_->addMany(other_objs.data(), n, [&](std::size_t i, Box<S>& box) {
-    ahead(i);
+  constexpr std::size_t kAhead = 8;
+  const std::size_t refused = core_->addMany(other_objs.data(), n, [&](std::size_t i, Box<S>& box) {
+    if (i + kAhead < n) __builtin_prefetch(&other_objs[i + kAhead]->getAABB());
     box = boxOf(*other_objs[i]);
+    return isValid(box);
   });
+  // A registered object is left alone, whatever its AABB says now (as registerObject does): the
+  // core reads only the boxes of entries it registers.
+  if (refused != n)
+    fail("registerObjects",
+         "entry #" + std::to_string(refused) + " has a NaN AABB coordinate; nothing registered");
 }
 
 template <typename S>

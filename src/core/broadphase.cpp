@@ -70,7 +70,10 @@ void Broadphase<S>::add(Object* obj, const Box<S>& box) {
 
 template <typename S>
 void Broadphase<S>::addMany(Object* const* objs, const Box<S>* boxes, std::size_t n) {
-  addMany(objs, n, [boxes](std::size_t i, Box<S>& box) { box = boxes[i]; });
+  addMany(objs, n, [boxes](std::size_t i, Box<S>& box) {
+    box = boxes[i];
+    return true;
+  });
 }
 
 template <typename S>

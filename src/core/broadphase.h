@@ -107,9 +107,10 @@ class Broadphase {
   /// what is registered is placed by one build.
   void addMany(Object* const* objs, const Box<S>* boxes, std::size_t n);
   /// The same, the box of entry i read by read(i, box) when it is registered (once, in batch
-  /// order): the boxes are never held apart from the slots.
+  /// order): the boxes are never held apart from the slots. read returns false for a box it
+  /// refuses: then nothing of the batch is registered, and the entry's index is returned; else n.
   template <class Read>
-  void addMany(Object* const* objs, std::size_t n, Read&& read);
+  std::size_t addMany(Object* const* objs, std::size_t n, Read&& read);
   /// Unregisters; false if not registered.
   bool remove(const Object* obj);
   /// update(): reads every object's box through read(obj, box), refits, rebuilds if due and
@@ -471,7 +472,7 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
 
 template <typename S>
 template <class Read>
-void Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& read) {
+std::size_t Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& read) {
   // Entries registered already, or earlier in the batch, are skipped by the table. The new ones
   // are sorted on the way: bounded ones into the array the build takes as its slots, unbounded
   // ones (rare: no allocation unless there are some) for their list.
@@ -479,15 +480,31 @@ void Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& read) {
   std::vector<Item<S>> loose;
   bounded.reserve(n);
   Box<S> box;
+  std::size_t refused = n;
+  ObjectId refused_id = kNone;
   const std::size_t added = table_.addBatch(objs, n, [&](std::size_t i, ObjectId id) {
-    read(i, box);
+    if (!read(i, box)) {
+      refused = i;
+      refused_id = id;
+      return false;
+    }
     const Item<S> item{grown(box, id), objs[i], kNone, id};
     if (classify(item.box, config_.unbounded_limit) == BoxKind::unbounded)
       loose.push_back(item);
     else
       bounded.push_back(item);
+    return true;
   });
+  if (refused != n) {
+    // Undone before anything is placed: the table alone holds the batch's ids (every one of
+    // them is in `bounded`, `loose` or refused_id, since the table stopped at the refusal).
+    table_.remove(refused_id);
+    for (const Item<S>& it : loose) table_.remove(it.id);
+    for (const Item<S>& it : bounded) table_.remove(it.id);
+    return refused;
+  }
   if (added != 0) placeBatch(std::move(bounded), loose);
+  return n;
 }
 
 template <typename S>

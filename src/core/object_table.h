@@ -45,7 +45,9 @@ class ObjectTable {
   ObjectId add(Object* obj);
   /// Registers the entries of a batch (not null) that are neither registered nor repeated
   /// earlier in it, in batch order, the map sized once, and calls `added(i, id)` for each with
-  /// its new id (nothing for the skipped ones). Returns the number registered. Inline, with the
+  /// its new id (nothing for the skipped ones); stops after the first call that returns false
+  /// (that entry registered too: the caller removes what it wants undone). Returns the number
+  /// registered. Inline, with the
   /// caller's `added` inlined too: a build of a few dozen objects is a few microseconds, and a
   /// call per entry or an array of ids handed back showed in it.
   template <class Added>
@@ -298,7 +300,7 @@ inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, 
     const ObjectId id = take(objs[i]);
     index_[h] = id + 1;
     ++count;
-    added(i, id);
+    if (!added(i, id)) break;
   }
   return count;
 }
