@@ -510,38 +510,31 @@ std::size_t Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& re
 template <typename S>
 template <class Region>
 void Broadphase<S>::search(Region& region, const Filter* bits) const {
-  std::optional<PairGate<S>> gated;
-  Exclusions room;  // read by no region: a region asks only the bits
-  if (bits != nullptr) {
+  const std::uint32_t* seq = table_.seqs();
+  const View<S> cubes = tree_.view();
+  typename Region::State start{};
+  // Objects without bits of their own all have the default: one answer for every object (a
+  // region's gate reads the table's bits alone).
+  if (bits != nullptr && table_.filters() != nullptr) {
+    Exclusions room;  // read by no region: a region asks only the bits
     Against query;
     query.bits = *bits;
-    gated = gate(&query, room);
-    // Objects without bits of their own all have the default: one answer for every object.
-    if (!gated->hasBits()) {
-      if (!filtersPass(Filter{}, *bits)) return;
-      gated.reset();
-    }
-  }
-  const std::uint32_t* seq = table_.seqs();
-  if (!unbounded_.empty()) {
-    if (gated)
-      filteredLeaf(region, *gated, unbounded_.items().data(), std::uint32_t(unbounded_.size()),
-                   seq);
-    else
-      region.leaf(unbounded_.items().data(), unbounded_.size(), seq);
-  }
-  const View<S> cubes = tree_.view();
-  if (cubes.root == kNone) return;
-  typename Region::State start{};
-  const Node& root = cubes.nodes[cubes.root];
-  if (!gated) {
-    if (!region.enters(root.lo, root.hi, start)) return;
-    RegionGuide<S, Region> guide{cubes, seq, region};
+    const PairGate<S> gated = gate(&query, room);
+    if (!unbounded_.empty())
+      filteredLeaf(region, gated, unbounded_.items().data(), std::uint32_t(unbounded_.size()), seq);
+    if (cubes.root == kNone) return;
+    const Node& root = cubes.nodes[cubes.root];
+    RegionGuide<S, Region, true> guide{cubes, seq, region, &gated};
+    if (guide.groupPasses(cubes.root) == 0 || !region.enters(root.lo, root.hi, start)) return;
     walkTree(cubes.nodes, cubes.root, start, guide);
     return;
   }
-  RegionGuide<S, Region, true> guide{cubes, seq, region, &*gated};
-  if (guide.groupPasses(cubes.root) == 0 || !region.enters(root.lo, root.hi, start)) return;
+  if (bits != nullptr && !filtersPass(Filter{}, *bits)) return;
+  if (!unbounded_.empty()) region.leaf(unbounded_.items().data(), unbounded_.size(), seq);
+  if (cubes.root == kNone) return;
+  const Node& root = cubes.nodes[cubes.root];
+  if (!region.enters(root.lo, root.hi, start)) return;
+  RegionGuide<S, Region> guide{cubes, seq, region};
   walkTree(cubes.nodes, cubes.root, start, guide);
 }
 
