@@ -2,8 +2,8 @@
 
 // One thread's checker of the batched checks (queries/batch.cpp): the links placed for a state,
 // the world's walks through the core's query entries, the cull on the records, FCL on the rest.
-// The walk a run of states shares is in state_group.h, a mesh against a grown primitive in
-// grown_shapes.h. Private to the library.
+// The walk a run of states shares is in state_group.h, a state's clearance in
+// state_clearance.h, a mesh against a grown primitive in grown_shapes.h. Private to the library.
 
 #include <fcl/narrowphase/collision_request.h>
 #include <fcl/narrowphase/collision_result.h>
@@ -533,58 +533,13 @@ class StateChecker {
     return fclDistance(&a, &b, distance_request_, result);
   }
 
-  static bool onWorldNear(Object* w, ObjectId iw, Object*, ObjectId, void* data, S& best) {
-    WorldNear& near = *static_cast<WorldNear*>(data);
-    StateChecker& c = *near.checker;
-    const VolumeSphere* s;
-    const VolumeShape* h;
-    c.worldRecords(*w, iw, s, h);
-    const Slot& slot = c.linkRecords(near.link);
-    const bool stop =
-        c.lower(*near.closest, c.object(near.link), slot.sphere, slot.shape, *w, *s, *h);
-    best = near.closest->bound();
-    return stop;
-  }
-
+  // The clearance of the state placed (state_clearance.h).
+  static bool onWorldNear(Object* w, ObjectId iw, Object*, ObjectId, void* data, S& best);
   // Hands the distance of a and b to `closest` unless their records prove it is not below its
   // bound; true (stop) once the bound is 0 or less.
   bool lower(Closest<S>& closest, const Object& a, const VolumeSphere& sa, const VolumeShape& ha,
-             const Object& b, const VolumeSphere& sb, const VolumeShape& hb) {
-    if (!distance_judge_.mayBeat(Records{&sa, &ha}, Records{&sb, &hb}, closest.bound()))
-      return false;
-    closest.add(pairDistance(a, b));
-    return closest.done();
-  }
-
-  S clearanceOf(bool self) {
-    fcl::DistanceResult<S> result;  // the distance alone: no nearest points are kept
-    Closest<S> closest(result);
-    const std::size_t n = links_.size();
-    for (std::size_t l = 0; l < n && !closest.done(); ++l) {
-      if (world_.size() == 0) break;
-      typename Broadphase<S>::Probe p = probe(l);
-      p.margin = S(0);
-      WorldNear near{this, std::uint32_t(l), &closest};
-      S bound = closest.bound();  // the walk's, lowered by onWorldNear
-      world_.distance(p, &near, DistanceFn<S>(&StateChecker::onWorldNear), bound, nullptr);
-    }
-    for (std::size_t i = 0; self && i < n && !closest.done(); ++i)
-      for (std::uint32_t k = links_.after_at[i]; k < links_.after_at[i + 1] && !closest.done();
-           ++k) {
-        const std::uint32_t j = links_.after[k];
-        const Box<S> bi = rateBox(i), bj = rateBox(j);
-        S gap2 = 0;
-        for (int a = 0; a < 3; ++a) {
-          const S g = std::max({bi.lo[a] - bj.hi[a], bj.lo[a] - bi.hi[a], S(0)});
-          gap2 += g * g;
-        }
-        if (std::sqrt(gap2) >= closest.bound()) continue;
-        const Slot& x = linkRecords(std::uint32_t(i));
-        const Slot& y = linkRecords(j);
-        lower(closest, object(std::uint32_t(i)), x.sphere, x.shape, object(j), y.sphere, y.shape);
-      }
-    return closest.bound();
-  }
+             const Object& b, const VolumeSphere& sb, const VolumeShape& hb);
+  S clearanceOf(bool self);
 
   const QueryScope scope_;  // a pair predicate that mutates the world is refused
   const Broadphase<S>& world_;
@@ -666,3 +621,5 @@ class StateChecker {
 
 // The walks a run of states shares (placeGroup and what it calls).
 #include "queries/state_group.h"
+// The clearance of a state (clearanceOf and what it calls).
+#include "queries/state_clearance.h"
