@@ -59,7 +59,7 @@ TEST(Differential, EveryConfigEverySceneLongSequences) {
 // Found by ThousandsOfRandomSequences (seed 278): with max_depth 1, removing the only object of
 // a depth-1 leaf moves its sibling leaf (which may hold more than leaf_size objects, being at
 // max_depth) up to depth 0, where validate() requires at most leaf_size objects.
-// Fixed in 9e7db70 (removeFromTree re-splits the leaves it moves up); kept as a regression test.
+// removeFromTree re-splits the leaves it moves up; kept as a regression test.
 TEST(Differential, RemoveCollapsingADeepFullLeafKeepsInvariants) {
   cube::Config config;
   config.leaf_size = 1;
@@ -88,7 +88,7 @@ TEST(Differential, RemoveCollapsingADeepFullLeafKeepsInvariants) {
 // Inputs found by the fuzzer (tests/fuzz), replayed byte for byte.
 TEST(Differential, FuzzerRegressions) {
   const std::vector<std::vector<std::uint8_t>> inputs = {
-      // 60 s run before 9e7db70: validate() "leaf 0 holds 2 > leaf_size objects" after a removal
+      // a fuzz run before the fix: validate() "leaf 0 holds 2 > leaf_size objects" after a removal
       // under max_depth (same bug as RemoveCollapsingADeepFullLeafKeepsInvariants).
       {0x02, 0x04, 0x0a, 0x92, 0x0a, 0x92, 0x0a, 0x0a, 0x02, 0x0a, 0x92, 0x0a, 0x0a,
        0x02, 0x23, 0x1c, 0x0a, 0x4b, 0x00, 0x15, 0x4e, 0x08, 0x23, 0x1c, 0x0a, 0x02,
