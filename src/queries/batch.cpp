@@ -355,45 +355,6 @@ void checkPoseEdges(const Links<S>& links, std::size_t states,
   checkEdgeStarts(states, edge_starts);
 }
 
-// Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
-template <typename S>
-struct GivenRaise {
-  const std::vector<S>& bounds;
-  std::size_t n;
-  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
-                  std::size_t&) const {
-    raiseAt<S>(
-        n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
-        raise);
-  }
-};
-
-// Raises from the poses of the state and its neighbours, moving in SE(3) between them.
-template <typename S>
-struct Se3Raise {
-  const std::vector<fcl::Transform3<S>>& poses;
-  const std::vector<S> reach;
-  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
-                  std::size_t& bad) const {
-    const std::size_t n = reach.size();
-    const fcl::Transform3<S>* p = poses.data();
-    if (raiseAt<S>(
-            n, state, begin, end,
-            [&](std::size_t k, std::size_t l) {
-              return se3MotionBound(p[k * n + l], p[(k + 1) * n + l], reach[l]);
-            },
-            raise))
-      return;
-    // A pose read is NaN or infinite: the first such in pose order (a NaN bound comes from one).
-    for (std::size_t k = state > begin ? state - 1 : state; k <= state + 1 && k < end; ++k)
-      for (std::size_t l = 0; l < n; ++l)
-        if (!p[k * n + l].linear().allFinite() || !p[k * n + l].translation().allFinite()) {
-          bad = k * n + l;
-          return;
-        }
-  }
-};
-
 }  // namespace
 }  // namespace detail
 

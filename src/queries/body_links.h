@@ -2,7 +2,10 @@
 
 // What a BodySet keeps (private to the library): per link the geometry, margin, filter bits,
 // local AABB (also per coordinate, for the pose-box kernel) and the cull's record source, the
-// excluded pairs (BodySet::excludePair), and the links' tree the checkers copy.
+// excluded pairs (BodySet::excludePair), and the links' tree the checkers copy; the object a
+// checker places for a link.
+
+#include <fcl/narrowphase/collision_object.h>
 
 #include <cstdint>
 #include <memory>
@@ -51,6 +54,24 @@ namespace detail {
 [[noreturn]] inline void batchError(const char* where, const std::string& what) {
   throw std::invalid_argument(std::string("cube::") + where + ": " + what);
 }
+
+// A link's object in one thread's scratch: shares the link's geometry without the
+// computeLocalAABB() that FCL's constructors call (writing to a geometry other threads read).
+template <typename S>
+class LinkObject final : public fcl::CollisionObject<S> {
+ public:
+  explicit LinkObject(const std::shared_ptr<fcl::CollisionGeometry<S>>& geometry)
+      : fcl::CollisionObject<S>(nullptr) {
+    this->cgeom = geometry;
+    this->cgeom_const = geometry;
+  }
+  /// The state's pose, and its AABB (what a predicate's getAABB() reads).
+  void place(const fcl::Transform3<S>& pose, const fcl::Vector3<S>& lo, const fcl::Vector3<S>& hi) {
+    this->setTransform(pose);
+    this->aabb.min_ = lo;
+    this->aabb.max_ = hi;
+  }
+};
 
 struct BodyAccess {
   template <typename S>

@@ -35,24 +35,6 @@
 namespace cube {
 namespace detail {
 
-// A link's object in one thread's scratch: shares the link's geometry without the
-// computeLocalAABB() that FCL's constructors call (writing to a geometry other threads read).
-template <typename S>
-class LinkObject final : public fcl::CollisionObject<S> {
- public:
-  explicit LinkObject(const std::shared_ptr<fcl::CollisionGeometry<S>>& geometry)
-      : fcl::CollisionObject<S>(nullptr) {
-    this->cgeom = geometry;
-    this->cgeom_const = geometry;
-  }
-  /// The state's pose, and its AABB (what a predicate's getAABB() reads).
-  void place(const fcl::Transform3<S>& pose, const fcl::Vector3<S>& lo, const fcl::Vector3<S>& hi) {
-    this->setTransform(pose);
-    this->aabb.min_ = lo;
-    this->aabb.max_ = hi;
-  }
-};
-
 template <typename S>
 using Links = typename BodySet<S>::Links;
 
