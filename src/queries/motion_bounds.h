@@ -84,7 +84,6 @@ bool raiseAt(std::size_t n, std::size_t k, std::size_t begin, std::size_t end, c
   return finite == S(0);
 }
 
-
 // Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
 template <typename S>
 struct GivenRaise {
