@@ -89,6 +89,13 @@ def kept_line(readme, prefix):
     return m.group(1).strip().strip("`").rstrip(".") if m else ""
 
 
+def report_date(path):
+    """The start a compare.sh report gives on its date line ("" if none)."""
+    with open(path) as f:
+        m = re.search(r"^- date: (\S+?);", f.read(), re.M)
+    return m.group(1) if m else ""
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("json", nargs="?",
@@ -105,6 +112,8 @@ def main():
     ap.add_argument("--memory", help="cube_memory's JSON output to tabulate too")
     ap.add_argument("--threads", help="threads_vs_one.py's JSON output to tabulate too")
     ap.add_argument("--compare", nargs="+", help="compare.sh reports of identical binaries")
+    ap.add_argument("--compare-before", nargs="+", default=[],
+                    help="compare.sh reports of the commit before the pair judge against main")
     ap.add_argument("--kept", action="store_true",
                     help="every table from the result files kept in the repository, into "
                     "benchmarks/README.md")
@@ -121,6 +130,11 @@ def main():
             found = [f for f in os.listdir(d) if f.startswith("compare-aa-") and f.endswith(".md")]
             found.sort(key=lambda f: (first.index(f) if f in first else len(first), f))
             args.compare = [os.path.relpath(os.path.join(d, f)) for f in found]
+        if not args.compare_before:
+            d = os.path.join(HERE, "results")
+            found = [os.path.join(d, f) for f in os.listdir(d)
+                     if f.startswith("compare-before-") and f.endswith(".md")]
+            args.compare_before = [os.path.relpath(f) for f in sorted(found, key=report_date)]
     readme = None
     if args.readme:
         with open(args.readme) as f:
@@ -140,7 +154,7 @@ def main():
     bullet = bullet_text(args.bullet) if args.bullet else ""
     memory = memory_text(args.memory) if args.memory else ""
     threads = threads_text(args.threads) if args.threads else ""
-    compare = compare_text(args.compare) if args.compare else ""
+    compare = compare_text(args.compare, args.compare_before) if args.compare else ""
     if args.plot_data and args.json:
         plot_data(medians, args.plot_data)
     if readme is not None:

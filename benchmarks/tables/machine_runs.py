@@ -120,39 +120,55 @@ def threads_text(path):
     return "\n".join(out) + "\n"
 
 
-def compare_text(paths):
+def _compare_row(path, named):
+    """One kept compare.sh report as a table row; with `named`, the cases it calls slower."""
+    text = open(path).read()
+    setting = dict(re.findall(r"CUBE_COMPARE_([A-Z_]+)=(\S+)", text))
+    timing = re.search(r"^- timing: (.+)$", text, re.M)
+    rounds = setting.get("ROUNDS", "5")
+    layouts = setting.get("LAYOUTS", "1")
+    confirm = setting.get("CONFIRM")
+    shape = f"{rounds} x {layouts}" + (f" (+ {confirm})" if confirm and confirm != "0" else "")
+    summary = re.search(r"^(\d+) cases; more than 5% slower (.+)$", text, re.M)
+    counts = {}
+    if summary:
+        for what, n in re.findall(r"by ([^:,;]+): (\d+)", summary.group(2)):
+            counts[what.strip()] = n
+    slowest = re.search(r"^slowest (?:case|change)[^:]*: ([\d.]+)", text, re.M)
+    med = counts.get("the ratio of medians", counts.get("the medians", "–"))
+    paired = counts.get("the median paired ratio", "–")
+    mins = counts.get("the minimums", "–")
+    verdict = counts.get("the first two (the verdict)", counts.get("both", "–"))
+    row = (f"| [{os.path.basename(path)}](results/{os.path.basename(path)}) | "
+           f"{timing.group(1) if timing else '?'} | {shape} | "
+           f"{summary.group(1) if summary else '?'} | {med} | {paired} | {mins} | "
+           f"{verdict} | {slowest.group(1) if slowest else '?'} |")
+    if named:
+        slow = re.findall(r"^\| (\S+?)(?:/manual_time)?(?: \(\d+ rounds\))? \|.*\*\*slower\*\*",
+                          text, re.M)
+        row += " " + (", ".join(f"`{n}`" for n in slow) if slow else "none") + " |"
+    return row
+
+
+def compare_text(paths, before_after=()):
     """A summary of kept compare.sh reports: per file, its settings and how many cases it read
-    more than 5% slower by each measure."""
+    more than 5% slower by each measure; then the before/after runs, with the cases each calls
+    slower."""
+    head = ("| file | timing | rounds x layouts (+ confirmation) | cases | > 5% by medians | "
+            "by paired ratios | by minimums | called slower | slowest case |")
+    rule = "|---|---|---|---:|---:|---:|---:|---:|---:|"
     out = ["### How far apart compare.sh reads identical binaries (`results/compare-aa-*.md`)", "",
            "Each file is one run of `compare.sh` with the same binary on both sides: every case "
            "it reads slower is the machine. Rounds x layouts per side (+ confirmation rounds for "
            "the cases flagged after them); a case is called slower when both the ratio of "
            "medians and the median paired ratio exceed 1.05 (in a sequential run, which has no "
-           "pairs: the medians and the minimums).", "",
-           "| file | timing | rounds x layouts (+ confirmation) | cases | > 5% by medians | "
-           "by paired ratios | by minimums | called slower | slowest case |",
-           "|---|---|---|---:|---:|---:|---:|---:|---:|"]
-    for path in paths:
-        text = open(path).read()
-        setting = dict(re.findall(r"CUBE_COMPARE_([A-Z_]+)=(\S+)", text))
-        timing = re.search(r"^- timing: (.+)$", text, re.M)
-        rounds = setting.get("ROUNDS", "5")
-        layouts = setting.get("LAYOUTS", "1")
-        confirm = setting.get("CONFIRM")
-        shape = f"{rounds} x {layouts}" + (f" (+ {confirm})" if confirm and confirm != "0"
-                                           else "")
-        summary = re.search(r"^(\d+) cases; more than 5% slower (.+)$", text, re.M)
-        counts = {}
-        if summary:
-            for what, n in re.findall(r"by ([^:,;]+): (\d+)", summary.group(2)):
-                counts[what.strip()] = n
-        slowest = re.search(r"^slowest (?:case|change)[^:]*: ([\d.]+)", text, re.M)
-        med = counts.get("the ratio of medians", counts.get("the medians", "–"))
-        paired = counts.get("the median paired ratio", "–")
-        mins = counts.get("the minimums", "–")
-        verdict = counts.get("the first two (the verdict)", counts.get("both", "–"))
-        out.append(f"| [{os.path.basename(path)}](results/{os.path.basename(path)}) | "
-                   f"{timing.group(1) if timing else '?'} | {shape} | "
-                   f"{summary.group(1) if summary else '?'} | {med} | {paired} | {mins} | "
-                   f"{verdict} | {slowest.group(1) if slowest else '?'} |")
+           "pairs: the medians and the minimums).", "", head, rule]
+    out += [_compare_row(p, False) for p in paths]
+    if before_after:
+        out += ["", "### Before and after the single pair judge (`results/compare-before-*.md`)",
+                "", "Each file is one run of `compare.sh` of the commit before the single pair "
+                "judge and rules object against main as it then stood, in the order they were "
+                "run; its title says what it times. The cases each calls slower are named.", "",
+                head + " cases called slower |", rule + "---|"]
+        out += [_compare_row(p, True) for p in before_after]
     return "\n".join(out) + "\n"
