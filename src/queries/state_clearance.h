@@ -5,9 +5,10 @@
 // records prove no nearer than the best so far left out. Included by state_checker.h only, after
 // the class.
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
+
+#include "core/kernels/box_ops.h"
 
 namespace cube {
 namespace detail {
@@ -52,13 +53,7 @@ inline S StateChecker<S>::clearanceOf(bool self) {
   for (std::size_t i = 0; self && i < n && !closest.done(); ++i)
     for (std::uint32_t k = links_.after_at[i]; k < links_.after_at[i + 1] && !closest.done(); ++k) {
       const std::uint32_t j = links_.after[k];
-      const Box<S> bi = rateBox(i), bj = rateBox(j);
-      S gap2 = 0;
-      for (int a = 0; a < 3; ++a) {
-        const S g = std::max({bi.lo[a] - bj.hi[a], bj.lo[a] - bi.hi[a], S(0)});
-        gap2 += g * g;
-      }
-      if (std::sqrt(gap2) >= closest.bound()) continue;
+      if (std::sqrt(boxGap2(rateBox(i), rateBox(j))) >= double(closest.bound())) continue;
       const Slot& x = linkRecords(std::uint32_t(i));
       const Slot& y = linkRecords(j);
       lower(closest, object(std::uint32_t(i)), x.sphere, x.shape, object(j), y.sphere, y.shape);
