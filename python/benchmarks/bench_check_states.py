@@ -15,7 +15,7 @@ bounds computed here), against checkMotions with BatchOptions::continuous and th
 takes motion bounds. The world:
 boxes, spheres and cylinders at uniform random poses, about one overlap per object. Answers are
 compared before any time is printed; each time is the best of --repeat calls, the Python and
-the C++ call in turn; ratio = Python / C++.
+the C++ call in turn, each after a pause (PAUSE, below); ratio = Python / C++.
 
   PYTHONPATH=build/python python3 python/benchmarks/bench_check_states.py [--objects 10000]
       [--states 10000] [--repeat 5] [--threads 1 0] [--near 0.02]
@@ -165,14 +165,25 @@ def se3_bounds(length, poses, starts):
     return out
 
 
+# The pause before each call. The C++ calls run in the benchmark module, a second copy of the
+# library in this process: each copy counts the other's OpenMP workers, still spinning for a few
+# milliseconds after its region (libgomp's active wait), as other load on the machine, and so
+# would run a call that follows the other's on one thread. A user's process holds one copy,
+# which discounts its own last region's workers (thread_policy.h); after the pause neither sees
+# the other's.
+PAUSE = 0.05
+
+
 def timed(repeat, py, cpp):
     """The least time of `repeat` calls of each, the two called in turn (so that a change of
-    the machine's load meets both alike): (python seconds, C++ seconds)."""
+    the machine's load meets both alike), each after PAUSE: (python seconds, C++ seconds)."""
     t_py = t_cpp = math.inf
     for _ in range(repeat):
+        time.sleep(PAUSE)
         t0 = time.perf_counter()
         py()
         t_py = min(t_py, time.perf_counter() - t0)
+        time.sleep(PAUSE)
         t_cpp = min(t_cpp, cpp())
     return t_py, t_cpp
 

@@ -21,33 +21,6 @@ namespace cubepy {
 
 namespace {
 
-// transformFrom's checks on a pose that passes them by a margin rounding cannot close (the
-// rotation's columns orthonormal within half its tolerance, determinant near +1), with the
-// transform into `out`; false leaves the pose to transformFrom, which throws its error or
-// returns it.
-inline bool rigidFast(const double* m, fcl::Transform3d& out) {
-  // Independent tests joined by &, no branch per test. A NaN or infinite rotation entry fails
-  // the column norms; x - x is 0 for a finite translation entry, NaN otherwise.
-  constexpr double kTol = 0.5e-6;
-  const double t = (m[3] - m[3]) + (m[7] - m[7]) + (m[11] - m[11]);
-  bool ok = (t == 0) & (m[12] == 0) & (m[13] == 0) & (m[14] == 0) & (m[15] == 1);
-  const double a0 = m[0], a1 = m[4], a2 = m[8];  // the rotation's columns a, b, c
-  const double b0 = m[1], b1 = m[5], b2 = m[9];
-  const double c0 = m[2], c1 = m[6], c2 = m[10];
-  const double aa = a0 * a0 + a1 * a1 + a2 * a2, bb = b0 * b0 + b1 * b1 + b2 * b2,
-               cc = c0 * c0 + c1 * c1 + c2 * c2;
-  const double ab = a0 * b0 + a1 * b1 + a2 * b2, ac = a0 * c0 + a1 * c1 + a2 * c2,
-               bc = b0 * c0 + b1 * c1 + b2 * c2;
-  const double det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0);
-  ok &= (std::fabs(aa - 1) <= kTol) & (std::fabs(bb - 1) <= kTol) & (std::fabs(cc - 1) <= kTol) &
-        (std::fabs(ab) <= kTol) & (std::fabs(ac) <= kTol) & (std::fabs(bc) <= kTol) & (det > 0.5);
-  if (!ok) return false;
-  double* o = out.matrix().data();  // column-major
-  for (int col = 0; col < 4; ++col)
-    for (int row = 0; row < 4; ++row) o[4 * col + row] = m[4 * row + col];
-  return true;
-}
-
 // poses (states, links, 4, 4) as float64, its state count into *states.
 Array posesArray(py::handle poses, std::size_t links, std::size_t* states) {
   if (links == 0) throw py::value_error("the body has no link");
@@ -69,11 +42,10 @@ struct PoseReader {
   std::size_t links;
   /// Throws transformFrom's ValueError for a pose that fails its checks.
   void operator()(std::size_t state, fcl::Transform3d* out) const {
-    for (std::size_t l = 0; l < links; ++l) {
-      const std::size_t at = state * links + l;
-      if (!rigidFast(data + 16 * at, out[l]))
-        out[l] = transformFrom(data + 16 * at, poseName(at, links));
-    }
+    const double* m = data + 16 * state * links;
+    transformsFrom(m, links, out, [&](std::size_t l) {
+      return transformFrom(m + 16 * l, poseName(state * links + l, links));
+    });
   }
 };
 
@@ -89,18 +61,19 @@ class BadPoses {
  public:
   BadPoses(const double* data, std::size_t links) : read_{data, links} {}
   void read(std::size_t state, fcl::Transform3d* out) {
-    for (std::size_t l = 0; l < read_.links; ++l) {
+    const double* m = read_.data + 16 * state * read_.links;
+    transformsFrom(m, read_.links, out, [&](std::size_t l) {
       const std::size_t at = state * read_.links + l;
-      if (rigidFast(read_.data + 16 * at, out[l])) continue;
       try {
-        out[l] = transformFrom(read_.data + 16 * at, poseName(at, read_.links));
+        return transformFrom(m + 16 * l, poseName(at, read_.links));
       } catch (const py::value_error& e) {
         const std::lock_guard<std::mutex> guard(mutex_);
         bad_.emplace(at, e.what());
-        out[l].setIdentity();
-        out[l].translation()[0] = std::numeric_limits<double>::quiet_NaN();
+        fcl::Transform3d nan = fcl::Transform3d::Identity();
+        nan.translation()[0] = std::numeric_limits<double>::quiet_NaN();
+        return nan;
       }
-    }
+    });
   }
   /// `offset`: the index of the library's pose 0 among the array's.
   [[noreturn]] void rethrow(const std::invalid_argument& e, std::size_t offset) const {

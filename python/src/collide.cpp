@@ -316,8 +316,9 @@ py::object collideAtPoses(const Manager& m, const GeometryPtr& g, py::handle tfs
   Array a = floats(tfs, "transforms", {-1, 4, 4}, false);
   const std::size_t n = static_cast<std::size_t>(a.shape(0));
   std::vector<fcl::Transform3d> poses(n);
-  for (std::size_t i = 0; i < n; ++i)
-    poses[i] = transformFrom(a.data() + 16 * i, "transforms[" + std::to_string(i) + "]");
+  transformsFrom(a.data(), n, poses.data(), [&](std::size_t i) {
+    return transformFrom(a.data() + 16 * i, "transforms[" + std::to_string(i) + "]");
+  });
   std::vector<unsigned char> hit(n, 0);
   if (n > 0) {
     Object q(g->fcl, poses[0]);

@@ -8,10 +8,13 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "core/kernels/rigid_rows.h"
 
 namespace cubepy {
 
@@ -33,6 +36,21 @@ IndexArray indices(py::handle obj, const char* what, std::vector<py::ssize_t> sh
 fcl::Transform3d transform(py::handle obj, const char* what = "transform");
 /// The same check on 16 doubles (row-major); throws ValueError naming `what`.
 fcl::Transform3d transformFrom(const double* m, const std::string& what);
+/// The transforms of n row-major 4x4 matrices m[16 i .. 16 i + 15] into out[0 .. n-1]: each one
+/// that passes transformFrom's checks with a margin rounding cannot close is copied at once;
+/// out[i] = fallback(i) for any other (which throws transformFrom's error, or writes what the
+/// caller wants in its place), then the rest continue.
+template <class Fallback>
+void transformsFrom(const double* m, std::size_t n, fcl::Transform3d* out, Fallback&& fallback) {
+  static_assert(sizeof(fcl::Transform3d) == 16 * sizeof(double),
+                "consecutive transforms are consecutive column-major matrices");
+  if (n == 0) return;
+  for (std::size_t done = 0;; ++done) {
+    done += cube::detail::rigidRows(m + 16 * done, n - done, out[done].matrix().data());
+    if (done >= n) return;
+    out[done] = fallback(done);
+  }
+}
 /// A transform as a new 4x4 float64 array.
 py::array_t<double> toArray(const fcl::Transform3d& tf);
 /// A 3-vector as a new float64 array.

@@ -189,8 +189,9 @@ an error: as add_object, plus ValueError for a name given twice or lengths that 
             for (py::handle h : names) ns.push_back(nameOfArg(h));
             Array a = floats(tfs, "transforms", {static_cast<py::ssize_t>(ns.size()), 4, 4}, false);
             std::vector<fcl::Transform3d> out(ns.size());
-            for (std::size_t i = 0; i < ns.size(); ++i)
-              out[i] = transformFrom(a.data() + 16 * i, "transforms[" + std::to_string(i) + "]");
+            transformsFrom(a.data(), ns.size(), out.data(), [&](std::size_t i) {
+              return transformFrom(a.data() + 16 * i, "transforms[" + std::to_string(i) + "]");
+            });
             self.setTransforms(ns, out);
           },
           py::arg("names"), py::arg("transforms"), R"doc(

@@ -91,6 +91,20 @@ def test_bad_input_raises_and_changes_nothing(backend, error, call):
     assert state(m) == before
 
 
+@pytest.mark.parametrize("bad", [NAN, SCALED, MIRROR, SHEAR, BAD_ROW, INF])
+def test_set_transforms_names_the_first_bad_pose_and_moves_nothing(backend, bad):
+    m = build(mixed_scene(12, 5), backend)
+    before = state(m)
+    names = m.names[:5]
+    tfs = np.stack([m.get_transform(n) for n in names])
+    tfs[:, :3, 3] += 0.25  # the good ones move
+    tfs[3] = bad
+    tfs[4] = SCALED  # a later bad one is not the one named
+    with pytest.raises(ValueError, match=r"transforms\[3\]"):
+        m.set_transforms(names, tfs)
+    assert state(m) == before
+
+
 def test_unknown_backend():
     with pytest.raises(ValueError):
         cc.CollisionManager(backend="bullet")
