@@ -399,10 +399,12 @@ TEST(ContinuousEdges, ThreadCountsGiveTheSameAnswers) {
         std::copy(poses.begin() + k * n, poses.begin() + (k + 1) * n, out);
       };
       const std::size_t states = poses.size() / n;
-      for (const int threads : {1, 2}) {
+      for (const int threads : {1, 2, 3}) {
         o.threads = threads;
         EXPECT_EQ(cube::checkMotions(w.manager, body, states, starts, pose_of, bounds, order, o),
                   one);
+        // Without bounds: the SE(3) bounds from the poses pose_of writes, neighbours included.
+        EXPECT_EQ(cube::checkMotions(w.manager, body, states, starts, pose_of, order, o), one);
       }
       std::vector<std::atomic<int>> computed(states);
       const cube::PoseFunction<S> counting = [&](std::size_t k, fcl::Transform3d* out) {
@@ -479,27 +481,79 @@ TEST(ContinuousEdges, BadBoundsThrowAndChangeNothing) {
     bad[n + 2] = value;
     expectThrow(bad, "motion bound " + std::to_string(n + 2));
   }
-  // Continuous checking from a pose function needs the bounds.
+  EXPECT_EQ(calls.load(), 0);
+  // A NaN pose next to a state the SE(3) bounds read throws, naming it, from the array and
+  // from a pose function.
   cube::BatchOptions o;
   o.continuous = true;
-  EXPECT_THROW(cube::checkMotion(w.manager, body, e.states, pose_of, cube::MotionOrder::path, o),
-               std::invalid_argument);
-  EXPECT_EQ(calls.load(), 0);
-  // A NaN pose next to a state the SE(3) bounds read throws, naming it.
   auto nan = poses;
   nan[n + 1].translation()[2] = std::nan("");
-  try {
-    cube::checkMotion(w.manager, body, nan, cube::MotionOrder::path, o);
-    ADD_FAILURE() << "no throw for a NaN pose";
-  } catch (const std::invalid_argument& error) {
-    EXPECT_NE(std::string(error.what()).find("pose " + std::to_string(n + 1)), std::string::npos)
-        << error.what();
+  const cube::PoseFunction<S> nan_of = [&](std::size_t k, fcl::Transform3d* out) {
+    std::copy(nan.begin() + k * n, nan.begin() + (k + 1) * n, out);
+  };
+  for (const bool from_function : {false, true}) {
+    try {
+      if (from_function)
+        cube::checkMotion(w.manager, body, e.states, nan_of, cube::MotionOrder::path, o);
+      else
+        cube::checkMotion(w.manager, body, nan, cube::MotionOrder::path, o);
+      ADD_FAILURE() << "no throw for a NaN pose";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("pose " + std::to_string(n + 1)), std::string::npos)
+          << error.what();
+    }
   }
   EXPECT_EQ(cube::checkMotion(w.manager, body, poses, bounds), before);
   EXPECT_EQ(cube::checkMotion(w.manager, body, e.states, pose_of, bounds), before);
   EXPECT_EQ(cube::checkMotions(w.manager, body, e.states, {0}, pose_of, bounds),
             std::vector<std::size_t>{before});
   EXPECT_EQ(cube::checkMotion(w.manager, body, poses, cube::MotionOrder::path, o), before);
+  EXPECT_EQ(cube::checkMotion(w.manager, body, e.states, pose_of, cube::MotionOrder::path, o),
+            before);
+}
+
+// SE(3) bounds computed from a pose function's poses equal those of the pose array, on edges
+// whose states lie at uneven steps (each interval's bound its own), in both orders and on 1 to
+// 3 threads: the same answers as the array form and as the bounds given.
+TEST(ContinuousEdges, PoseFunctionBoundsEqualTheArrayFormsOnUnevenSteps) {
+  World w;
+  fillWorld(w, 60, 71);
+  const cube::BodySet<S> body = randomBody(4, 72);
+  const std::size_t n = body.size();
+  const std::vector<Edge> edges = randomEdges(120, n, 73, 2, 40);
+  std::mt19937 rng(74);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<fcl::Transform3d> poses;
+  std::vector<std::size_t> starts;
+  for (const Edge& e : edges) {
+    starts.push_back(poses.size() / n);
+    std::vector<double> at{0, 1};
+    for (std::size_t k = 2; k < e.states; ++k) at.push_back(u(rng) * u(rng));
+    std::sort(at.begin(), at.end());
+    for (const double s : at)
+      for (std::size_t l = 0; l < n; ++l) poses.push_back(e.at(l, s));
+  }
+  const std::size_t states = poses.size() / n;
+  const std::vector<S> bounds = se3Bounds(body, poses, starts, 1);
+  const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* out) {
+    std::copy(poses.begin() + k * n, poses.begin() + (k + 1) * n, out);
+  };
+  std::size_t colliding = 0;
+  for (const cube::MotionOrder order : {cube::MotionOrder::path, cube::MotionOrder::bisection}) {
+    cube::BatchOptions o;
+    o.continuous = true;
+    o.threads = 1;
+    const auto want = cube::checkMotions(w.manager, body, poses, starts, order, o);
+    EXPECT_EQ(cube::checkMotions(w.manager, body, poses, starts, bounds, order, o), want);
+    for (const int threads : {1, 2, 3}) {
+      o.threads = threads;
+      EXPECT_EQ(cube::checkMotions(w.manager, body, states, starts, pose_of, order, o), want)
+          << threads << " threads";
+    }
+    for (const std::size_t f : want) colliding += f != cube::kNoIndex;
+  }
+  EXPECT_GT(colliding, 0u);
+  EXPECT_LT(colliding, 2 * edges.size());
 }
 
 // Zero bounds are the discrete check; a lone state has no interval to raise it.

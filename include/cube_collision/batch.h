@@ -100,7 +100,8 @@ struct BatchOptions {
   /// too, with each link's motion bounds computed from its two poses as for motion interpolated
   /// in SE(3) (see "Continuous edges" below). Ignored by checkStates; the overloads that take
   /// motion bounds check continuously whatever its value; checkMotion(s) with a PoseFunction and
-  /// no bounds throw std::invalid_argument with it set.
+  /// no bounds compute them from the poses it writes (PoseFunction: a checked state's neighbours
+  /// are written too).
   bool continuous = false;
 };
 
@@ -197,7 +198,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 /// Writes the links' poses of state `state` (0 <= state < the motion's states) to
 /// poses[0 .. body.size() - 1], every one of them (the buffer may hold another state's poses).
 /// Called only for the states a check reads, at most once per state, possibly from several
-/// threads at once (BatchOptions::threads): it must be safe to call concurrently.
+/// threads at once (BatchOptions::threads): it must be safe to call concurrently. With
+/// BatchOptions::continuous and no motion bounds, the SE(3) bounds of a checked state read its
+/// neighbours in its edge too: those are written as well, and a state may be written more than
+/// once (as a neighbour of states of two runs, or in bisection order of several).
 template <typename S>
 using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* poses)>;
 
@@ -205,15 +209,16 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// planner that interpolates an edge and runs its kinematics per state: pose_of is called for the
 /// states of a run (checkMotions) before any of them is checked, and no later run is computed
 /// once the answer is known: on one thread, for an answer at place r of `order`, at most
-/// max(5, 2 r + 3) states are computed (with `threads` > 1, a few more may be, and their answers
+/// max(5, 2 r + 3) states are checked, and only those are computed but for the neighbours
+/// BatchOptions::continuous reads (with `threads` > 1, a few more may be, and their answers
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
 /// pose array is made: the call's memory is the visiting order, 24 bytes a state (40 while it
-/// is made), and room for the poses of one run (32 states) per thread. Throws
-/// std::invalid_argument for an empty body set, a null function or BatchOptions::continuous set
-/// (SE(3) bounds need every state's poses: the overload with motion bounds checks continuously)
-/// (before any work), and as checkMotion for a NaN or infinite pose; an exception from pose_of
-/// is passed on (possibly one from a state after the answer in its run, or with `threads` > 1 in
-/// a later one).
+/// is made), and room for the poses of one run (32 states, 34 with BatchOptions::continuous) per
+/// thread. With BatchOptions::continuous, the SE(3) bounds as checkMotion over all the poses
+/// computes them, each checked state's neighbours written too (PoseFunction). Throws
+/// std::invalid_argument for an empty body set or a null function (before any work), and as
+/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on (possibly one
+/// from a state after the answer in its run, or with `threads` > 1 in a later one).
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
@@ -236,11 +241,12 @@ std::vector<StateResult<S>> checkStates(
 /// checkMotions over `states` states whose poses `pose_of` writes on demand: only the states a
 /// check reads are written, as checkMotion with a pose function says (with `threads` > 1, a few
 /// after an edge's answer may be, and their answers dropped). The same answers as checkMotions
-/// over all the poses, whatever the thread count. Throws std::invalid_argument as checkMotions
-/// and for a null function or BatchOptions::continuous set (before any work); an exception from
-/// pose_of is passed on (with `threads` > 1, possibly one from a state after its edge's answer): a
-/// caller that wants the array form's rule for a bad pose writes a NaN entry into it instead of
-/// throwing.
+/// over all the poses, whatever the thread count (with BatchOptions::continuous too, the SE(3)
+/// bounds computed from the poses pose_of writes, as checkMotion with a pose function says).
+/// Throws std::invalid_argument as checkMotions and for a null function (before any work); an
+/// exception from pose_of is passed on (with `threads` > 1, possibly one from a state after its
+/// edge's answer): a caller that wants the array form's rule for a bad pose writes a NaN entry into
+/// it instead of throwing.
 template <typename S>
 std::vector<std::size_t> checkMotions(
     const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,

@@ -49,10 +49,6 @@ struct PoseReader {
   }
 };
 
-// The states converted at a time for continuous checks with SE(3) bounds (whole edges; a longer
-// edge alone).
-constexpr std::size_t kChunkStates = 512;
-
 // Reads states' poses as PoseReader does, except that a pose failing transformFrom's checks is
 // written as a NaN one (the library's rule then decides whether the call throws) and its error
 // kept: rethrow() turns the library's error naming it into that error. Safe to call from the
@@ -99,6 +95,10 @@ std::vector<double> motionBounds(py::handle obj, std::size_t states, std::size_t
              {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
   const double* d = b.data();
   std::vector<double> out(d, d + states * links);
+  // One pass without a branch per value (NaN fails both tests), the offender sought only then.
+  bool ok = true;
+  for (const double v : out) ok &= (v >= 0) & (v <= std::numeric_limits<double>::max());
+  if (ok) return out;
   for (std::size_t i = 0; i < out.size(); ++i)
     if (!(out[i] >= 0) || !std::isfinite(out[i]))
       throw py::value_error("motion_bounds[" + std::to_string(i / links) + ", " +
@@ -223,37 +223,9 @@ TypeError (non-numeric poses).)doc")
               // then names it as transformFrom does.
               BadPoses bad(a.data(), n);
               const auto read = [&](std::size_t k, fcl::Transform3d* out) { bad.read(k, out); };
-              if (!s.empty() && continuous && !given) {
-                // SE(3) bounds read a state's neighbours: the library's array form, over
-                // consecutive edges of about kChunkStates states at a time (edges are
-                // independent: the same answers and the same first error as one call), their
-                // poses converted into one buffer reused across chunks, which stays in cache and
-                // costs no page faults per state.
-                std::vector<fcl::Transform3d> tfs;
-                std::vector<std::size_t> chunk_starts;
-                const auto end_of = [&](std::size_t e) {
-                  return e + 1 < s.size() ? s[e + 1] : states;
-                };
-                for (std::size_t e0 = 0, e1; e0 < s.size(); e0 = e1) {
-                  const std::size_t first = s[e0];
-                  for (e1 = e0 + 1; e1 < s.size() && end_of(e1) - first <= kChunkStates;) ++e1;
-                  const std::size_t last = end_of(e1 - 1);
-                  tfs.resize((last - first) * n);
-                  for (std::size_t k = first; k < last; ++k) read(k, tfs.data() + (k - first) * n);
-                  chunk_starts.clear();
-                  for (std::size_t e = e0; e < e1; ++e) chunk_starts.push_back(s[e] - first);
-                  std::vector<std::size_t> part;
-                  try {
-                    part =
-                        cube::checkMotions<double>(*m.cube(), body.set, tfs, chunk_starts, mo, opt);
-                  } catch (const std::invalid_argument& e) {
-                    bad.rethrow(e, first * n);
-                  }
-                  res.insert(res.end(), part.begin(), part.end());
-                }
-              } else if (!s.empty()) {
-                // Discrete, or the caller's bounds: only the states the check reads are
-                // converted, on its threads.
+              if (!s.empty()) {
+                // Only the states the check reads are converted, on its threads (with SE(3)
+                // bounds, their neighbours too).
                 try {
                   if (given) {
                     res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, bounds,

@@ -141,10 +141,12 @@ void checkStateRuns(const Broadphase<S>& core, const Links<S>& links, std::size_
 struct NoRaise {};
 
 // checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
-// the links' poses, the j-th state of a run placed together), edges as edge_starts says (checked
-// by the caller). A continuous check: raise_at(state, edge begin, edge end, raise, bad) writes
-// the links' margin raises of a state to raise[0 .. links), or sets `bad` to the index of a pose
-// it read with a NaN or infinite entry.
+// the links' poses, the j-th state of a run placed together; j = kGroupStates and the next for
+// a neighbour of a state that its run does not hold), edges as edge_starts says (checked by the
+// caller). A continuous check: raise_at(state, edge begin, edge end, raise, bad, poses_of)
+// writes the links' margin raises of a state to raise[0 .. links), or sets `bad` to the index of
+// a pose it read with a NaN or infinite entry; poses_of(k) gives the poses of the state or of a
+// neighbour in its edge.
 template <typename S, class PoseAt, class RaiseAt = NoRaise>
 std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
                                          std::size_t states,
@@ -205,7 +207,10 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   std::size_t longest = 0;  // the most states of an edge
   for (std::size_t e = 0; e < edges; ++e)
     longest = std::max(longest, (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e]);
-  const std::size_t run_states = on_demand ? std::min(longest, StateChecker<S>::kGroupStates) : 0;
+  // Room for a run's states, and with raises from the poses, for two neighbours past them.
+  const std::size_t run_states = !on_demand   ? 0
+                                 : continuous ? kRun + 2
+                                              : std::min(longest, StateChecker<S>::kGroupStates);
   const auto make = [&] {
     return std::make_unique<MotionScratch<S>>(core, links, run_states, continuous);
   };
@@ -244,7 +249,16 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
       const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
       for (std::size_t j = 0; j < count; ++j) {
         S* raise = scratch->raise.data() + j * n;
-        raise_at(items[run.first + j].state, begin, end, raise, raise_bad);
+        const std::size_t k = items[run.first + j].state;
+        // A neighbour's poses: from the run where it holds them (consecutive states in path
+        // order), else written into the room's two places past a run's.
+        const auto poses_of = [&](std::size_t s) -> const fcl::Transform3<S>* {
+          if (s == k) return at[j];
+          if (j > 0 && items[run.first + j - 1].state == s) return at[j - 1];
+          if (j + 1 < count && items[run.first + j + 1].state == s) return at[j + 1];
+          return pose_at(*scratch, s, s < k ? kRun : kRun + 1);
+        };
+        raise_at(k, begin, end, raise, raise_bad, poses_of);
         if (raise_bad != kNoIndex) {
           raised = j;
           break;
@@ -389,7 +403,7 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
   if (options.continuous)
     return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
                                    options, false, pose_at,
-                                   detail::Se3Raise<S>{poses, detail::linkReach<S>(links)});
+                                   detail::Se3Raise<S>{detail::linkReach<S>(links)});
   return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
                                  false, pose_at);
 }
@@ -440,18 +454,8 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const auto& links = detail::BodyAccess::links(body);
   if (links.size() == 0) batchError("checkMotion", "the body set has no link");
   if (!pose_of) batchError("checkMotion", "null pose function");
-  if (options.continuous)
-    batchError("checkMotion",
-               "continuous checking with a pose function needs the motion bounds (the overload "
-               "that takes them)");
   if (states == 0) return kNoIndex;
-  const std::vector<std::size_t> starts{0};
-  return detail::firstCollisions(detail::coreOf(world), links, states, starts, order, options, true,
-                                 [&](auto& scratch, std::size_t state, std::size_t j) {
-                                   fcl::Transform3<S>* at = scratch.room(j, links.size());
-                                   pose_of(state, at);
-                                   return at;
-                                 })[0];
+  return checkMotions(world, body, states, std::vector<std::size_t>{0}, pose_of, order, options)[0];
 }
 
 template <typename S>
@@ -483,25 +487,18 @@ std::vector<std::size_t> checkMotions(
     const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of, MotionOrder order,
     const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
-  if (links.size() == 0) batchError("checkMotions", "the body set has no link");
-  if (!pose_of) batchError("checkMotions", "null pose function");
+  detail::checkPoseEdges(links, states, edge_starts, pose_of);
+  const auto pose_at = [&](auto& scratch, std::size_t state, std::size_t j) {
+    fcl::Transform3<S>* at = scratch.room(j, links.size());
+    pose_of(state, at);
+    return at;
+  };
   if (options.continuous)
-    batchError("checkMotions",
-               "continuous checking with a pose function needs the motion bounds (the overload "
-               "that takes them)");
-  if (edge_starts.empty() && states > 0)
-    batchError("checkMotions", "states given without edge_starts (every state needs an edge)");
-  for (std::size_t e = 0; e < edge_starts.size(); ++e)
-    if ((e == 0 && edge_starts[0] != 0) || (e > 0 && edge_starts[e] <= edge_starts[e - 1]) ||
-        edge_starts[e] >= states)
-      batchError("checkMotions",
-                 "edge_starts must start at 0 and increase strictly within the states");
+    return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
+                                   options, true, pose_at,
+                                   detail::Se3Raise<S>{detail::linkReach<S>(links)});
   return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
-                                 true, [&](auto& scratch, std::size_t state, std::size_t j) {
-                                   fcl::Transform3<S>* at = scratch.room(j, links.size());
-                                   pose_of(state, at);
-                                   return at;
-                                 });
+                                 true, pose_at);
 }
 
 template <typename S>

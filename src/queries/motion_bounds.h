@@ -89,37 +89,45 @@ template <typename S>
 struct GivenRaise {
   const std::vector<S>& bounds;
   std::size_t n;
-  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
-                  std::size_t&) const {
+  template <class PosesOf>
+  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise, std::size_t&,
+                  const PosesOf&) const {
     raiseAt<S>(
         n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
         raise);
   }
 };
 
-// Raises from the poses of the state and its neighbours, moving in SE(3) between them.
+// Raises from the poses of the state and its neighbours in its edge, moving in SE(3) between
+// them; poses_of(k) gives state k's links' poses (only the state's and its neighbours' are
+// asked for).
 template <typename S>
 struct Se3Raise {
-  const std::vector<fcl::Transform3<S>>& poses;
   const std::vector<S> reach;
-  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise,
-                  std::size_t& bad) const {
+  template <class PosesOf>
+  void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise, std::size_t& bad,
+                  const PosesOf& poses_of) const {
     const std::size_t n = reach.size();
-    const fcl::Transform3<S>* p = poses.data();
+    const fcl::Transform3<S>* near[3] = {state > begin ? poses_of(state - 1) : nullptr,
+                                         poses_of(state),
+                                         state + 1 < end ? poses_of(state + 1) : nullptr};
     if (raiseAt<S>(
             n, state, begin, end,
             [&](std::size_t k, std::size_t l) {
-              return se3MotionBound(p[k * n + l], p[(k + 1) * n + l], reach[l]);
+              const fcl::Transform3<S>* from = near[k + 1 - state];  // k is state - 1 or state
+              return se3MotionBound(from[l], near[k + 2 - state][l], reach[l]);
             },
             raise))
       return;
     // A pose read is NaN or infinite: the first such in pose order (a NaN bound comes from one).
-    for (std::size_t k = state > begin ? state - 1 : state; k <= state + 1 && k < end; ++k)
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (near[i] == nullptr) continue;
       for (std::size_t l = 0; l < n; ++l)
-        if (!p[k * n + l].linear().allFinite() || !p[k * n + l].translation().allFinite()) {
-          bad = k * n + l;
+        if (!near[i][l].linear().allFinite() || !near[i][l].translation().allFinite()) {
+          bad = (state + i - 1) * n + l;
           return;
         }
+    }
   }
 };
 
