@@ -85,6 +85,7 @@ struct MotionScratch {
   StateChecker<S> checker;
   std::vector<fcl::Transform3<S>> poses;  // reserved for a run; states made as they are written
   std::vector<S> raise;
+  RaiseMemo<S> memo;
   // `run_states`: the most states of a run (0: poses are not written here); `continuous`: room
   // for the raises of a run.
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states,
@@ -253,12 +254,13 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
         // A neighbour's poses: from the run where it holds them (consecutive states in path
         // order), else written into the room's two places past a run's.
         const auto poses_of = [&](std::size_t s) -> const fcl::Transform3<S>* {
+          if (!on_demand) return pose_at(*scratch, s, 0);  // the caller's array
           if (s == k) return at[j];
           if (j > 0 && items[run.first + j - 1].state == s) return at[j - 1];
           if (j + 1 < count && items[run.first + j + 1].state == s) return at[j + 1];
           return pose_at(*scratch, s, s < k ? kRun : kRun + 1);
         };
-        raise_at(k, begin, end, raise, raise_bad, poses_of);
+        raise_at(k, begin, end, raise, raise_bad, poses_of, scratch->memo);
         if (raise_bad != kNoIndex) {
           raised = j;
           break;

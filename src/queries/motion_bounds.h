@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -84,6 +85,14 @@ bool raiseAt(std::size_t n, std::size_t k, std::size_t begin, std::size_t end, c
   return finite == S(0);
 }
 
+// One thread's memo of the last interval whose links' SE(3) bounds it computed: the state after
+// it, checked next in path order, reads them again as its interval before.
+template <typename S>
+struct RaiseMemo {
+  std::vector<S> after;             // per link
+  std::size_t interval = SIZE_MAX;  // its first state; SIZE_MAX: none
+};
+
 // Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
 template <typename S>
 struct GivenRaise {
@@ -91,7 +100,7 @@ struct GivenRaise {
   std::size_t n;
   template <class PosesOf>
   void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise, std::size_t&,
-                  const PosesOf&) const {
+                  const PosesOf&, RaiseMemo<S>&) const {
     raiseAt<S>(
         n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
         raise);
@@ -99,27 +108,43 @@ struct GivenRaise {
 };
 
 // Raises from the poses of the state and its neighbours in its edge, moving in SE(3) between
-// them; poses_of(k) gives state k's links' poses (only the state's and its neighbours' are
-// asked for).
+// them (as raiseAt: half the larger bound of the intervals the state ends and starts);
+// poses_of(k) gives state k's links' poses (only the state's and its neighbours' are asked for,
+// the one before only if the memo does not hold its interval).
 template <typename S>
 struct Se3Raise {
   const std::vector<S> reach;
   template <class PosesOf>
   void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise, std::size_t& bad,
-                  const PosesOf& poses_of) const {
+                  const PosesOf& poses_of, RaiseMemo<S>& memo) const {
     const std::size_t n = reach.size();
-    const fcl::Transform3<S>* near[3] = {state > begin ? poses_of(state - 1) : nullptr,
-                                         poses_of(state),
-                                         state + 1 < end ? poses_of(state + 1) : nullptr};
-    if (raiseAt<S>(
-            n, state, begin, end,
-            [&](std::size_t k, std::size_t l) {
-              const fcl::Transform3<S>* from = near[k + 1 - state];  // k is state - 1 or state
-              return se3MotionBound(from[l], near[k + 2 - state][l], reach[l]);
-            },
-            raise))
-      return;
+    const bool before = state > begin, after = state + 1 < end;
+    const bool known = before && memo.interval == state - 1;
+    const fcl::Transform3<S>* prev = before && !known ? poses_of(state - 1) : nullptr;
+    const fcl::Transform3<S>* cur = poses_of(state);
+    const fcl::Transform3<S>* next = after ? poses_of(state + 1) : nullptr;
+    memo.after.resize(n);
+    S finite = 0;  // x - x: 0 for a finite x, NaN otherwise
+    for (std::size_t l = 0; l < n; ++l) {
+      S b = 0;
+      if (before) {
+        const S back = known ? memo.after[l] : se3MotionBound(prev[l], cur[l], reach[l]);
+        finite += back - back;
+        b = back;
+      }
+      if (after) {
+        const S ahead = se3MotionBound(cur[l], next[l], reach[l]);
+        finite += ahead - ahead;
+        b = std::max(b, ahead);
+        memo.after[l] = ahead;
+      }
+      raise[l] = S(0.5) * b;
+    }
+    memo.interval = after ? state : SIZE_MAX;
+    if (finite == S(0)) return;
     // A pose read is NaN or infinite: the first such in pose order (a NaN bound comes from one).
+    if (before && prev == nullptr) prev = poses_of(state - 1);
+    const fcl::Transform3<S>* near[3] = {prev, cur, next};
     for (std::size_t i = 0; i < 3; ++i) {
       if (near[i] == nullptr) continue;
       for (std::size_t l = 0; l < n; ++l)
