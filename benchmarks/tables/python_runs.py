@@ -187,3 +187,70 @@ def fcl_compat_text(path):
                        + ", ".join(f"{p[4]:.1f}" for p in ps) + " ms | "
                        + ", ".join(f"{p[4] / p[3]:.1f}x" for p in ps) + " |")
     return "\n".join(out) + "\n"
+
+
+def check_states_text(path):
+    """python/benchmarks/bench_check_states.py's output (one or more runs in one file): per call
+    and thread count, the Python call's time against the C++ call's on the same world, body and
+    poses, one figure per run."""
+    runs = []
+    num = r"([\d.]+) ms"
+    for line in open(path):
+        m = re.match(r"^world: (\d+) objects; (\d+) states of (\d+) links; (\d+) edges of (\d+) "
+                     r"states; load (\S+) \S+ \S+, (\d+) threads runnable", line)
+        if m:
+            runs.append({"about": tuple(int(m.group(i)) for i in (1, 2, 3, 4, 5)),
+                         "load": f"{m.group(6)} ({int(m.group(7)) - 1} other threads runnable)",
+                         "times": {}})
+            continue
+        if not runs:
+            continue
+        m = re.match(r"^(check_states|check_motions_continuous \w+|check_motions)\s+threads=(\d+)"
+                     r"(?: self=(\d))?.*?: python\s+" + num + r", C\+\+\s+" + num, line)
+        if m:
+            call = m.group(1)
+            if m.group(3) is not None:
+                call += " (self pairs)" if m.group(3) == "1" else ""
+            runs[-1]["times"][(call, int(m.group(2)))] = (float(m.group(4)), float(m.group(5)))
+    runs = [r for r in runs if r["times"]]
+    if not runs:
+        return ""
+    labels = {"check_states": "`check_states`",
+              "check_states (self pairs)": "`check_states(self_collision=True)`",
+              "check_motions": "`check_motions`",
+              "check_motions_continuous se3": "`check_motions(continuous=True)` (SE(3) bounds)",
+              "check_motions_continuous bounds": "`check_motions(motion_bounds=B)`"}
+    calls = list(dict.fromkeys(c for r in runs for c, _ in r["times"]))
+    threads = sorted({t for r in runs for _, t in r["times"]}, key=lambda t: (t == 0, t))
+    objects, states, links, edges, edge_states = runs[0]["about"]
+    loads = ", ".join(r["load"] for r in runs)
+    head = ["one thread" if t == 1 else "default threads" if t == 0 else f"{t} threads"
+            for t in threads]
+    out = ["### Python package: the batched checks against the C++ calls "
+           "(`python/benchmarks/bench_check_states.py`)", "",
+           f"From `{os.path.relpath(path, os.path.join(HERE, '..'))}`, {len(runs)} runs (load "
+           f"average at the start of each: {loads}): {objects:,} world objects, {states:,} "
+           f"states of a {links}-link chain ({edges} edges of {edge_states:,} states for the "
+           "motions). Per run, the Python call's time / the C++ call's on the same manager, "
+           "body and poses (the C++ poses made before its clock starts), each the best of its "
+           "repeats, the two called in turn.", "",
+           "| call | " + " | ".join(head) + " |", "|---|" + "---|" * len(threads)]
+    for call in calls:
+        cells = []
+        for t in threads:
+            rs = [r["times"][(call, t)] for r in runs if (call, t) in r["times"]]
+            cells.append(", ".join(f"{p / c:.2f}x" for p, c in rs) or "–")
+        out.append(f"| {labels.get(call, call)} | " + " | ".join(cells) + " |")
+    best = {}
+    for call in calls:
+        for t in threads:
+            rs = [r["times"][(call, t)] for r in runs if (call, t) in r["times"]]
+            if rs:
+                best[(call, t)] = min(rs, key=lambda x: x[1])
+    out += ["", "Times of the run whose C++ call was fastest, Python / C++:", "",
+            "| call | " + " | ".join(head) + " |", "|---|" + "---|" * len(threads)]
+    for call in calls:
+        cells = [f"{best[(call, t)][0]:.2f} / {best[(call, t)][1]:.2f} ms"
+                 if (call, t) in best else "–" for t in threads]
+        out.append(f"| {labels.get(call, call)} | " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
