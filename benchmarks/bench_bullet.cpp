@@ -20,6 +20,8 @@
 // updated leaf by leaf, self-collided with collideTT). A peer that keeps pairs may report stale
 // ones (Bullet removes them a few per call): its callback loop tests each pair's boxes, as a
 // Bullet user's narrow phase would, and only overlapping pairs count.
+// The cube_keep peer (self and update cases) is the cube manager with Config::keep_pairs, which
+// keeps its overlapping pairs between calls as Bullet's pair caches do.
 // The floor peer (self and update cases) is what no broadphase used through FCL's interface can
 // skip: every object's AABB copied out of its FCL object and the callback called once per pair,
 // the pairs found beforehand outside the timed region.
@@ -39,6 +41,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <iterator>
 #include <memory>
 #include <random>
@@ -247,9 +250,10 @@ struct FclObjects {
 template <class Manager>
 class FclPeer final : public Peer {
  public:
-  explicit FclPeer(FclObjects& fcl) : fcl_(fcl) {}
+  explicit FclPeer(FclObjects& fcl, std::function<std::unique_ptr<Manager>()> make = nullptr)
+      : fcl_(fcl), make_(std::move(make)) {}
   void build(const std::vector<Box>&) override {
-    mgr_ = std::make_unique<Manager>();
+    mgr_ = make_ ? make_() : std::make_unique<Manager>();
     mgr_->registerObjects(fcl_.ptrs);
     mgr_->setup();
   }
@@ -290,6 +294,7 @@ class FclPeer final : public Peer {
     return false;
   }
   FclObjects& fcl_;
+  std::function<std::unique_ptr<Manager>()> make_;  // null: default-constructed
   FclObjects* query_objs_ = nullptr;
   std::unique_ptr<Manager> mgr_;
   std::vector<Object*> moved_;
@@ -488,9 +493,11 @@ class FloorPeer final : public Peer {
 
 const char* const kPeers[] = {
     "cube",         "fcl_dyntree",      "bt_dbvt_bp",      "bt_dbvt_bp_deferred",
-    "bt_32bit_sap", "bt_dbvt_bottomup", "bt_dbvt_topdown", "floor"};
-constexpr int kNumPeers = 8;
-constexpr int kFloor = 7;
+    "bt_32bit_sap", "bt_dbvt_bottomup", "bt_dbvt_topdown", "cube_keep",
+    "floor"};
+constexpr int kNumPeers = 9;
+constexpr int kCubeKeep = 7;
+constexpr int kFloor = 8;
 
 // The scene in use and its FCL objects, one at a time (cases are registered scene by scene).
 struct Current {
@@ -550,6 +557,13 @@ std::unique_ptr<Peer> makePeer(int p, Current& c) {
       return std::make_unique<BulletTreePeer>(true);
     case 6:
       return std::make_unique<BulletTreePeer>(false);
+    case kCubeKeep:
+      // The cube manager for "move a few, collide again" loops: the pairs kept between calls.
+      return std::make_unique<FclPeer<cube::CubeCollisionManager<S>>>(c.fcl, [] {
+        cube::Config config;
+        config.keep_pairs = true;
+        return std::make_unique<cube::CubeCollisionManager<S>>(config);
+      });
     default:
       return std::make_unique<FloorPeer>(c.fcl);
   }
@@ -756,8 +770,11 @@ int main(int argc, char** argv) {
           // The sweep's proxies are inserted one by one into sorted edge lists, each insertion a
           // walk along them: quadratic too, minutes at 100,000 objects.
           if (p == 4 && n > 10000) continue;
-          // The floor has no build or queries of its own to time.
-          if (p == kFloor && (Case(ci) == Case::build || Case(ci) == Case::queries)) continue;
+          // The floor has no build or queries of its own to time; the cube manager keeping its
+          // pairs builds and answers queries as the plain one does.
+          if ((p == kFloor || p == kCubeKeep) &&
+              (Case(ci) == Case::build || Case(ci) == Case::queries))
+            continue;
           const std::string name =
               std::string(kCases[ci]) + "/" + layout + "/" + std::to_string(n) + "/" + kPeers[p];
           benchmark::RegisterBenchmark(

@@ -38,6 +38,12 @@ def bullet_text(path):
     reps = max((len(v) for v in times.values()), default=0)
     # The floor peer (copy the boxes, call the callback per pair) is in runs that measured it.
     has_floor = any(peer == "floor" for _, peer in med)
+    # The cube manager with keep_pairs, in runs that measured it: its time, and the best peer's
+    # (the plain cube manager's too) over it.
+    has_keep = any(peer == "cube_keep" for _, peer in med)
+    keep_text = (" keep_pairs: the cube manager with `Config::keep_pairs` (its pairs kept between "
+                 "calls, as Bullet's pair caches keep theirs), its time and the best other's "
+                 "(the plain cube manager's included) over it." if has_keep else "")
     floor_text = (" floor: copying every object's AABB out of its FCL object and calling the "
                   "callback once per overlapping pair (the pairs known beforehand); cube / floor "
                   "is cube's time over that." if has_floor else "")
@@ -45,10 +51,12 @@ def bullet_text(path):
            f"From `{os.path.basename(path)}` ({reps} repetitions, median wall time). Ratio = the "
            "peer's time / cube's: above 1, cube is faster. ✗: that peer missed pairs the brute "
            "force finds (their number in brackets); its time is of the wrong answer." +
-           floor_text, "",
+           floor_text + keep_text, "",
            "| case | scene | n | cube | " + " | ".join(BULLET_PEERS) + " | best peer / cube |" +
-           (" floor | cube / floor |" if has_floor else ""),
-           "|---|---|---:|---:|" + "---:|" * (len(BULLET_PEERS) + (3 if has_floor else 1))]
+           (" floor | cube / floor |" if has_floor else "") +
+           (" keep_pairs | best other / keep_pairs |" if has_keep else ""),
+           "|---|---|---:|---:|" + "---:|" * (len(BULLET_PEERS) + (3 if has_floor else 1) +
+                                               (2 if has_keep else 0))]
     for row in order:
         cube = med.get((row, "cube"))
         if cube is None:
@@ -67,8 +75,16 @@ def bullet_text(path):
         best_cell = f"{min(ratios):.2f}x" if ratios else "–"
         floor = med.get((row, "floor"))
         floor_cells = (f" {fmt_time(floor)} | {cube / floor:.2f}x |" if floor else " – | – |")
+        keep = med.get((row, "cube_keep"))
+        keep_cells = ""
+        if has_keep:
+            others = [t for (r, p), t in med.items()
+                      if r == row and p in BULLET_PEERS + ["cube"] and agree.get((r, p)) is not False]
+            keep_cells = (f" {fmt_time(keep)} | {min(others) / keep:.2f}x |" if keep and others
+                          else " – | – |")
         out.append(f"| {row[0]} | {row[1]} | {row[2]:,} | {fmt_time(cube)} | " +
-                   " | ".join(cells) + f" | {best_cell} |" + (floor_cells if has_floor else ""))
+                   " | ".join(cells) + f" | {best_cell} |" + (floor_cells if has_floor else "") +
+                   keep_cells)
     return "\n".join(out) + "\n"
 
 
