@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "core/kernels/cpu_features.h"
 #include "core/kernels/pair_kernels.h"
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -140,8 +141,7 @@ PairKernels<S> makeAvx2() {
 template <typename S>
 const PairKernels<S>* avx2Kernels() {
   static const PairKernels<S> table = makeAvx2<S>();
-  static const bool cpu_has_it = __builtin_cpu_supports("avx2");
-  return cpu_has_it ? &table : nullptr;
+  return cpuHasAvx2() ? &table : nullptr;
 }
 
 #else

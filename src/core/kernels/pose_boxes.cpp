@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/kernels/cpu_features.h"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define CUBE_POSE_AVX2 1
@@ -195,11 +197,6 @@ bool positionsPortable(const S* const* states, std::size_t count, std::size_t be
   return k;
 }
 
-bool hasAvx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
-
 #endif
 
 }  // namespace
@@ -207,7 +204,7 @@ bool hasAvx2() {
 void poseBoxes(const double* poses, std::size_t n, const PoseBoxes<double>& io) {
   std::size_t done = 0;
 #if defined(CUBE_POSE_AVX2)
-  if (hasAvx2()) done = avx2(poses, n, io);
+  if (cpuHasAvx2()) done = avx2(poses, n, io);
 #endif
   portable(poses, done, n, io);
 }
@@ -224,7 +221,7 @@ bool walkBoxes(std::size_t n, const WalkBoxes<double>& io) {
   std::size_t done = 0;
   bool ok = true;
 #if defined(CUBE_POSE_AVX2)
-  if (hasAvx2()) done = walkAvx2(n, io, ok);
+  if (cpuHasAvx2()) done = walkAvx2(n, io, ok);
 #endif
   return walkPortable(done, n, io) && ok;
 }
@@ -241,7 +238,7 @@ bool sumIsFinite(const double* x, std::size_t n) {
   std::size_t done = 0;
   double sum = 0;
 #if defined(CUBE_POSE_AVX2)
-  if (hasAvx2()) done = sumAvx2(x, n, sum);
+  if (cpuHasAvx2()) done = sumAvx2(x, n, sum);
 #endif
   return sumPortable(x, done, n, sum);
 }
@@ -249,7 +246,7 @@ bool sumIsFinite(const double* x, std::size_t n) {
 bool positionBoxes(const double* const* states, std::size_t count, std::size_t first, std::size_t n,
                    double* const lo[3], double* const hi[3]) {
 #if defined(CUBE_POSE_AVX2)
-  if (hasAvx2()) return positionsAvx2(states, count, first, first + n, lo, hi);
+  if (cpuHasAvx2()) return positionsAvx2(states, count, first, first + n, lo, hi);
 #endif
   return positionsPortable(states, count, first, first + n, lo, hi);
 }

@@ -6,6 +6,8 @@
 
 #include <cmath>
 
+#include "core/kernels/cpu_features.h"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define CUBE_RIGID_AVX2 1
@@ -110,18 +112,13 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
   return n;
 }
 
-bool hasAvx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
-
 #endif
 
 }  // namespace
 
 std::size_t rigidRows(const double* rows, std::size_t n, double* cols) {
 #if defined(CUBE_RIGID_AVX2)
-  if (hasAvx2()) return avx2(rows, n, cols);
+  if (cpuHasAvx2()) return avx2(rows, n, cols);
 #endif
   return portable(rows, 0, n, cols);
 }
