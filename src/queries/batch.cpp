@@ -93,6 +93,7 @@ struct MotionScratch {
       : checker(world, links),
         raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {
     poses.reserve(run_states * links.size());
+    memo.after.resize(continuous ? links.size() : 0);
   }
   // Room for the links' poses of the j-th state of a run (j < run_states). Made on first use: an
   // edge that collides early reads a few of its states, and making a run's room at once wrote

@@ -89,7 +89,7 @@ bool raiseAt(std::size_t n, std::size_t k, std::size_t begin, std::size_t end, c
 // it, checked next in path order, reads them again as its interval before.
 template <typename S>
 struct RaiseMemo {
-  std::vector<S> after;             // per link
+  std::vector<S> after;             // per link (sized by the scratch that holds it)
   std::size_t interval = SIZE_MAX;  // its first state; SIZE_MAX: none
 };
 
@@ -123,25 +123,17 @@ struct Se3Raise {
     const fcl::Transform3<S>* prev = before && !known ? poses_of(state - 1) : nullptr;
     const fcl::Transform3<S>* cur = poses_of(state);
     const fcl::Transform3<S>* next = after ? poses_of(state + 1) : nullptr;
-    memo.after.resize(n);
-    S finite = 0;  // x - x: 0 for a finite x, NaN otherwise
-    for (std::size_t l = 0; l < n; ++l) {
-      S b = 0;
-      if (before) {
-        const S back = known ? memo.after[l] : se3MotionBound(prev[l], cur[l], reach[l]);
-        finite += back - back;
-        b = back;
-      }
-      if (after) {
-        const S ahead = se3MotionBound(cur[l], next[l], reach[l]);
-        finite += ahead - ahead;
-        b = std::max(b, ahead);
-        memo.after[l] = ahead;
-      }
-      raise[l] = S(0.5) * b;
-    }
+    // The interval before from the memo where it holds it; the one after into it.
+    const bool finite = raiseAt<S>(
+        n, state, begin, end,
+        [&](std::size_t k, std::size_t l) {
+          if (k + 1 == state)
+            return known ? memo.after[l] : se3MotionBound(prev[l], cur[l], reach[l]);
+          return memo.after[l] = se3MotionBound(cur[l], next[l], reach[l]);
+        },
+        raise);
     memo.interval = after ? state : SIZE_MAX;
-    if (finite == S(0)) return;
+    if (finite) return;
     // A pose read is NaN or infinite: the first such in pose order (a NaN bound comes from one).
     if (before && prev == nullptr) prev = poses_of(state - 1);
     const fcl::Transform3<S>* near[3] = {prev, cur, next};
