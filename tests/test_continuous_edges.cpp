@@ -481,7 +481,26 @@ TEST(ContinuousEdges, BadBoundsThrowAndChangeNothing) {
     bad[n + 2] = value;
     expectThrow(bad, "motion bound " + std::to_string(n + 2));
   }
+  // A view with values but no pointer.
+  for (int overload = 0; overload < 2; ++overload) {
+    try {
+      const cube::MotionBounds<S> null_view(nullptr, bounds.size());
+      if (overload == 0) cube::checkMotion(w.manager, body, poses, null_view);
+      if (overload == 1) cube::checkMotion(w.manager, body, e.states, pose_of, null_view);
+      ADD_FAILURE() << "no throw for a null pointer";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("null"), std::string::npos) << error.what();
+    }
+  }
   EXPECT_EQ(calls.load(), 0);
+  // Bounds read in place from the middle of a larger buffer answer as the vector does.
+  std::vector<S> buffer(bounds.size() + 7, std::nan(""));
+  std::copy(bounds.begin(), bounds.end(), buffer.begin() + 3);
+  const cube::MotionBounds<S> view(buffer.data() + 3, bounds.size());
+  EXPECT_EQ(cube::checkMotion(w.manager, body, poses, view), before);
+  EXPECT_EQ(cube::checkMotion(w.manager, body, e.states, pose_of, view), before);
+  EXPECT_EQ(cube::checkMotions(w.manager, body, poses, {0}, view), std::vector<std::size_t>{before});
+  calls = 0;
   // A NaN pose next to a state the SE(3) bounds read throws, naming it, from the array and
   // from a pose function.
   cube::BatchOptions o;

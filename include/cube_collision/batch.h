@@ -32,6 +32,20 @@ struct NoDeduce {
 };
 }  // namespace detail
 
+/// The caller's motion bounds of a continuous check, read in place: `size` values from `data`
+/// (state-major, as the overloads that take them say), valid for the call. A std::vector
+/// converts to it; other storage (a numpy array, a planner's buffer) gives its pointer and count.
+template <typename S>
+struct MotionBounds {
+  const S* data = nullptr;
+  std::size_t size = 0;
+  MotionBounds() = default;
+  /// The values of `v`, which must outlive the call.
+  MotionBounds(const std::vector<S>& v) : data(v.data()), size(v.size()) {}  // NOLINT: implicit
+  /// `count` values from `values` (null only with count 0).
+  MotionBounds(const S* values, std::size_t count) : data(values), size(count) {}
+};
+
 /// "No such state, link or object".
 inline constexpr std::size_t kNoIndex = std::numeric_limits<std::size_t>::max();
 
@@ -295,21 +309,22 @@ std::vector<std::size_t> checkMotions(
 
 /// checkMotions with continuous checking (see above) and the caller's bounds: motion_bounds[k *
 /// body.size() + l] bounds link l's motion from state k to state k + 1 of the same edge, one
-/// value per pose of `poses` (those of each edge's last state are not used). Throws
-/// std::invalid_argument as checkMotions, and for motion bounds whose size is not poses.size() or
-/// with a negative, NaN or infinite value (naming the first), before any work.
+/// value per pose of `poses` (those of each edge's last state are not used), read in place (see
+/// MotionBounds). Throws std::invalid_argument as checkMotions, and for motion bounds whose size
+/// is not poses.size(), with a null pointer, or with a negative, NaN or infinite value (naming
+/// the first), before any work.
 template <typename S>
 std::vector<std::size_t> checkMotions(
     const CubeCollisionManager<S>& world, const BodySet<S>& body,
     const std::vector<fcl::Transform3<S>>& poses, const std::vector<std::size_t>& edge_starts,
-    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+    const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
     MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
 
 /// checkMotions with the caller's motion bounds for one edge made of all the states of `poses`.
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         const std::vector<fcl::Transform3<S>>& poses,
-                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 
@@ -319,26 +334,26 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 /// check reads are written, as checkMotions over a PoseFunction says; the same answers as
 /// checkMotions over all the poses with these bounds, whatever the thread count. Throws
 /// std::invalid_argument as that overload (but checks continuously whatever
-/// BatchOptions::continuous says), and for bounds of another size or with a negative, NaN or
-/// infinite value, naming the first, before any work.
+/// BatchOptions::continuous says), and for bounds of another size, with a null pointer or with a
+/// negative, NaN or infinite value, naming the first, before any work.
 template <typename S>
 std::vector<std::size_t> checkMotions(
     const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
     const std::vector<std::size_t>& edge_starts,
     const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
-    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+    const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
     MotionOrder order = MotionOrder::path, const BatchOptions& options = BatchOptions());
 
 /// checkMotion over a PoseFunction with continuous checking and the caller's motion bounds:
 /// motion_bounds[k * body.size() + l] for link l from state k to k + 1, states * body.size()
 /// values (the last state's not used). Throws std::invalid_argument as the overload without
-/// bounds, and for bounds of another size or with a negative, NaN or infinite value, naming the
-/// first, before any work.
+/// bounds, and for bounds of another size, with a null pointer or with a negative, NaN or infinite
+/// value, naming the first, before any work.
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
                         const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
-                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
                         MotionOrder order = MotionOrder::path,
                         const BatchOptions& options = BatchOptions());
 

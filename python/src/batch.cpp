@@ -87,24 +87,25 @@ class BadPoses {
   std::map<std::size_t, std::string> bad_;  // pose index -> its error
 };
 
-// motion_bounds in the library's layout (state-major: k * links + l), checked while copied:
-// shape (states, links), every value finite and >= 0 (ValueError naming the first other one).
-std::vector<double> motionBounds(py::handle obj, std::size_t states, std::size_t links) {
-  const Array b =
-      floats(obj, "motion_bounds",
-             {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
+// motion_bounds in the library's layout (state-major: k * links + l), read in place by the call
+// (no copy): shape (states, links), every value finite and >= 0 (ValueError naming the first
+// other one).
+Array motionBounds(py::handle obj, std::size_t states, std::size_t links) {
+  Array b = floats(obj, "motion_bounds",
+                   {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
   const double* d = b.data();
-  std::vector<double> out(d, d + states * links);
+  const std::size_t count = states * links;
   // One pass without a branch per value (NaN fails both tests), the offender sought only then.
   bool ok = true;
-  for (const double v : out) ok &= (v >= 0) & (v <= std::numeric_limits<double>::max());
-  if (ok) return out;
-  for (std::size_t i = 0; i < out.size(); ++i)
-    if (!(out[i] >= 0) || !std::isfinite(out[i]))
+  for (std::size_t i = 0; i < count; ++i)
+    ok &= (d[i] >= 0) & (d[i] <= std::numeric_limits<double>::max());
+  if (ok) return b;
+  for (std::size_t i = 0; i < count; ++i)
+    if (!(d[i] >= 0) || !std::isfinite(d[i]))
       throw py::value_error("motion_bounds[" + std::to_string(i / links) + ", " +
-                            std::to_string(i % links) + "] is " + std::to_string(out[i]) +
+                            std::to_string(i % links) + "] is " + std::to_string(d[i]) +
                             ": each bound must be finite and >= 0");
-  return out;
+  return b;
 }
 
 void needCube(const Manager& m, const char* what) {
@@ -207,8 +208,9 @@ TypeError (non-numeric poses).)doc")
             else
               throw py::value_error("order must be 'path' or 'bisection'");
             const bool given = !motion_bounds.is_none();
-            const std::vector<double> bounds =
-                given ? motionBounds(motion_bounds, states, n) : std::vector<double>();
+            const Array bounds = given ? motionBounds(motion_bounds, states, n) : Array();
+            const cube::MotionBounds<double> view(given ? bounds.data() : nullptr,
+                                                  given ? states * n : 0);
             cube::BatchOptions opt;
             opt.self_collision = self_collision;
             opt.continuous = continuous;
@@ -228,7 +230,7 @@ TypeError (non-numeric poses).)doc")
                 // bounds, their neighbours too).
                 try {
                   if (given) {
-                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, bounds,
+                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, view,
                                                      mo, opt);
                   } else {
                     res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, mo, opt);

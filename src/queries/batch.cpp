@@ -415,7 +415,7 @@ template <typename S>
 std::vector<std::size_t> checkMotions(
     const CubeCollisionManager<S>& world, const BodySet<S>& body,
     const std::vector<fcl::Transform3<S>>& poses, const std::vector<std::size_t>& edge_starts,
-    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds, MotionOrder order,
+    const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds, MotionOrder order,
     const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
   const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
@@ -430,7 +430,7 @@ std::vector<std::size_t> checkMotions(
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         const std::vector<fcl::Transform3<S>>& poses,
-                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
                         MotionOrder order, const BatchOptions& options) {
   const std::vector<std::size_t> starts =
       poses.empty() ? std::vector<std::size_t>{} : std::vector<std::size_t>{0};
@@ -509,7 +509,7 @@ std::vector<std::size_t> checkMotions(
     const CubeCollisionManager<S>& world, const BodySet<S>& body, std::size_t states,
     const std::vector<std::size_t>& edge_starts,
     const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
-    const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds, MotionOrder order,
+    const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds, MotionOrder order,
     const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
   detail::checkPoseEdges(links, states, edge_starts, pose_of);
@@ -528,7 +528,7 @@ template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,
                         const typename detail::NoDeduce<PoseFunction<S>>::type& pose_of,
-                        const typename detail::NoDeduce<std::vector<S>>::type& motion_bounds,
+                        const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
                         MotionOrder order, const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
   if (links.size() == 0) batchError("checkMotion", "the body set has no link");
@@ -561,13 +561,13 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                                       const BatchOptions&);                                       \
   template std::vector<std::size_t> checkMotions<S>(                                              \
       const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
-      const std::vector<std::size_t>&, const std::vector<S>&, MotionOrder, const BatchOptions&);  \
+      const std::vector<std::size_t>&, const MotionBounds<S>&, MotionOrder, const BatchOptions&);  \
   template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
                                       const std::vector<fcl::Transform3<S>>&,                     \
-                                      const std::vector<S>&, MotionOrder, const BatchOptions&);   \
+                                      const MotionBounds<S>&, MotionOrder, const BatchOptions&);   \
   template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
-                                      std::size_t, const PoseFunction<S>&, const std::vector<S>&, \
-                                      MotionOrder, const BatchOptions&);                          \
+                                      std::size_t, const PoseFunction<S>&,                        \
+                                      const MotionBounds<S>&, MotionOrder, const BatchOptions&);  \
   template std::vector<StateResult<S>> checkStates<S>(                                            \
       const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t, const PoseFunction<S>&,     \
       const BatchOptions&);                                                                       \
@@ -581,7 +581,7 @@ CUBE_INSTANTIATE_BATCH(float)
 #define CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(S)                                                      \
   template std::vector<std::size_t> checkMotions<S>(                                               \
       const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                              \
-      const std::vector<std::size_t>&, const PoseFunction<S>&, const std::vector<S>&, MotionOrder, \
+      const std::vector<std::size_t>&, const PoseFunction<S>&, const MotionBounds<S>&, MotionOrder, \
       const BatchOptions&);
 CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(double)
 CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(float)

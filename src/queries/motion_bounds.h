@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -49,16 +50,23 @@ S se3MotionBound(const fcl::Transform3<S>& a, const fcl::Transform3<S>& b, S rea
   return (b.translation() - a.translation()).norm() + angle * reach;
 }
 
-// Throws unless `bounds` holds `expected` finite values >= 0.
+// Throws unless `bounds` holds `expected` finite values >= 0 (and a pointer where it holds any).
 template <typename S>
-void checkMotionBounds(const std::vector<S>& bounds, std::size_t expected, const char* where) {
-  if (bounds.size() != expected)
-    batchError(where, "motion_bounds has " + std::to_string(bounds.size()) +
+void checkMotionBounds(const MotionBounds<S>& bounds, std::size_t expected, const char* where) {
+  if (bounds.size != expected)
+    batchError(where, "motion_bounds has " + std::to_string(bounds.size) +
                           " values where the states need " + std::to_string(expected));
-  for (std::size_t i = 0; i < bounds.size(); ++i)
-    if (!(bounds[i] >= S(0)) || !std::isfinite(bounds[i]))
-      batchError(where, "motion bound " + std::to_string(i) + " (" + std::to_string(bounds[i]) +
-                            ") is negative, NaN or infinite");
+  if (bounds.size != 0 && bounds.data == nullptr)
+    batchError(where, "motion_bounds has a null pointer");
+  // One pass without a branch per value (NaN fails both tests); the offender sought only then.
+  bool ok = true;
+  for (std::size_t i = 0; i < bounds.size; ++i)
+    ok &= (bounds.data[i] >= S(0)) & (bounds.data[i] <= std::numeric_limits<S>::max());
+  if (ok) return;
+  for (std::size_t i = 0; i < bounds.size; ++i)
+    if (!(bounds.data[i] >= S(0)) || !std::isfinite(bounds.data[i]))
+      batchError(where, "motion bound " + std::to_string(i) + " (" +
+                            std::to_string(bounds.data[i]) + ") is negative, NaN or infinite");
 }
 
 // Link l's margin raise at state k of the edge [begin, end) given bound(j, l) of the interval
@@ -96,13 +104,13 @@ struct RaiseMemo {
 // Raises from the caller's bounds, bounds[k * n + l] for link l from state k to k + 1.
 template <typename S>
 struct GivenRaise {
-  const std::vector<S>& bounds;
+  MotionBounds<S> bounds;
   std::size_t n;
   template <class PosesOf>
   void operator()(std::size_t state, std::size_t begin, std::size_t end, S* raise, std::size_t&,
                   const PosesOf&, RaiseMemo<S>&) const {
     raiseAt<S>(
-        n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds[k * n + l]; },
+        n, state, begin, end, [&](std::size_t k, std::size_t l) { return bounds.data[k * n + l]; },
         raise);
   }
 };
