@@ -499,7 +499,8 @@ TEST(ContinuousEdges, BadBoundsThrowAndChangeNothing) {
   const cube::MotionBounds<S> view(buffer.data() + 3, bounds.size());
   EXPECT_EQ(cube::checkMotion(w.manager, body, poses, view), before);
   EXPECT_EQ(cube::checkMotion(w.manager, body, e.states, pose_of, view), before);
-  EXPECT_EQ(cube::checkMotions(w.manager, body, poses, {0}, view), std::vector<std::size_t>{before});
+  EXPECT_EQ(cube::checkMotions(w.manager, body, poses, {0}, view),
+            std::vector<std::size_t>{before});
   calls = 0;
   // A NaN pose next to a state the SE(3) bounds read throws, naming it, from the array and
   // from a pose function.

@@ -230,8 +230,8 @@ TypeError (non-numeric poses).)doc")
                 // bounds, their neighbours too).
                 try {
                   if (given) {
-                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, view,
-                                                     mo, opt);
+                    res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, view, mo,
+                                                     opt);
                   } else {
                     res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, mo, opt);
                   }

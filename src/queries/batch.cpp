@@ -546,43 +546,43 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
       detail::GivenRaise<S>{motion_bounds, links.size()})[0];
 }
 
-#define CUBE_INSTANTIATE_BATCH(S)                                                                 \
-  template std::vector<StateResult<S>> checkStates<S>(                                            \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
-      const BatchOptions&);                                                                       \
-  template std::vector<std::size_t> checkMotions<S>(                                              \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
-      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                         \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
-                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,        \
-                                      const BatchOptions&);                                       \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
-                                      std::size_t, const PoseFunction<S>&, MotionOrder,           \
-                                      const BatchOptions&);                                       \
-  template std::vector<std::size_t> checkMotions<S>(                                              \
-      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,  \
+#define CUBE_INSTANTIATE_BATCH(S)                                                                  \
+  template std::vector<StateResult<S>> checkStates<S>(                                             \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,   \
+      const BatchOptions&);                                                                        \
+  template std::vector<std::size_t> checkMotions<S>(                                               \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,   \
+      const std::vector<std::size_t>&, MotionOrder, const BatchOptions&);                          \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,           \
+                                      const std::vector<fcl::Transform3<S>>&, MotionOrder,         \
+                                      const BatchOptions&);                                        \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,           \
+                                      std::size_t, const PoseFunction<S>&, MotionOrder,            \
+                                      const BatchOptions&);                                        \
+  template std::vector<std::size_t> checkMotions<S>(                                               \
+      const CubeCollisionManager<S>&, const BodySet<S>&, const std::vector<fcl::Transform3<S>>&,   \
       const std::vector<std::size_t>&, const MotionBounds<S>&, MotionOrder, const BatchOptions&);  \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
-                                      const std::vector<fcl::Transform3<S>>&,                     \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,           \
+                                      const std::vector<fcl::Transform3<S>>&,                      \
                                       const MotionBounds<S>&, MotionOrder, const BatchOptions&);   \
-  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,          \
-                                      std::size_t, const PoseFunction<S>&,                        \
-                                      const MotionBounds<S>&, MotionOrder, const BatchOptions&);  \
-  template std::vector<StateResult<S>> checkStates<S>(                                            \
-      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t, const PoseFunction<S>&,     \
-      const BatchOptions&);                                                                       \
-  template std::vector<std::size_t> checkMotions<S>(                                              \
-      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                             \
+  template std::size_t checkMotion<S>(const CubeCollisionManager<S>&, const BodySet<S>&,           \
+                                      std::size_t, const PoseFunction<S>&, const MotionBounds<S>&, \
+                                      MotionOrder, const BatchOptions&);                           \
+  template std::vector<StateResult<S>> checkStates<S>(                                             \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t, const PoseFunction<S>&,      \
+      const BatchOptions&);                                                                        \
+  template std::vector<std::size_t> checkMotions<S>(                                               \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                              \
       const std::vector<std::size_t>&, const PoseFunction<S>&, MotionOrder, const BatchOptions&);
 CUBE_INSTANTIATE_BATCH(double)
 CUBE_INSTANTIATE_BATCH(float)
 #undef CUBE_INSTANTIATE_BATCH
 
-#define CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(S)                                                      \
-  template std::vector<std::size_t> checkMotions<S>(                                               \
-      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                              \
-      const std::vector<std::size_t>&, const PoseFunction<S>&, const MotionBounds<S>&, MotionOrder, \
-      const BatchOptions&);
+#define CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(S)                                          \
+  template std::vector<std::size_t> checkMotions<S>(                                   \
+      const CubeCollisionManager<S>&, const BodySet<S>&, std::size_t,                  \
+      const std::vector<std::size_t>&, const PoseFunction<S>&, const MotionBounds<S>&, \
+      MotionOrder, const BatchOptions&);
 CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(double)
 CUBE_INSTANTIATE_BATCH_POSE_BOUNDS(float)
 #undef CUBE_INSTANTIATE_BATCH_POSE_BOUNDS
