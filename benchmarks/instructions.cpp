@@ -12,7 +12,9 @@
 // of the objects moved, update(), 10 steps), distance (10 object distances, FCL's narrow phase),
 // contacts (collideAll self-collide, FCL's narrow phase), states (checkStates of 50 states of a
 // 30-link robot, one thread), edges (checkMotions of 20 collision-free edges of 32 states of that
-// robot, one thread), single (the states of states, one call each), first (the first pipeline query
+// robot, one thread), single (the states of states, one call each), singlekept (the same with one
+// BatchScratch kept for every call), edgeeach / edgekept (the edges of edges, one checkMotion
+// over a pose function each, without / with a kept BatchScratch), first (the first pipeline query
 // of a manager: collideAll with FCL's default request, which builds the per-object volumes), still
 // (update() with nothing moved, then a self-collide, counting callback, 10 steps), keep (the same
 // with Config::keep_pairs and 1% of the objects moved before each step, the motion not counted),
@@ -113,7 +115,8 @@ int main(int argc, char** argv) {
   world.setup();
   Run run;
   if (which == "distance" || which == "contacts" || which == "states" || which == "edges" ||
-      which == "single" || which == "long")
+      which == "single" || which == "long" || which == "singlekept" || which == "edgeeach" ||
+      which == "edgekept")
     cube::collideAll<S>(world);  // the volumes the first pipeline query builds ("first")
 
   if (which == "self") {
@@ -204,7 +207,8 @@ int main(int argc, char** argv) {
     run.checksum = cube::collideAll<S>(world, all, one).numContacts();
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = 1;
-  } else if (which == "states" || which == "edges" || which == "single" || which == "long") {
+  } else if (which == "states" || which == "edges" || which == "single" || which == "long" ||
+             which == "singlekept" || which == "edgeeach" || which == "edgekept") {
     // states: 50 random states; edges: 20 edges of 32 states each, joints interpolated between
     // a random state and one near it (a planner's edges), checked in path order; long: 50
     // random states of links 8 typical sizes long among meshes (most states meet several).
@@ -229,7 +233,7 @@ int main(int argc, char** argv) {
         t.translate(fcl::Vector3d(0, 0, len));
       }
     };
-    const bool edges = which == "edges";
+    const bool edges = which == "edges" || which == "edgeeach" || which == "edgekept";
     const int count = edges ? 20 : 50, per_edge = edges ? 32 : 1;
     std::vector<std::size_t> starts;
     cube::BatchOptions probe;
@@ -263,12 +267,27 @@ int main(int argc, char** argv) {
     }
     cube::BatchOptions one;
     one.threads = 1;
+    cube::BatchScratch kept;
+    if (which == "singlekept" || which == "edgekept") one.scratch = &kept;
     CALLGRIND_START_INSTRUMENTATION;
-    if (edges) {
+    if (which == "edgeeach" || which == "edgekept") {  // each edge a call of its own
+      for (std::size_t e = 0; e < starts.size(); ++e) {
+        const std::size_t from = starts[e] * 30;
+        const std::size_t to = e + 1 < starts.size() ? starts[e + 1] * 30 : poses.size();
+        const std::size_t n = (to - from) / 30;
+        const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* out) {
+          std::copy(poses.begin() + long(from + 30 * k), poses.begin() + long(from + 30 * k + 30),
+                    out);
+        };
+        const std::size_t f =
+            cube::checkMotion(world, body, n, pose_of, cube::MotionOrder::path, one);
+        run.checksum += f == cube::kNoIndex ? 0 : f + 1;
+      }
+    } else if (edges) {
       for (const std::size_t f :
            cube::checkMotions(world, body, poses, starts, cube::MotionOrder::path, one))
         run.checksum += f == cube::kNoIndex ? 0 : f + 1;
-    } else if (which == "single") {  // each state a call of its own
+    } else if (which == "single" || which == "singlekept") {  // each state a call of its own
       for (std::size_t k = 0; k < poses.size(); k += 30) {
         const std::vector<fcl::Transform3d> state(poses.begin() + long(k),
                                                   poses.begin() + long(k) + 30);

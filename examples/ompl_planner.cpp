@@ -136,6 +136,14 @@ class CheckClock {
 
 // ---- Checkers built on the batched checks ------------------------------------------------------
 
+// The set-up the checks keep between calls (cube::BatchScratch), one per planner thread: OMPL
+// may call a checker from several threads at once, and a scratch serves one call at a time.
+cube::BatchOptions withThreadScratch(cube::BatchOptions options) {
+  thread_local cube::BatchScratch scratch;
+  options.scratch = &scratch;
+  return options;
+}
+
 class CubeValidity final : public ob::StateValidityChecker {
  public:
   CubeValidity(const ob::SpaceInformationPtr& si, const cube::CubeCollisionManagerd& world,
@@ -148,7 +156,7 @@ class CubeValidity final : public ob::StateValidityChecker {
     const CheckClock::Scope timed(clock_);
     Poses poses(kJoints);  // const and thread-safe, as OMPL asks: no member is written
     forwardKinematics(jointsOf(s), poses.data());
-    return !cube::checkStates(world_, body_, poses, options_)[0].colliding;
+    return !cube::checkStates(world_, body_, poses, withThreadScratch(options_))[0].colliding;
   }
 
  private:
@@ -219,15 +227,16 @@ class CubeMotion final : public ob::MotionValidator {
     };
     const std::size_t states = std::size_t(nd) + 1 - first_j;
     states_ += states;
+    const cube::BatchOptions options = withThreadScratch(options_);
     if (refine_ == 0)
-      return {cube::checkMotion(world_, body_, states, pose_of, order, options_), nd};
+      return {cube::checkMotion(world_, body_, states, pose_of, order, options), nd};
     std::vector<S> bounds(states * kJoints);
     for (int l = 0; l < kJoints; ++l) {
       double b = 0;
       for (int j = 0; j <= l; ++j) b += std::abs(to[j] - from[j]) * (l - j + 1.01) * kLength;
       for (std::size_t k = 0; k < states; ++k) bounds[k * kJoints + l] = b / double(nd);
     }
-    return {cube::checkMotion(world_, body_, states, pose_of, bounds, order, options_), nd};
+    return {cube::checkMotion(world_, body_, states, pose_of, bounds, order, options), nd};
   }
 
   const cube::CubeCollisionManagerd& world_;

@@ -25,6 +25,8 @@
 namespace cube {
 namespace detail {
 struct BodyAccess;
+struct ScratchSlots;
+struct ScratchAccess;
 /// T as a parameter type that takes no part in deducing S (a lambda converts to it).
 template <class T>
 struct NoDeduce {
@@ -92,6 +94,33 @@ class BodySet {
   std::unique_ptr<Links> links_;
 };
 
+/// What a batched check sets up on the calling thread (the links' objects and records, the
+/// walks' buffers), kept from one call to the next: a planner that checks a state or a short edge
+/// per call passes the same BatchScratch (BatchOptions::scratch) to each of its calls on a thread
+/// and skips that set-up, a sizeable share of a call of a few states. Answers never depend on
+/// it. A call whose world, body or scalar type differs from the last one's, or whose body
+/// changed since (addLink, excludePair), sets up anew (and keeps that). Only the calling
+/// thread's share of a call uses it; a call's other threads set up their own. One call at a
+/// time: a call that finds it in use (another thread's call, or a call made from inside a call
+/// that uses it) throws std::logic_error before any work. It holds no reference a caller must
+/// keep alive: a world or body destroyed between calls is never read again through it.
+class BatchScratch {
+ public:
+  BatchScratch();
+  ~BatchScratch();
+  BatchScratch(BatchScratch&& other) noexcept;
+  BatchScratch& operator=(BatchScratch&& other) noexcept;
+  BatchScratch(const BatchScratch&) = delete;
+  BatchScratch& operator=(const BatchScratch&) = delete;
+  /// Frees what it holds; the next call sets up anew. Throws std::logic_error while a call uses
+  /// it.
+  void release();
+
+ private:
+  friend struct detail::ScratchAccess;
+  std::unique_ptr<detail::ScratchSlots> slots_;
+};
+
 /// What checkStates and checkMotion compute, beyond "colliding or not".
 struct BatchOptions {
   /// Also check the links against each other (pairs not excluded by BodySet::excludePair).
@@ -117,6 +146,9 @@ struct BatchOptions {
   /// no bounds compute them from the poses it writes (PoseFunction: a checked state's neighbours
   /// are written too).
   bool continuous = false;
+  /// Set-up kept between calls on the calling thread (see BatchScratch); null: made for the call
+  /// and freed after it.
+  BatchScratch* scratch = nullptr;
 };
 
 /// One state's answer.

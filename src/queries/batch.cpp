@@ -9,8 +9,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cassert>
+#include <exception>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 
@@ -76,9 +79,8 @@ void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visi
 }  // namespace detail
 
 namespace detail {
-namespace {
 
-// One thread's scratch of a motion check: the checker and, for poses written on demand, room
+// One thread's scratch of a batched check: the checker and, for poses written on demand, room
 // for the states of one run; for a continuous check, room for a state's margin raises.
 template <typename S>
 struct MotionScratch {
@@ -90,10 +92,18 @@ struct MotionScratch {
   // for the raises of a run.
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states,
                 bool continuous)
-      : checker(world, links),
-        raise(continuous ? StateChecker<S>::kGroupStates * links.size() : 0) {
-    poses.reserve(run_states * links.size());
-    memo.after.resize(continuous ? links.size() : 0);
+      : checker(world, links) {
+    prepare(run_states, continuous, links.size());
+  }
+  // Ready for a call with these needs; nothing an earlier call wrote is read again (no pose, no
+  // memo).
+  void prepare(std::size_t run_states, bool continuous, std::size_t n) {
+    poses.clear();
+    if (poses.capacity() < run_states * n) poses.reserve(run_states * n);
+    if (continuous && raise.size() < StateChecker<S>::kGroupStates * n)
+      raise.resize(StateChecker<S>::kGroupStates * n);
+    memo.after.resize(continuous ? n : 0);
+    memo.interval = SIZE_MAX;
   }
   // Room for the links' poses of the j-th state of a run (j < run_states). Made on first use: an
   // edge that collides early reads a few of its states, and making a run's room at once wrote
@@ -104,6 +114,118 @@ struct MotionScratch {
     return poses.data() + j * links;
   }
 };
+
+// A BatchScratch's kept scratch and the world and links it was made for.
+template <typename S>
+struct ScratchSlot {
+  std::unique_ptr<MotionScratch<S>> scratch;
+  const Broadphase<S>* world = nullptr;
+  const Links<S>* links = nullptr;
+  std::uint64_t generation = 0;
+};
+
+struct ScratchSlots {
+  std::atomic<bool> busy{false};
+  ScratchSlot<float> for_float;
+  ScratchSlot<double> for_double;
+  template <typename S>
+  ScratchSlot<S>& slot() {
+    if constexpr (std::is_same<S, float>::value)
+      return for_float;
+    else
+      return for_double;
+  }
+};
+
+struct ScratchAccess {
+  static ScratchSlots& slots(BatchScratch& s) {
+    if (s.slots_ == nullptr) s.slots_ = std::make_unique<ScratchSlots>();  // a moved-from one
+    return *s.slots_;
+  }
+};
+
+// A thread's scratch in a call: its own, or the calling thread's (owned by CallerScratch).
+template <typename S>
+struct ScratchHandle {
+  std::unique_ptr<MotionScratch<S>> own;
+  MotionScratch<S>* at = nullptr;
+  MotionScratch<S>& operator*() const { return *at; }
+  MotionScratch<S>* operator->() const { return at; }
+};
+
+// The calling thread's scratch for one call: the one BatchOptions::scratch kept, where it was
+// made for this world and these links (rebound to the world as it is now), else made; given back
+// to it when the call returns (not when it throws: its state is then not trusted).
+template <typename S>
+class CallerScratch {
+ public:
+  CallerScratch(const BatchOptions& options, const Broadphase<S>& world, const Links<S>& links,
+                std::size_t run_states, bool continuous, const char* where)
+      : world_(world),
+        links_(links),
+        run_states_(run_states),
+        continuous_(continuous),
+        thread_(std::this_thread::get_id()) {
+    if (options.scratch == nullptr) return;
+    ScratchSlots& slots = ScratchAccess::slots(*options.scratch);
+    if (slots.busy.exchange(true, std::memory_order_acquire))
+      throw std::logic_error(std::string("cube::") + where +
+                             ": its BatchScratch is in use by another call");
+    slots_ = &slots;
+    ScratchSlot<S>& kept = slots.slot<S>();
+    if (kept.scratch != nullptr && kept.world == &world && kept.links == &links &&
+        kept.generation == links.generation) {
+      held_ = std::move(kept.scratch);
+      held_->checker.rebind();
+      held_->checker.openScope();
+      held_->prepare(run_states, continuous, links.size());
+    }
+    kept.scratch.reset();  // one made for another world or body: freed now
+  }
+  ~CallerScratch() {
+    if (slots_ == nullptr) return;
+    if (held_ != nullptr && std::uncaught_exceptions() == exceptions_) {
+      held_->checker.closeScope();
+      ScratchSlot<S>& kept = slots_->slot<S>();
+      kept.scratch = std::move(held_);
+      kept.world = &world_;
+      kept.links = &links_;
+      kept.generation = links_.generation;
+    }
+    held_.reset();
+    slots_->busy.store(false, std::memory_order_release);
+  }
+  CallerScratch(const CallerScratch&) = delete;
+  CallerScratch& operator=(const CallerScratch&) = delete;
+
+  // The calling thread's scratch (made on first use); another thread's own, made for it.
+  ScratchHandle<S> forThisThread() {
+    ScratchHandle<S> h;
+    if (std::this_thread::get_id() != thread_) {
+      h.own = make();
+      h.at = h.own.get();
+      return h;
+    }
+    if (held_ == nullptr) held_ = make();
+    h.at = held_.get();
+    return h;
+  }
+
+ private:
+  std::unique_ptr<MotionScratch<S>> make() const {
+    return std::make_unique<MotionScratch<S>>(world_, links_, run_states_, continuous_);
+  }
+  const Broadphase<S>& world_;
+  const Links<S>& links_;
+  const std::size_t run_states_;
+  const bool continuous_;
+  const std::thread::id thread_;
+  const int exceptions_ = std::uncaught_exceptions();
+  ScratchSlots* slots_ = nullptr;
+  std::unique_ptr<MotionScratch<S>> held_;
+};
+
+namespace {
 
 // checkStates over `states` states whose poses pose_at(scratch, state, j) gives (the j-th state
 // of a run), into `out`: runs of consecutive states, placed together where they lie close
@@ -133,10 +255,9 @@ void checkStateRuns(const Broadphase<S>& core, const Links<S>& links, std::size_
       done += took;
     }
   };
-  parallelForWith(
-      (states + kRun - 1) / kRun, batchThreads(states, options.threads), 1,
-      [&] { return std::make_unique<MotionScratch<S>>(core, links, run_states, false); },
-      check_run);
+  CallerScratch<S> caller(options, core, links, run_states, false, "checkStates");
+  parallelForWith((states + kRun - 1) / kRun, batchThreads(states, options.threads), 1,
+                  [&] { return caller.forThisThread(); }, check_run);
 }
 
 // A discrete check: no state's margins raised.
@@ -213,9 +334,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   const std::size_t run_states = !on_demand   ? 0
                                  : continuous ? kRun + 2
                                               : std::min(longest, StateChecker<S>::kGroupStates);
-  const auto make = [&] {
-    return std::make_unique<MotionScratch<S>>(core, links, run_states, continuous);
-  };
+  CallerScratch<S> caller(options, core, links, run_states, continuous, "checkMotions");
   // The states of run r in rank order, up to the edge's first collision; the number checked.
   const auto check = [&](auto& scratch, std::size_t r) -> std::size_t {
     const Run& run = runs[r];
@@ -301,7 +420,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   int team = 1;
   // The calling thread's checker: made once, kept for its share of a region (a checker costs
   // as much to make as tens of states).
-  std::unique_ptr<MotionScratch<S>> mine = make();
+  ScratchHandle<S> mine = caller.forThisThread();
   {
     auto& scratch = mine;
     const std::size_t prefix = edges == 1 ? kMotionSerialStates : 0;
@@ -320,10 +439,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   if (next < runs.size())
     parallelForWith(
         runs.size() - next, team, 1,
-        [&]() -> std::unique_ptr<MotionScratch<S>> {
-          if (omp_get_thread_num() == 0 && mine) return std::move(mine);
-          return make();
-        },
+        [&] { return caller.forThisThread(); },
         [&](auto& scratch, std::size_t k) { check(scratch, next + k); });
   // The earliest event of each edge in its order: a pose error there throws, edge by edge.
   std::sort(bad.begin(), bad.end());
@@ -544,6 +660,19 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
         return at;
       },
       detail::GivenRaise<S>{motion_bounds, links.size()})[0];
+}
+
+BatchScratch::BatchScratch() : slots_(std::make_unique<detail::ScratchSlots>()) {}
+BatchScratch::~BatchScratch() = default;
+BatchScratch::BatchScratch(BatchScratch&& other) noexcept = default;
+BatchScratch& BatchScratch::operator=(BatchScratch&& other) noexcept = default;
+void BatchScratch::release() {
+  if (slots_ == nullptr) return;
+  if (slots_->busy.exchange(true, std::memory_order_acquire))
+    throw std::logic_error("cube::BatchScratch::release: in use by a call");
+  slots_->for_float = {};
+  slots_->for_double = {};
+  slots_->busy.store(false, std::memory_order_release);
 }
 
 #define CUBE_INSTANTIATE_BATCH(S)                                                                  \

@@ -19,6 +19,11 @@
 #include "cube_collision/batch.h"
 
 namespace cube {
+namespace detail {
+/// A number no Links content had before: what a BatchScratch compares to know the body it set
+/// up for is the one it is given (a copy keeps its source's, as it holds the same links).
+std::uint64_t newBodyGeneration();
+}  // namespace detail
 
 template <typename S>
 struct BodySet<S>::Links {
@@ -33,6 +38,7 @@ struct BodySet<S>::Links {
                                                // [after_at[i], after_at[i + 1]), ascending
   bool any_bits = false;                       // a link has filter bits other than the default
   detail::BodyView<S> view{0};  // the links' tree, copied by each checker (bounds per state)
+  std::uint64_t generation = detail::newBodyGeneration();  // new with every change
 
   std::size_t size() const { return geometry.size(); }
   void listPairs() {

@@ -3,6 +3,7 @@
 
 #include <fcl/narrowphase/collision_object.h>
 
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,12 @@
 namespace cube {
 
 using detail::batchError;
+
+std::uint64_t detail::newBodyGeneration() {
+  // Only a source of distinct numbers: no answer depends on its value.
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
 
 template <typename S>
 BodySet<S>::BodySet() : links_(std::make_unique<Links>()) {
@@ -88,6 +95,7 @@ std::size_t BodySet<S>::addLink(std::shared_ptr<fcl::CollisionGeometry<S>> geome
   l.any_bits = l.any_bits || !l.bits.back().isDefault();
   l.view = std::move(view);
   l.listPairs();
+  l.generation = detail::newBodyGeneration();
   return n;
 }
 
@@ -98,6 +106,7 @@ void BodySet<S>::excludePair(std::size_t i, std::size_t j) {
   if (i == j) batchError("BodySet::excludePair", "a link is never checked against itself");
   links_->excluded[i * n + j] = links_->excluded[j * n + i] = 1;
   links_->listPairs();
+  links_->generation = detail::newBodyGeneration();
 }
 
 template <typename S>

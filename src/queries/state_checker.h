@@ -17,6 +17,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <optional>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -46,8 +47,7 @@ class StateChecker {
   using Object = fcl::CollisionObject<S>;
 
   StateChecker(const Broadphase<S>& world, const Links<S>& links)
-      : scope_(&world),
-        world_(world),
+      : world_(world),
         links_(links),
         world_spheres_(world.table().spheres()),
         world_shapes_(world.table().shapes()),
@@ -90,9 +90,24 @@ class StateChecker {
     far_ = next + n;
     for (std::uint32_t l = 0; l < links.size(); ++l) body_.setObject(l, objectAt(l));
     eager_objects_ = bool(world.predicate());
+    openScope();
   }
+
+  /// For a checker kept from an earlier call on the same world and links (BatchScratch): what
+  /// it read of the world then (its volumes may have been made or moved since, its predicate
+  /// set or cleared).
+  void rebind() {
+    world_spheres_ = world_.table().spheres();
+    world_shapes_ = world_.table().shapes();
+    eager_objects_ = bool(world_.predicate());
+  }
+  /// Names the world as read by a query on this thread (the constructor does) until
+  /// closeScope(); a checker kept between calls is closed in between.
+  void openScope() { scope_.emplace(&world_); }
+  void closeScope() { scope_.reset(); }
+  // Reads nothing of the world or the links: a checker kept between calls may outlive them.
   ~StateChecker() {
-    for (std::size_t l = 0; l < links_.size(); ++l)
+    for (std::size_t l = 0; l < link_count_; ++l)
       if (slots_[l].made) objectAt(std::uint32_t(l))->~LinkObject<S>();
   }
   StateChecker(const StateChecker&) = delete;
@@ -523,9 +538,10 @@ class StateChecker {
              const Object& b, const VolumeSphere& sb, const VolumeShape& hb);
   S clearanceOf(bool self);
 
-  const QueryScope scope_;  // a pair predicate that mutates the world is refused
+  std::optional<QueryScope> scope_;  // a pair predicate that mutates the world is refused
   const Broadphase<S>& world_;
   const Links<S>& links_;
+  const std::size_t link_count_ = links_.size();
   const VolumeSphere* world_spheres_;
   const VolumeShape* world_shapes_;
   BodyView<S> body_;       // the links' boxes (grown by their margins) for the walk
