@@ -172,3 +172,69 @@ def compare_text(paths, before_after=()):
                 head + " cases called slower |", rule + "---|"]
         out += [_compare_row(p, True) for p in before_after]
     return "\n".join(out) + "\n"
+
+
+def ompl_text(path):
+    """examples/ompl_planner's output, one or more runs in one file (each after a "run:" line
+    with the load average): per run the planning times of the cube checkers and of FCL's, the
+    time inside the checks, the planner's own time, the continuous run, and whether the paths
+    were the same."""
+    runs = []
+    for line in open(path):
+        m = re.match(r"^run: load (\S+) \S+ \S+, (\d+) threads runnable", line)
+        if m:
+            runs.append({"load": f"{m.group(1)} ({int(m.group(2)) - 1} other threads runnable)"})
+            continue
+        if not runs:
+            continue
+        r = runs[-1]
+        m = re.match(r"^RRTConnect, (\d+)-joint arm, (\d+) obstacles, (\d+) problems", line)
+        if m:
+            r["about"] = tuple(int(m.group(i)) for i in (1, 2, 3))
+        m = re.match(r"^planning time: cube ([\d.]+) ms, FCL DynamicAABBTree ([\d.]+) ms: "
+                     r"[\d.]+x less; cube continuous ([\d.]+) ms", line)
+        if m:
+            r["plan"] = tuple(float(m.group(i)) for i in (1, 2, 3))
+        m = re.match(r"^inside the checks: cube ([\d.]+) ms, FCL ([\d.]+) ms .*the planner's own "
+                     r"time: ([\d.]+) ms .*would plan ([\d.]+)x faster", line)
+        if m:
+            r["checks"] = tuple(float(m.group(i)) for i in (1, 2, 3, 4))
+        m = re.match(r"^paths touching an obstacle on a 100x finer subdivision: discrete (\d+) of "
+                     r"(\d+), continuous (\d+) of (\d+)", line)
+        if m:
+            r["fine"] = tuple(int(m.group(i)) for i in (1, 2, 3, 4))
+        m = re.match(r"^same paths: (\d+) of (\d+) problems.*?; (\d+) motion checks, ([\d.]+) "
+                     r"states an edge", line)
+        if m:
+            r["same"] = (int(m.group(1)), int(m.group(2)), int(m.group(3)), float(m.group(4)))
+    runs = [r for r in runs if "plan" in r and "checks" in r and "same" in r]
+    if not runs:
+        return ""
+    joints, obstacles, problems = runs[0].get("about", (0, 0, 0))
+    out = ["### OMPL's RRTConnect with the batched checks (`examples/ompl_planner`)", "",
+           f"From `{os.path.relpath(path, os.path.join(HERE, '..'))}`, {len(runs)} runs of "
+           f"the example with its defaults ({joints}-joint arm, {obstacles:,} obstacles, "
+           f"{problems} problems, the same seeds for every checker; load average at the start of "
+           f"each: {', '.join(r['load'] for r in runs)}). Cube: `checkStates` / `checkMotion` "
+           "with one `BatchScratch` per planner thread; FCL: the checker FCL users write "
+           "(`DynamicAABBTreeCollisionManager`, OMPL's `DiscreteMotionValidator`). Planning "
+           "time is the planner's `solve`; the checks' time includes the kinematics; the "
+           "planner's own time (the rest, the same exploration in both runs) bounds the ratio: "
+           "'checks free' is FCL's planning time over it.", "",
+           "| run | planning: cube / FCL | ratio | inside the checks: cube / FCL | ratio | "
+           "planner's own time | checks free | continuous planning | same paths | motion "
+           "checks (states an edge) |",
+           "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for i, r in enumerate(runs, 1):
+        cube, fcl, cont = r["plan"]
+        cc, fc, own, free = r["checks"]
+        same, total, motions, per_edge = r["same"]
+        out.append(f"| {i} | {cube:.1f} / {fcl:.1f} ms | {fcl / cube:.2f}x | {cc:.1f} / "
+                   f"{fc:.1f} ms | {fc / cc:.2f}x | {own:.1f} ms | {free:.1f}x | {cont:.1f} ms | "
+                   f"{same} of {total} | {motions:,} ({per_edge:.1f}) |")
+    fine = [r["fine"] for r in runs if "fine" in r]
+    if fine:
+        d, n, c, m = fine[0]
+        out += ["", f"Paths that touch an obstacle on a subdivision 100 times finer than OMPL's "
+                f"(run 1): discrete checks {d} of {n}, continuous checks {c} of {m}."]
+    return "\n".join(out) + "\n"
