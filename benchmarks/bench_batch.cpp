@@ -15,7 +15,8 @@
 // same edges checked without the bounds, with counters us_per_checked_state, the time over the
 // states the check visits, and, for cube, vs_discrete = cube_discrete's time per visited state /
 // cube's), single (the states of states_free, one per call: against FCL's per-state check,
-// whose cost is the same as in states_free), states_long (meshes only: random states as they
+// whose cost is the same as in states_free; and cube_kept, cube's calls with one BatchScratch
+// kept for all of them, as a planner keeps one per thread), states_long (meshes only: random states as they
 // come of the same chain with links 8 times as long, nearly all in contact with several
 // meshes). Managers: the FCL managers first, then cube_loop and cube_loop_t2 (the library's
 // single-state path on one and two threads: a CubeCollisionManager of the 30 link objects moved
@@ -581,9 +582,11 @@ void runContinuous(benchmark::State& state, Setup& s, const std::string& manager
   if (!discrete && ref > 0) state.counters["vs_discrete"] = ref / (per_call / double(checked));
 }
 
-std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads) {
+std::vector<std::size_t> cubeAnswers(const Setup& s, Kind k, int threads,
+                                     cube::BatchScratch* kept = nullptr) {
   cube::BatchOptions o;
   o.threads = threads;
+  o.scratch = kept;
   o.self_collision = k == Kind::states_self;
   const Poses& poses = posesOf(s, k);
   if (isEdges(k))
@@ -604,7 +607,7 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
          const std::string& manager) {
   Setup& s = setupFor(scene, n);
   if (kind == Kind::edges_continuous) return runContinuous(state, s, manager);
-  const bool is_cube = manager == "cube" || manager == "cube_t2";
+  const bool is_cube = manager == "cube" || manager == "cube_t2" || manager == "cube_kept";
   const bool is_loop = manager == "cube_loop" || manager == "cube_loop_t2";
   const std::string key = std::string(kindName(kind));
   // The reference: FCL's dynamic tree, link by link.
@@ -619,15 +622,18 @@ void run(benchmark::State& state, Kind kind, const std::string& scene, std::size
   double seconds = 0;
   std::size_t calls = 0;
   if (is_cube) {
-    const int threads = manager == "cube" ? 1 : 2;
-    if (cubeAnswers(s, kind, threads) != want) {
+    const int threads = manager == "cube_t2" ? 2 : 1;
+    // cube_kept: one BatchScratch for every call (a planner's per-thread one).
+    cube::BatchScratch scratch;
+    cube::BatchScratch* kept = manager == "cube_kept" ? &scratch : nullptr;
+    if (cubeAnswers(s, kind, threads, kept) != want) {
       state.SkipWithError("cube's answers differ from FCL's");
       g_extra_failed = true;
       return;
     }
     for (auto _ : state) {
       const auto t0 = std::chrono::steady_clock::now();
-      benchmark::DoNotOptimize(cubeAnswers(s, kind, threads));
+      benchmark::DoNotOptimize(cubeAnswers(s, kind, threads, kept));
       seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       ++calls;
       state.SetIterationTime(
@@ -722,6 +728,7 @@ void registerBatch() {
         }
         managers.push_back("cube");
         if (k != Kind::single) managers.push_back("cube_t2");
+        if (k == Kind::single) managers.push_back("cube_kept");
         for (const std::string& m : managers) {
           const std::string name =
               std::string("batch_") + kindName(k) + "/" + scene + "/" + std::to_string(n) + "/" + m;

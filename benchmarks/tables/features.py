@@ -141,7 +141,9 @@ def batch_tables(raw):
            "A 30-link robot; per cell: best FCL manager's time / cube's on one thread / on two "
            "threads, then microseconds per state, cube on one thread against that FCL manager, "
            "and the library's single-state path (`cube_loop`: a robot manager moved per state and "
-           "`collideAll`, one thread)'s time / cube's on one thread.",
+           "`collideAll`, one thread)'s time / cube's on one thread; for single states, also "
+           "cube's calls with one `BatchScratch` kept for all of them (best FCL / it, and its "
+           "microseconds per state).",
            ""]
     for n in sorted({int(k[2]) for k in keys}):
         out += [f"**{n:,} world objects**", "", "| case | " + " | ".join(scenes) + " |",
@@ -162,9 +164,12 @@ def batch_tables(raw):
                 fu = get(raw, f"{kind}/{sc}/{n}/{m}", "us_per_state")
                 cu = get(raw, f"{kind}/{sc}/{n}/cube", "us_per_state")
                 loop = get(raw, f"{kind}/{sc}/{n}/cube_loop")
+                kept = get(raw, f"{kind}/{sc}/{n}/cube_kept")
+                ku = get(raw, f"{kind}/{sc}/{n}/cube_kept", "us_per_state")
                 row.append(f"{t / c1:.2f}x" + (f" / {t / c2:.2f}x" if c2 else "") +
                            f" ({cu:.2f} vs {fu:.2f} µs" +
-                           (f"; loop {loop / c1:.2f}x)" if loop else ")"))
+                           (f"; loop {loop / c1:.2f}x" if loop else "") +
+                           (f"; kept scratch {t / kept:.2f}x, {ku:.2f} µs" if kept else "") + ")")
             out.append(f"| {kind[6:]} | " + " | ".join(row) + " |")
         out.append("")
     cont = [tuple(k.split("/")) for k in raw if k.startswith("batch_edges_continuous/")]
