@@ -16,8 +16,8 @@
 // states the check visits, and, for cube, vs_discrete = cube_discrete's time per visited state /
 // cube's), single (the states of states_free, one per call: against FCL's per-state check,
 // whose cost is the same as in states_free; and cube_kept, cube's calls with one BatchScratch
-// kept for all of them, as a planner keeps one per thread), states_long (meshes only: random states as they
-// come of the same chain with links 8 times as long, nearly all in contact with several
+// kept for all of them, as a planner keeps one per thread), states_long (meshes only: random states
+// as they come of the same chain with links 8 times as long, nearly all in contact with several
 // meshes). Managers: the FCL managers first, then cube_loop and cube_loop_t2 (the library's
 // single-state path on one and two threads: a CubeCollisionManager of the 30 link objects moved
 // per state, setTransform, computeAABB and update(), then collideAll(world, robot), and with
