@@ -62,14 +62,7 @@ TEST_P(BatchWorlds, ThreadCountsGiveTheSameAnswers) {
   const auto one = cube::checkStates(w.manager, body, poses, o);
   for (const int t : {2, 3, 8}) {
     o.threads = t;
-    const auto many = cube::checkStates(w.manager, body, poses, o);
-    ASSERT_EQ(many.size(), one.size());
-    for (std::size_t k = 0; k < one.size(); ++k) {
-      EXPECT_EQ(many[k].colliding, one[k].colliding);
-      EXPECT_EQ(many[k].link, one[k].link);
-      EXPECT_EQ(many[k].object, one[k].object);
-      EXPECT_EQ(many[k].other_link, one[k].other_link);
-    }
+    expectSameAnswers(cube::checkStates(w.manager, body, poses, o), one);
   }
 }
 

@@ -275,14 +275,7 @@ TEST(BatchScratch, ThreadCountsWithAKeptScratchGiveTheSameAnswers) {
   o.scratch = &scratch;
   for (const int t : {1, 2, 3, 8, 2, 1}) {
     o.threads = t;
-    const auto got = cube::checkStates(w.manager, body, poses, o);
-    ASSERT_EQ(got.size(), states.size());
-    for (std::size_t k = 0; k < got.size(); ++k) {
-      EXPECT_EQ(got[k].colliding, states[k].colliding);
-      EXPECT_EQ(got[k].link, states[k].link);
-      EXPECT_EQ(got[k].object, states[k].object);
-      EXPECT_EQ(got[k].other_link, states[k].other_link);
-    }
+    expectSameAnswers(cube::checkStates(w.manager, body, poses, o), states);
     EXPECT_EQ(
         cube::checkMotions(w.manager, body, edges.poses, edges.starts, cube::MotionOrder::path, o),
         motions);
@@ -386,10 +379,7 @@ TEST(BatchScratch, FloatAndDoubleCallsShareAScratch) {
     const std::vector<fcl::Transform3f> fone(fposes.begin() + long(k * 4),
                                              fposes.begin() + long(k * 4 + 4));
     const auto want = cube::checkStates(fworld, fbody, fone, plain);
-    const auto got = cube::checkStates(fworld, fbody, fone, kept);
-    EXPECT_EQ(got[0].colliding, want[0].colliding) << "state " << k;
-    EXPECT_EQ(got[0].link, want[0].link) << "state " << k;
-    EXPECT_EQ(got[0].object, want[0].object) << "state " << k;
+    expectSameAnswers(cube::checkStates(fworld, fbody, fone, kept), want);
     fhits += want[0].colliding;
   }
   EXPECT_GT(fhits, 0u);

@@ -438,8 +438,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   }
   if (next < runs.size())
     parallelForWith(
-        runs.size() - next, team, 1,
-        [&] { return caller.forThisThread(); },
+        runs.size() - next, team, 1, [&] { return caller.forThisThread(); },
         [&](auto& scratch, std::size_t k) { check(scratch, next + k); });
   // The earliest event of each edge in its order: a pose error there throws, edge by edge.
   std::sort(bad.begin(), bad.end());

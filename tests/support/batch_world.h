@@ -224,6 +224,19 @@ inline void expectSame(const std::vector<cube::StateResult<S>>& got, const World
   if (colliding != nullptr) *colliding = hits;
 }
 
+// Two calls' answers alike: colliding, and the first pair where it was asked for.
+template <typename T>
+void expectSameAnswers(const std::vector<cube::StateResult<T>>& got,
+                       const std::vector<cube::StateResult<T>>& want) {
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].colliding, want[k].colliding) << "state " << k;
+    EXPECT_EQ(got[k].link, want[k].link) << "state " << k;
+    EXPECT_EQ(got[k].object, want[k].object) << "state " << k;
+    EXPECT_EQ(got[k].other_link, want[k].other_link) << "state " << k;
+  }
+}
+
 // The states of an edge of n states in the order MotionOrder names (batch.h), written here.
 inline std::vector<std::size_t> visitOrder(std::size_t n, cube::MotionOrder order) {
   std::vector<std::size_t> visit;
