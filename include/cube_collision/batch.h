@@ -102,9 +102,9 @@ class BodySet {
 /// changed since (addLink, excludePair), sets up anew (and keeps that). Only the calling
 /// thread's share of a call uses it; a call's other threads set up their own. One call at a
 /// time: a call that finds it in use (another thread's call, or a call made from inside a call
-/// that uses it) throws std::logic_error before any work; it must not be moved or destroyed
-/// while a call uses it. It holds no reference a caller must keep alive: a world or body
-/// destroyed between calls is never read again through it.
+/// that uses it) throws std::logic_error before any state is checked; it must not be moved or
+/// destroyed while a call uses it. It holds no reference a caller must keep alive: a world or
+/// body destroyed between calls is never read again through it.
 class BatchScratch {
  public:
   BatchScratch();
