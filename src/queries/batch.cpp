@@ -95,10 +95,9 @@ struct MotionScratch {
       : checker(world, links) {
     prepare(run_states, continuous, links.size());
   }
-  // Ready for a call with these needs; nothing an earlier call wrote is read again (no pose, no
-  // memo).
+  // Ready for a call with these needs; nothing an earlier call wrote is read again (no memo; the
+  // rooms an earlier call made stay, as each pose is written before it is read).
   void prepare(std::size_t run_states, bool continuous, std::size_t n) {
-    poses.clear();
     if (poses.capacity() < run_states * n) poses.reserve(run_states * n);
     if (continuous && raise.size() < StateChecker<S>::kGroupStates * n)
       raise.resize(StateChecker<S>::kGroupStates * n);
