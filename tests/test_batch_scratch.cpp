@@ -282,17 +282,32 @@ TEST(BatchScratch, ThreadCountsWithAKeptScratchGiveTheSameAnswers) {
   }
 }
 
+// A world of `objects` shapes (planes too with `planes`), a body of `links` links, `states`
+// random states of it, and one-thread options that use one kept scratch.
+struct KeptScene {
+  World w;
+  cube::BodySet<S> body;
+  std::vector<fcl::Transform3d> poses;
+  cube::BatchScratch scratch;
+  cube::BatchOptions o;
+  KeptScene(std::size_t objects, std::size_t links, std::size_t states, std::uint32_t seed,
+            bool planes)
+      : body(randomBody(links, seed + 1, false)), poses(randomStates(states, links, seed + 2)) {
+    fillWorld(w, objects, seed, false, planes);
+    o.threads = 1;
+    o.scratch = &scratch;
+  }
+};
+
 // A check from inside a call's pair predicate with the same scratch, and its release there,
 // throw std::logic_error; the outer call goes on, and the scratch serves later calls.
 TEST(BatchScratch, AScratchServesOneCallAtATime) {
-  World w;
-  fillWorld(w, 200, 81, false, false);
-  const cube::BodySet<S> body = randomBody(5, 82, false);
-  const auto poses = randomStates(10, body.size(), 83);
-  cube::BatchScratch scratch;
-  cube::BatchOptions o;
-  o.threads = 1;
-  o.scratch = &scratch;
+  KeptScene k(200, 5, 10, 81, false);
+  World& w = k.w;
+  const cube::BodySet<S>& body = k.body;
+  const auto& poses = k.poses;
+  cube::BatchScratch& scratch = k.scratch;
+  const cube::BatchOptions& o = k.o;
   int refused = 0, released = 0, other = 0, depth = 0;
   w.manager.setPairFilter([&](Object*, Object*) {
     if (depth > 0) return true;  // the inner calls' own pairs
@@ -315,7 +330,8 @@ TEST(BatchScratch, AScratchServesOneCallAtATime) {
     --depth;
     return true;
   });
-  for (std::size_t k = 0; k < 10; ++k) cube::checkStates(w.manager, body, stateOf(poses, k, 5), o);
+  for (std::size_t i = 0; i < 10; ++i)
+    cube::checkStates(w.manager, body, stateOf(poses, i, body.size()), o);
   EXPECT_GT(refused, 0);
   EXPECT_EQ(released, refused);
   EXPECT_EQ(other, refused);
@@ -325,19 +341,12 @@ TEST(BatchScratch, AScratchServesOneCallAtATime) {
 
 // A call that throws (a NaN pose) leaves the scratch as usable as a new one.
 TEST(BatchScratch, ACallThatThrowsLeavesTheScratchUsable) {
-  World w;
-  fillWorld(w, 300, 91, false, true);
-  const cube::BodySet<S> body = randomBody(6, 92, false);
-  const auto poses = randomStates(20, body.size(), 93);
-  cube::BatchScratch scratch;
-  cube::BatchOptions o;
-  o.threads = 1;
-  o.scratch = &scratch;
-  statesOneByOne(w, body, poses, o, scratch);
-  auto bad = stateOf(poses, 3, body.size());
+  KeptScene k(300, 6, 20, 91, true);
+  statesOneByOne(k.w, k.body, k.poses, k.o, k.scratch);
+  auto bad = stateOf(k.poses, 3, k.body.size());
   bad[2].translation()[1] = std::nan("");
-  EXPECT_THROW(cube::checkStates(w.manager, body, bad, o), std::invalid_argument);
-  statesOneByOne(w, body, poses, o, scratch);
+  EXPECT_THROW(cube::checkStates(k.w.manager, k.body, bad, k.o), std::invalid_argument);
+  statesOneByOne(k.w, k.body, k.poses, k.o, k.scratch);
 }
 
 // One scratch for float and double calls in turn: each answers as a call without it.

@@ -138,7 +138,7 @@ struct ScratchSlots {
 
 struct ScratchAccess {
   static ScratchSlots& slots(BatchScratch& s) {
-    if (s.slots_ == nullptr) s.slots_ = std::make_unique<ScratchSlots>();  // a moved-from one
+    if (s.slots_ == nullptr) s.slots_ = std::make_unique<ScratchSlots>();  // made on first use
     return *s.slots_;
   }
 };
@@ -660,7 +660,7 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
       detail::GivenRaise<S>{motion_bounds, links.size()})[0];
 }
 
-BatchScratch::BatchScratch() : slots_(std::make_unique<detail::ScratchSlots>()) {}
+BatchScratch::BatchScratch() = default;
 BatchScratch::~BatchScratch() = default;
 BatchScratch::BatchScratch(BatchScratch&& other) noexcept = default;
 BatchScratch& BatchScratch::operator=(BatchScratch&& other) noexcept = default;
