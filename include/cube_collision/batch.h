@@ -247,8 +247,10 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
 /// Called only for the states a check reads, at most once per state, possibly from several
 /// threads at once (BatchOptions::threads): it must be safe to call concurrently. With
 /// BatchOptions::continuous and no motion bounds, the SE(3) bounds of a checked state read its
-/// neighbours in its edge too: those are written as well, and a state may be written more than
-/// once (as a neighbour of states of two runs, or in bisection order of several).
+/// neighbours in its edge too: those are written as well. In path order on one thread each state
+/// is written at most once (the neighbour after a run is the next run's first state, kept for
+/// it); otherwise a state may be written more than once (in bisection order as a neighbour of
+/// several states, or with `threads` > 1 when the run after is another thread's).
 template <typename S>
 using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* poses)>;
 
@@ -260,7 +262,7 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// BatchOptions::continuous reads (with `threads` > 1, a few more may be, and their answers
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
 /// pose array is made: the call's memory is the visiting order, 24 bytes a state (40 while it
-/// is made), and room for the poses of one run (32 states, 34 with BatchOptions::continuous) per
+/// is made), and room for the poses of one run (32 states, 35 with BatchOptions::continuous) per
 /// thread. With BatchOptions::continuous, the SE(3) bounds as checkMotion over all the poses
 /// computes them, each checked state's neighbours written too (PoseFunction). Throws
 /// std::invalid_argument for an empty body set or a null function (before any work), and as

@@ -88,6 +88,12 @@ struct MotionScratch {
   std::vector<fcl::Transform3<S>> poses;  // reserved for a run; states made as they are written
   std::vector<S> raise;
   RaiseMemo<S> memo;
+  // The neighbour a continuous check wrote past its run on demand (the state after the run's
+  // last) and its room, one of the two rooms past a run's and its neighbour before: the next run
+  // in path order starts at that state and reads it there rather than asking for it again (a
+  // pose function may run a robot's kinematics). SIZE_MAX: none.
+  std::size_t ahead = SIZE_MAX;
+  std::size_t ahead_room = 0;
   // `run_states`: the most states of a run (0: poses are not written here); `continuous`: room
   // for the raises of a run.
   MotionScratch(const Broadphase<S>& world, const Links<S>& links, std::size_t run_states,
@@ -103,6 +109,7 @@ struct MotionScratch {
       raise.resize(StateChecker<S>::kGroupStates * n);
     memo.after.resize(continuous ? n : 0);
     memo.interval = SIZE_MAX;
+    ahead = SIZE_MAX;
   }
   // Room for the links' poses of the j-th state of a run (j < run_states). Made on first use: an
   // edge that collides early reads a few of its states, and making a run's room at once wrote
@@ -329,9 +336,10 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   std::size_t longest = 0;  // the most states of an edge
   for (std::size_t e = 0; e < edges; ++e)
     longest = std::max(longest, (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e]);
-  // Room for a run's states, and with raises from the poses, for two neighbours past them.
+  // Room for a run's states, and with raises from the poses, for its neighbour before and two
+  // rooms in turn for the one after (MotionScratch::ahead).
   const std::size_t run_states = !on_demand   ? 0
-                                 : continuous ? kRun + 2
+                                 : continuous ? kRun + 3
                                               : std::min(longest, StateChecker<S>::kGroupStates);
   CallerScratch<S> caller(options, core, links, run_states, continuous, "checkMotions");
   // The states of run r in rank order, up to the edge's first collision; the number checked.
@@ -343,7 +351,14 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     while (count < run.count && items[run.first + count].rank <= seen) ++count;
     if (count == 0) return 0;
     const fcl::Transform3<S>* at[kRun];
-    for (std::size_t j = 0; j < count; ++j)
+    std::size_t j0 = 0;
+    if constexpr (continuous) {
+      if (on_demand && items[run.first].state == scratch->ahead) {
+        at[0] = scratch->room(scratch->ahead_room, n);  // written by the run before
+        j0 = 1;
+      }
+    }
+    for (std::size_t j = j0; j < count; ++j)
       at[j] = pose_at(*scratch, items[run.first + j].state, j);
     // Item i's event (a contact, or a pose error: bad_pose) at its rank.
     const auto event = [&](std::size_t i, std::size_t bad_pose) {
@@ -377,7 +392,14 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
           if (s == k) return at[j];
           if (j > 0 && items[run.first + j - 1].state == s) return at[j - 1];
           if (j + 1 < count && items[run.first + j + 1].state == s) return at[j + 1];
-          return pose_at(*scratch, s, s < k ? kRun : kRun + 1);
+          if (s < k) return pose_at(*scratch, s, kRun);
+          if (s == scratch->ahead) return scratch->room(scratch->ahead_room, n);
+          // Into the room that at[0] does not hold.
+          const std::size_t room = scratch->ahead_room == kRun + 1 ? kRun + 2 : kRun + 1;
+          const fcl::Transform3<S>* written = pose_at(*scratch, s, room);
+          scratch->ahead = s;
+          scratch->ahead_room = room;
+          return written;
         };
         raise_at(k, begin, end, raise, raise_bad, poses_of, scratch->memo);
         if (raise_bad != kNoIndex) {
