@@ -303,8 +303,7 @@ TYPED_TEST(AllPairs, LeafMasksEqualBruteForce) {
   using S = TypeParam;
   using cube::detail::kMaskLeaf;
   std::vector<PairKernel> kernels = {PairKernel::portable, PairKernel::best};
-  if (std::is_same_v<S, double> && cube::detail::pairKernelAvailable(PairKernel::avx2))
-    kernels.push_back(PairKernel::avx2);
+  if (cube::detail::pairKernelAvailable(PairKernel::avx2)) kernels.push_back(PairKernel::avx2);
   std::size_t hits_seen = 0, runs = 0;
   for (std::uint32_t seed = 1; seed <= 40; ++seed) {
     const Slots<S> s(3 * kMaskLeaf, seed);
@@ -341,15 +340,10 @@ TYPED_TEST(AllPairs, LeafMasksEqualBruteForce) {
   EXPECT_THROW(cube::detail::leafOverlapMask(s.items.data(), kMaskLeaf + 1, s.items.data(), 1,
                                              false, PairKernel::portable),
                std::logic_error);
-  if (!std::is_same_v<S, double>) {
-    EXPECT_THROW(cube::detail::leafOverlapMask(s.items.data(), 1, s.items.data(), 1, false,
-                                               PairKernel::avx2),
-                 std::logic_error);
-  }
 }
 
-// Self-collide of a tree large enough for the walk to test its leaves on float columns (AVX2,
-// double): the same pairs as brute force over the exact boxes, with exact touches, gaps float
+// Self-collide of a tree large enough for the walk to test its leaves on float columns (AVX2):
+// the same pairs as brute force over the exact boxes, with exact touches, gaps float
 // cannot see, and dead slots left by removals.
 TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
   using S = TypeParam;

@@ -87,8 +87,6 @@ std::uint64_t leafOverlapMask(const Item<S>* xs, std::uint32_t nx, const Item<S>
   if (nx > kMaskLeaf || ny > kMaskLeaf || (self && (xs != ys || nx != ny)))
     throw std::logic_error("leafOverlapMask: runs too long, or not one run for self");
   if (!pairKernelAvailable(kernel)) throw std::logic_error("leafOverlapMask: kernel unavailable");
-  if (kernel == PairKernel::avx2 && !std::is_same_v<S, double>)
-    throw std::logic_error("leafOverlapMask: no AVX2 leaf kernel for this scalar type");
   return pairKernels<S>(kernel).leafHits[self](xs, nx, ys, ny);
 }
 

@@ -166,10 +166,10 @@ bool collideAllPairs(const View<S>& a, const View<S>& b, bool self, void* data, 
 
 /// The box tests the walks make between two leaves (each at most kMaskLeaf objects): bit
 /// kMaskLeaf i + j of the result is set where xs[i] and ys[j] overlap (closed). With `self`, xs
-/// and ys are the same run and only j > i counts. `kernel`: avx2 (double only) four pairs per
-/// instruction, portable or sse2 one pair at a time, best the table the walks use between two
-/// leaves (pairKernels()). Throws std::logic_error on runs too long, a kernel
-/// the CPU lacks, or avx2 for float. For the tests, which compare the kernels.
+/// and ys are the same run and only j > i counts. `kernel`: avx2 four double or eight float
+/// pairs per instruction, portable or sse2 one pair at a time, best the table the walks use
+/// between two leaves (pairKernels()). Throws std::logic_error on runs too long or a kernel the
+/// CPU lacks. For the tests, which compare the kernels.
 template <typename S>
 std::uint64_t leafOverlapMask(const Item<S>* xs, std::uint32_t nx, const Item<S>* ys,
                               std::uint32_t ny, bool self, PairKernel kernel);

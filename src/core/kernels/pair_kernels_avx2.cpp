@@ -3,6 +3,7 @@
 // and FCL stay built for the baseline, so their ABI is untouched.
 
 #include <algorithm>
+#include <utility>
 
 #include "core/kernels/cpu_features.h"
 #include "core/kernels/pair_kernels.h"
@@ -57,6 +58,56 @@ template <bool Self>
       if (Self) bits &= ~0u << std::min<std::uint32_t>(31, i + 1 > j0 ? i + 1 - j0 : 0);
       hits |= std::uint64_t(bits) << (kMaskLeaf * i + j0);
     }
+  }
+  return hits;
+}
+
+// The exact leaf mask in float, eight pairs per instruction: the boxes of ys (at most
+// kMaskLeaf) transposed into one register per coordinate, each box of xs compared with all of
+// them. Lanes past ny repeat a valid box and are masked off. Transposed in registers: copied
+// through memory, each register's load waited for the eight narrower stores.
+template <bool Self>
+[[gnu::target("avx2")]] std::uint64_t leafHitsAvx2(const Item<float>* xs, std::uint32_t nx,
+                                                   const Item<float>* ys, std::uint32_t ny) {
+  static_assert(kMaskLeaf == 8, "one register of eight floats holds a leaf's coordinate");
+  const Box<float>* y[8];
+  for (std::uint32_t l = 0; l < 8; ++l) y[l] = &ys[l < ny ? l : ny - 1].box;
+  // (lo0 lo1 lo2 hi0) of boxes l and l + 4 in the two halves, transposed half by half.
+  __m256 r[4];
+  for (int l = 0; l < 4; ++l)
+    r[l] = _mm256_set_m128(_mm_loadu_ps(y[l + 4]->lo), _mm_loadu_ps(y[l]->lo));
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  __m256 lo[3], hi[3];
+  lo[0] = _mm256_shuffle_ps(t0, t2, 0x44);
+  lo[1] = _mm256_shuffle_ps(t0, t2, 0xee);
+  lo[2] = _mm256_shuffle_ps(t1, t3, 0x44);
+  hi[0] = _mm256_shuffle_ps(t1, t3, 0xee);
+  // (hi1 hi2) of each: four boxes per half.
+  const auto half = [&](int l) {
+    const auto pair = [](const Box<float>* b) {
+      return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(b->hi + 1)));
+    };
+    const __m128 u = _mm_unpacklo_ps(pair(y[l]), pair(y[l + 1]));      // a1 b1 a2 b2
+    const __m128 v = _mm_unpacklo_ps(pair(y[l + 2]), pair(y[l + 3]));  // c1 d1 c2 d2
+    return std::make_pair(_mm_movelh_ps(u, v), _mm_movehl_ps(v, u));
+  };
+  const auto h0 = half(0), h4 = half(4);
+  hi[1] = _mm256_set_m128(h4.first, h0.first);
+  hi[2] = _mm256_set_m128(h4.second, h0.second);
+  const std::uint32_t valid = (1u << ny) - 1;
+  std::uint64_t hits = 0;
+  for (std::uint32_t i = 0; i < nx; ++i) {
+    const float* x = xs[i].box.lo;  // lo0 lo1 lo2 hi0 hi1 hi2
+    __m256 hit = _mm256_and_ps(_mm256_cmp_ps(_mm256_broadcast_ss(x), hi[0], _CMP_LE_OQ),
+                               _mm256_cmp_ps(lo[0], _mm256_broadcast_ss(x + 3), _CMP_LE_OQ));
+    for (int k = 1; k < 3; ++k)
+      hit = _mm256_and_ps(
+          hit, _mm256_and_ps(_mm256_cmp_ps(_mm256_broadcast_ss(x + k), hi[k], _CMP_LE_OQ),
+                             _mm256_cmp_ps(lo[k], _mm256_broadcast_ss(x + 3 + k), _CMP_LE_OQ)));
+    std::uint32_t bits = std::uint32_t(_mm256_movemask_ps(hit)) & valid;
+    if (Self) bits &= ~0u << (i + 1);
+    hits |= std::uint64_t(bits) << (kMaskLeaf * i);
   }
   return hits;
 }
@@ -125,14 +176,11 @@ PairKernels<S> makeAvx2() {
   k.isa = PairKernel::avx2;
   k.rowMasks[0] = &rowMasksAvx2<false>;
   k.rowMasks[1] = &rowMasksAvx2<true>;
-  if constexpr (std::is_same_v<S, double>) {
-    // Double only: float boxes are exact in float columns, but no float walk was measured to
-    // gain from them.
-    k.leafHits[0] = &leafHitsAvx2<false>;
-    k.leafHits[1] = &leafHitsAvx2<true>;
-    k.columnHits[0] = &columnHitsAvx2<false>;
-    k.columnHits[1] = &columnHitsAvx2<true>;
-  }
+  // Float boxes are exact in float columns (their recheck always passes).
+  k.columnHits[0] = &columnHitsAvx2<false>;
+  k.columnHits[1] = &columnHitsAvx2<true>;
+  k.leafHits[0] = &leafHitsAvx2<false>;
+  k.leafHits[1] = &leafHitsAvx2<true>;
   return k;
 }
 
