@@ -11,13 +11,19 @@
 // usable size plus the 8-byte header in front of it, as mallinfo2's uordblks counts), in use
 // and at its highest, exactly. Each manager's pairs are
 // counted by a self-collide and must agree with FCL's dynamic tree's (the exit status says).
+// The build (construction, registerObjects, setup) and the self-collide are timed too (wall
+// clock, the best of three builds and self-collides),
+// with the counting allocator in place: a few atomic additions per heap block, which FCL's trees
+// allocate per node and the cube manager a few times per build.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree_array.h>
 #include <malloc.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -135,8 +141,14 @@ struct Result {
   double after = 0;  // bytes per object held after the build
   double peak = 0;   // bytes per object at the build's peak, over the heap before it
   std::size_t pairs = 0;
+  double build_s = 0;                                 // construction, registerObjects and setup
+  double self_s = 0;                                  // one self-collide with a counting callback
   std::vector<std::pair<std::string, double>> parts;  // cube only: bytes per object by component
 };
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 template <typename S, class Make>
 Result measure(const char* name, const std::vector<fcl::CollisionObject<S>*>& objs, Make&& make) {
@@ -146,9 +158,11 @@ Result measure(const char* name, const std::vector<fcl::CollisionObject<S>*>& ob
   const double n = double(objs.size());
   const long long before = g_live.load();
   g_peak.store(before);
+  auto t0 = std::chrono::steady_clock::now();
   std::unique_ptr<fcl::BroadPhaseCollisionManager<S>> mgr = make();
   mgr->registerObjects(objs);
   mgr->setup();
+  r.build_s = since(t0);
   r.after = double(g_live.load() - before) / n;
   r.peak = double(g_peak.load() - before) / n;
   if (auto* cube = dynamic_cast<cube::CubeCollisionManager<S>*>(mgr.get())) {
@@ -167,8 +181,22 @@ Result measure(const char* name, const std::vector<fcl::CollisionObject<S>*>& ob
         {"cubes per object", double(tree.nodes().capacity()) / n}};
   }
   Counter c;
+  t0 = std::chrono::steady_clock::now();
   mgr->collide(&c, &Counter::fn<S>);
+  r.self_s = since(t0);
   r.pairs = c.calls;
+  for (int rep = 1; rep < 3; ++rep) {
+    mgr.reset();
+    t0 = std::chrono::steady_clock::now();
+    mgr = make();
+    mgr->registerObjects(objs);
+    mgr->setup();
+    r.build_s = std::min(r.build_s, since(t0));
+    Counter again;
+    t0 = std::chrono::steady_clock::now();
+    mgr->collide(&again, &Counter::fn<S>);
+    r.self_s = std::min(r.self_s, since(t0));
+  }
   return r;
 }
 
@@ -219,9 +247,11 @@ int main(int argc, char** argv) {
       // Each against FCL's dynamic tree of its scalar type.
       const bool same = r.pairs == results[i < first + 3 ? first + 1 : first + 4].pairs;
       agree = agree && same;
-      std::printf("%-22s n=%-8zu after %7.1f B/object  build peak %7.1f B/object  pairs %zu%s\n",
-                  r.manager.c_str(), r.n, r.after, r.peak, r.pairs,
-                  same ? "" : "  (differs from DynamicAABBTree)");
+      std::printf(
+          "%-22s n=%-8zu after %7.1f B/object  build peak %7.1f B/object  build %.4f s  "
+          "self-collide %.4f s  pairs %zu%s\n",
+          r.manager.c_str(), r.n, r.after, r.peak, r.build_s, r.self_s, r.pairs,
+          same ? "" : "  (differs from DynamicAABBTree)");
       for (const auto& [part, v] : r.parts) std::printf("    %-18s %7.2f\n", part.c_str(), v);
     }
     std::fflush(stdout);
@@ -237,8 +267,9 @@ int main(int argc, char** argv) {
       const Result& r = results[i];
       std::fprintf(f,
                    "  {\"manager\": \"%s\", \"n\": %zu, \"bytes_per_object\": %.2f, "
-                   "\"build_peak_per_object\": %.2f, \"pairs\": %zu",
-                   r.manager.c_str(), r.n, r.after, r.peak, r.pairs);
+                   "\"build_peak_per_object\": %.2f, \"build_s\": %.6f, \"self_s\": %.6f, "
+                   "\"pairs\": %zu",
+                   r.manager.c_str(), r.n, r.after, r.peak, r.build_s, r.self_s, r.pairs);
       if (!r.parts.empty()) {
         std::fprintf(f, ", \"parts\": {");
         for (std::size_t k = 0; k < r.parts.size(); ++k)

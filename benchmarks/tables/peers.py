@@ -137,4 +137,31 @@ def memory_text(path):
         out.append(f"| {n:,} | " + " | ".join(
             f"{parts[k]:.2f}" if k in parts else "–" for k, _ in MEMORY_PARTS) +
             f" | {parts.get('bytes()', float('nan')):.2f} |")
+    if not any("build_s" in r for r in data["results"]):
+        return "\n".join(out) + "\n"
+    out += ["", "Time of the same build and of one self-collide (wall clock, the counting "
+            "allocator in place; the best of three); "
+            "ratio = FCL's dynamic tree's time / the cube manager's, each in its scalar type:", "",
+            "| n | cube build | DynTree build | ratio | cube self-collide | DynTree self-collide | "
+            "ratio | cube float build / self | DynTree float build / self | float ratios |",
+            "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+
+    def secs(x):
+        return f"{x * 1e3:.1f} ms" if x < 1 else f"{x:.2f} s"
+
+    for n in sizes:
+        c, d = res.get(("cube", n)), res.get(("DynamicAABBTree", n))
+        cf, df = res.get(("cube_float", n)), res.get(("DynamicAABBTree_float", n))
+        if not (c and d and "build_s" in c and "build_s" in d):
+            continue
+        row = (f"| {n:,} | {secs(c['build_s'])} | {secs(d['build_s'])} | "
+               f"{d['build_s'] / c['build_s']:.2f}x | {secs(c['self_s'])} | {secs(d['self_s'])} | "
+               f"{d['self_s'] / c['self_s']:.2f}x |")
+        if cf and df and "build_s" in cf and "build_s" in df:
+            row += (f" {secs(cf['build_s'])} / {secs(cf['self_s'])} | "
+                    f"{secs(df['build_s'])} / {secs(df['self_s'])} | "
+                    f"{df['build_s'] / cf['build_s']:.2f}x / {df['self_s'] / cf['self_s']:.2f}x |")
+        else:
+            row += " – | – | – |"
+        out.append(row)
     return "\n".join(out) + "\n"

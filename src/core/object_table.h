@@ -29,6 +29,9 @@ namespace detail {
 /// its records, so that its queries read them.
 inline constexpr std::size_t kVolumeRebuildMinObjects = 256;
 
+/// Pointer maps of at least this many slots (a megabyte) are read ahead by a batch registration.
+inline constexpr std::size_t kPrefetchMapSlots = std::size_t(1) << 18;
+
 /// The map's hash of a pointer (a 64-bit finalizer: pointers differ mostly in middle bits).
 inline std::size_t hashPointer(const void* p) {
   return hashKey(reinterpret_cast<std::uintptr_t>(p));
@@ -292,8 +295,13 @@ inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, 
   // Sized once for the whole batch; each pointer is then looked up and put with one probe
   // sequence, which also finds the batch's own repeats.
   reserve(n);
+  // A pointer's first place is anywhere in the map: in a map larger than the caches, a miss per
+  // object unless asked for a few objects ahead.
+  constexpr std::size_t kAhead = 16;
+  const std::size_t ahead = index_.size() >= kPrefetchMapSlots ? kAhead : 0;
   std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    if (i + ahead < n && ahead != 0) __builtin_prefetch(&index_[homeOf(objs[i + ahead])]);
     std::size_t h = homeOf(objs[i]);
     while (index_[h] != 0 && obj_[index_[h] - 1] != objs[i]) h = nextOf(h);
     if (index_[h] != 0) continue;  // registered already, or earlier in the batch
