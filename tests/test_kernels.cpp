@@ -474,6 +474,14 @@ TEST(BoxOps, Sse2EqualsPortableBitForBit) {
     std::memcpy(&u, &x, sizeof x);
     return u;
   };
+  auto toFloat = [](const Box<double>& b) {
+    Box<float> f;
+    for (int k = 0; k < 3; ++k) {
+      f.lo[k] = static_cast<float>(b.lo[k]);
+      f.hi[k] = static_cast<float>(b.hi[k]);
+    }
+    return f;
+  };
   auto nodeOf = [](const Box<double>& b) {
     Node n{};
     pt::roundOut(b, n.lo, n.hi);
@@ -494,6 +502,10 @@ TEST(BoxOps, Sse2EqualsPortableBitForBit) {
     ASSERT_EQ(s2::FixedBox<double>(b).overlaps(a), pt::overlap(a, b)) << rep;
     ASSERT_EQ(s2::FixedBox<double>(a).overlaps(b), pt::overlap(b, a)) << rep;
     ASSERT_EQ(pt::FixedBox<double>(b).overlaps(a), pt::overlap(a, b)) << rep;
+    // And in float, the boxes rounded to nearest (touching faces stay touching).
+    const Box<float> fa = toFloat(a), fb = toFloat(b);
+    ASSERT_EQ(s2::FixedBox<float>(fb).overlaps(fa), pt::overlap(fa, fb)) << rep;
+    ASSERT_EQ(s2::FixedBox<float>(fa).overlaps(fb), pt::overlap(fb, fa)) << rep;
     ASSERT_EQ(s2::overlap(na, nb), pt::overlap(na, nb)) << rep;
     ASSERT_EQ(bits(s2::boxGap2(a, b)), bits(pt::boxGap2(a, b))) << rep;
     ASSERT_EQ(bits(s2::cubeGap2(na, nb)), bits(pt::cubeGap2(na, nb))) << rep;

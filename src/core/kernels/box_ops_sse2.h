@@ -113,6 +113,26 @@ struct FixedBox<double> {
   __m128d q3;   // -b.lo1, -b.lo2
 };
 
+/// FixedBox for float: the same negation of the hi side's bounds, the tested box read as it lies
+/// in memory, (lo0 lo1 lo2 hi0) and (hi1 hi2): two four-lane compares.
+template <>
+struct FixedBox<float> {
+  explicit FixedBox(const Box<float>& b)
+      : q0(_mm_set_ps(-b.lo[0], b.hi[2], b.hi[1], b.hi[0])),
+        q1(_mm_set_ps(std::numeric_limits<float>::infinity(),
+                      std::numeric_limits<float>::infinity(), -b.lo[2], -b.lo[1])) {}
+  bool overlaps(const Box<float>& x) const {
+    const __m128 flip_hi0 = _mm_set_ps(-0.0f, 0.0f, 0.0f, 0.0f);
+    const __m128 c0 = _mm_cmple_ps(_mm_xor_ps(_mm_loadu_ps(x.lo), flip_hi0), q0);
+    // (hi1 hi2) negated in the low lanes; 0 <= infinity in the others.
+    const __m128 h = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(x.hi + 1)));
+    const __m128 c1 = _mm_cmple_ps(_mm_xor_ps(h, _mm_set_ps(0.0f, 0.0f, -0.0f, -0.0f)), q1);
+    return _mm_movemask_ps(_mm_and_ps(c0, c1)) == 15;
+  }
+  __m128 q0;  // b.hi0, b.hi1, b.hi2, -b.lo0
+  __m128 q1;  // -b.lo1, -b.lo2, inf, inf
+};
+
 inline double boxGap2(const Box<double>& a, const Box<double>& b) {
   const __m128d zero = _mm_setzero_pd();
   const __m128d x01 = _mm_sub_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.hi));
