@@ -125,7 +125,7 @@ struct FixedBox<float> {
     const __m128 flip_hi0 = _mm_set_ps(-0.0f, 0.0f, 0.0f, 0.0f);
     const __m128 c0 = _mm_cmple_ps(_mm_xor_ps(_mm_loadu_ps(x.lo), flip_hi0), q0);
     // (hi1 hi2) negated in the low lanes; 0 <= infinity in the others.
-    const __m128 h = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(x.hi + 1)));
+    const __m128 h = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(x.hi + 1));
     const __m128 c1 = _mm_cmple_ps(_mm_xor_ps(h, _mm_set_ps(0.0f, 0.0f, -0.0f, -0.0f)), q1);
     return _mm_movemask_ps(_mm_and_ps(c0, c1)) == 15;
   }

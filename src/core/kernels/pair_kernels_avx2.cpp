@@ -86,7 +86,7 @@ template <bool Self>
   // (hi1 hi2) of each: four boxes per half.
   const auto half = [&](int l) {
     const auto pair = [](const Box<float>* b) {
-      return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(b->hi + 1)));
+      return _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(b->hi + 1));
     };
     const __m128 u = _mm_unpacklo_ps(pair(y[l]), pair(y[l + 1]));      // a1 b1 a2 b2
     const __m128 v = _mm_unpacklo_ps(pair(y[l + 2]), pair(y[l + 3]));  // c1 d1 c2 d2
