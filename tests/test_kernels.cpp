@@ -506,6 +506,7 @@ TEST(BoxOps, Sse2EqualsPortableBitForBit) {
     const Box<float> fa = toFloat(a), fb = toFloat(b);
     ASSERT_EQ(s2::FixedBox<float>(fb).overlaps(fa), pt::overlap(fa, fb)) << rep;
     ASSERT_EQ(s2::FixedBox<float>(fa).overlaps(fb), pt::overlap(fb, fa)) << rep;
+    ASSERT_EQ(bits(s2::boxGap2(fa, fb)), bits(pt::boxGap2(fa, fb))) << rep;
     ASSERT_EQ(s2::overlap(na, nb), pt::overlap(na, nb)) << rep;
     ASSERT_EQ(bits(s2::boxGap2(a, b)), bits(pt::boxGap2(a, b))) << rep;
     ASSERT_EQ(bits(s2::cubeGap2(na, nb)), bits(pt::cubeGap2(na, nb))) << rep;

@@ -149,6 +149,26 @@ inline double boxGap2(const Box<double>& a, const Box<double>& b) {
   return _mm_cvtsd_f64(_mm_add_sd(s01, _mm_mul_sd(d2, d2)));
 }
 
+/// boxGap2 for float: the bounds widened to double (exactly), then as for double.
+inline double boxGap2(const Box<float>& a, const Box<float>& b) {
+  const auto pair = [](const float* p) {
+    return _mm_cvtps_pd(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(p)));
+  };
+  const auto one = [](const float* p) { return _mm_cvtss_sd(_mm_setzero_pd(), _mm_load_ss(p)); };
+  const __m128d zero = _mm_setzero_pd();
+  const __m128d x01 = _mm_sub_pd(pair(a.lo), pair(b.hi));
+  const __m128d y01 = _mm_sub_pd(pair(b.lo), pair(a.hi));
+  const __m128d x2 = _mm_sub_sd(one(a.lo + 2), one(b.hi + 2));
+  const __m128d y2 = _mm_sub_sd(one(b.lo + 2), one(a.hi + 2));
+  __m128d d01 = _mm_andnot_pd(_mm_cmpunord_pd(x01, y01), _mm_max_pd(x01, y01));
+  __m128d d2 = _mm_andnot_pd(_mm_cmpunord_sd(x2, y2), _mm_max_sd(x2, y2));
+  d01 = _mm_max_pd(d01, zero);
+  d2 = _mm_max_sd(d2, zero);
+  d01 = _mm_mul_pd(d01, d01);
+  const __m128d s01 = _mm_add_sd(d01, _mm_unpackhi_pd(d01, d01));
+  return _mm_cvtsd_f64(_mm_add_sd(s01, _mm_mul_sd(d2, d2)));
+}
+
 inline double cubeGap2(const Node& a, const Node& b) {
   const __m128 d1 = _mm_sub_ps(_mm_loadu_ps(a.lo), _mm_loadu_ps(b.hi));
   const __m128 d2 = _mm_sub_ps(_mm_loadu_ps(b.lo), _mm_loadu_ps(a.hi));
