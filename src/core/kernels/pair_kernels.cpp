@@ -16,22 +16,29 @@ namespace detail {
 
 ColumnStore::ColumnStore(std::uint32_t n) {
   const std::uint32_t stride = (n + kMaskLeaf + 7) & ~7u;
-  const std::size_t bytes = 6 * std::size_t(stride) * sizeof(float);
-  constexpr std::size_t kHuge = std::size_t(2) << 20;  // x86-64's huge page
-  const bool huge = bytes >= kHugeColumnBytes;
-  const std::size_t align = huge ? kHuge : 32;
-  const std::size_t size = (bytes + align - 1) / align * align;  // aligned_alloc's rule
-  heap_ = static_cast<float*>(std::aligned_alloc(align, size));
-  if (heap_ == nullptr) throw std::bad_alloc();
+  const std::size_t floats = 6 * std::size_t(stride);
+  float* cols = nullptr;
+  if (floats * sizeof(float) >= kHugeColumnBytes) {
+    constexpr std::size_t kHuge = std::size_t(2) << 20;  // x86-64's huge page
+    const std::size_t size = (floats * sizeof(float) + kHuge - 1) / kHuge * kHuge;
+    huge_ = static_cast<float*>(std::aligned_alloc(kHuge, size));
+    if (huge_ == nullptr) throw std::bad_alloc();
 #if defined(__linux__)
-  if (huge) madvise(heap_, size, MADV_HUGEPAGE);  // advice only: small pages if refused
+    madvise(huge_, size, MADV_HUGEPAGE);  // advice only: small pages if refused
 #endif
-  cols_ = Columns::packed(heap_, stride);
+    cols = huge_;
+  } else {
+    // 32-byte alignment by hand: 7 floats of slack.
+    heap_.reset(new float[floats + 7]);
+    const auto addr = reinterpret_cast<std::uintptr_t>(heap_.get());
+    cols = heap_.get() + ((32 - addr % 32) % 32) / sizeof(float);
+  }
+  cols_ = Columns::packed(cols, stride);
   for (int k = 0; k < 6; ++k) std::fill(cols_.col[k] + n, cols_.col[k] + stride, 0.0f);
 }
 
 ColumnStore::~ColumnStore() {
-  std::free(heap_);
+  std::free(huge_);
 }
 
 namespace {

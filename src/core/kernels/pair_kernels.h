@@ -83,7 +83,8 @@ class ColumnStore {
   const Columns& columns() const { return cols_; }
 
  private:
-  float* heap_ = nullptr;
+  std::unique_ptr<float[]> heap_;  // below kHugeColumnBytes
+  float* huge_ = nullptr;          // from kHugeColumnBytes on (aligned_alloc)
   Columns cols_;
 };
 inline constexpr std::size_t kHugeColumnBytes = std::size_t(32) << 20;
