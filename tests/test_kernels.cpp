@@ -402,6 +402,27 @@ TYPED_TEST(AllPairs, LargeTreeSelfCollideEqualsBruteForce) {
 
 // roundOut works on whole boxes with SIMD; its result must be floatBelow's bit for bit (lo) and
 // its mirror image (hi), and contain the box.
+// Column stores small and large (from kHugeColumnBytes on they come from another allocation):
+// each column 32-byte aligned, its padding zeroed, every entry of every column its own.
+TEST(ColumnStores, AreAlignedPaddedAndApartAtEverySize) {
+  using cube::detail::ColumnStore;
+  const std::uint32_t huge =
+      std::uint32_t(cube::detail::kHugeColumnBytes / (6 * sizeof(float))) + 5;
+  for (const std::uint32_t n : {1u, 300u, 4099u, huge}) {
+    const ColumnStore store(n);
+    const cube::detail::Columns& c = store.columns();
+    for (int k = 0; k < 6; ++k) {
+      ASSERT_EQ(reinterpret_cast<std::uintptr_t>(c.col[k]) % 32, 0u) << n;
+      for (std::uint32_t i = n; i < n + cube::detail::kMaskLeaf; ++i)
+        ASSERT_EQ(c.col[k][i], 0.0f) << n << " " << i;
+    }
+    for (std::uint32_t i : {0u, n / 2, n - 1})
+      for (int k = 0; k < 6; ++k) c.col[k][i] = float(k + 1);
+    for (std::uint32_t i : {0u, n / 2, n - 1})
+      for (int k = 0; k < 6; ++k) ASSERT_EQ(c.col[k][i], float(k + 1)) << n << " " << i;
+  }
+}
+
 TEST(RoundOut, EqualsTheScalarRoundingAndContainsTheBox) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> unit(-1, 1);
