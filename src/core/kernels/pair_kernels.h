@@ -72,8 +72,8 @@ inline void fillColumns(const Item<S>* items, Slot&& slot, std::uint32_t count, 
 /// Owns the storage of a Columns for at least n entries plus kMaskLeaf of padding (read by the
 /// lanes of a leaf past its end), padding zeroed: the float columns of a large self walk.
 /// Stores of kHugeColumnBytes or more ask Linux for huge pages: glibc maps a block that large
-/// afresh at every call (smaller ones come back from its heap, already mapped), and its small
-/// pages' faults and TLB misses were a sixth of a self-collide of 2,000,000 objects.
+/// afresh at every call (smaller ones come back from its heap, already mapped), and the faults
+/// and TLB misses of its small pages weighed on a self-collide of millions of objects.
 class ColumnStore {
  public:
   explicit ColumnStore(std::uint32_t n);
@@ -87,6 +87,7 @@ class ColumnStore {
   float* huge_ = nullptr;          // from kHugeColumnBytes on (aligned_alloc)
   Columns cols_;
 };
+/// The size from which a ColumnStore asks for huge pages (glibc's largest heap block).
 inline constexpr std::size_t kHugeColumnBytes = std::size_t(32) << 20;
 
 /// The columns of an all-pairs test (at most kAllPairsMax boxes), in the object itself: no
