@@ -133,20 +133,25 @@ struct FixedBox<float> {
   __m128 q1;  // -b.lo1, -b.lo2, inf, inf
 };
 
-inline double boxGap2(const Box<double>& a, const Box<double>& b) {
+// The squared gap from the differences a.lo - b.hi (x) and b.lo - a.hi (y) in double, axes 0
+// and 1 in one register and axis 2 in another: as gap2, an axis whose difference is NaN counts
+// as touching, and the squares are summed in axis order.
+inline double gap2FromDifferences(__m128d x01, __m128d y01, __m128d x2, __m128d y2) {
   const __m128d zero = _mm_setzero_pd();
-  const __m128d x01 = _mm_sub_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.hi));
-  const __m128d y01 = _mm_sub_pd(_mm_loadu_pd(b.lo), _mm_loadu_pd(a.hi));
-  const __m128d x2 = _mm_sub_sd(_mm_load_sd(a.lo + 2), _mm_load_sd(b.hi + 2));
-  const __m128d y2 = _mm_sub_sd(_mm_load_sd(b.lo + 2), _mm_load_sd(a.hi + 2));
   __m128d d01 = _mm_andnot_pd(_mm_cmpunord_pd(x01, y01), _mm_max_pd(x01, y01));
   __m128d d2 = _mm_andnot_pd(_mm_cmpunord_sd(x2, y2), _mm_max_sd(x2, y2));
   d01 = _mm_max_pd(d01, zero);
   d2 = _mm_max_sd(d2, zero);
   d01 = _mm_mul_pd(d01, d01);
-  // Summed in axis order, as gap2 does.
   const __m128d s01 = _mm_add_sd(d01, _mm_unpackhi_pd(d01, d01));
   return _mm_cvtsd_f64(_mm_add_sd(s01, _mm_mul_sd(d2, d2)));
+}
+
+inline double boxGap2(const Box<double>& a, const Box<double>& b) {
+  return gap2FromDifferences(_mm_sub_pd(_mm_loadu_pd(a.lo), _mm_loadu_pd(b.hi)),
+                             _mm_sub_pd(_mm_loadu_pd(b.lo), _mm_loadu_pd(a.hi)),
+                             _mm_sub_sd(_mm_load_sd(a.lo + 2), _mm_load_sd(b.hi + 2)),
+                             _mm_sub_sd(_mm_load_sd(b.lo + 2), _mm_load_sd(a.hi + 2)));
 }
 
 /// boxGap2 for float: the bounds widened to double (exactly), then as for double.
@@ -155,18 +160,9 @@ inline double boxGap2(const Box<float>& a, const Box<float>& b) {
     return _mm_cvtps_pd(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(p)));
   };
   const auto one = [](const float* p) { return _mm_cvtss_sd(_mm_setzero_pd(), _mm_load_ss(p)); };
-  const __m128d zero = _mm_setzero_pd();
-  const __m128d x01 = _mm_sub_pd(pair(a.lo), pair(b.hi));
-  const __m128d y01 = _mm_sub_pd(pair(b.lo), pair(a.hi));
-  const __m128d x2 = _mm_sub_sd(one(a.lo + 2), one(b.hi + 2));
-  const __m128d y2 = _mm_sub_sd(one(b.lo + 2), one(a.hi + 2));
-  __m128d d01 = _mm_andnot_pd(_mm_cmpunord_pd(x01, y01), _mm_max_pd(x01, y01));
-  __m128d d2 = _mm_andnot_pd(_mm_cmpunord_sd(x2, y2), _mm_max_sd(x2, y2));
-  d01 = _mm_max_pd(d01, zero);
-  d2 = _mm_max_sd(d2, zero);
-  d01 = _mm_mul_pd(d01, d01);
-  const __m128d s01 = _mm_add_sd(d01, _mm_unpackhi_pd(d01, d01));
-  return _mm_cvtsd_f64(_mm_add_sd(s01, _mm_mul_sd(d2, d2)));
+  return gap2FromDifferences(_mm_sub_pd(pair(a.lo), pair(b.hi)), _mm_sub_pd(pair(b.lo), pair(a.hi)),
+                             _mm_sub_sd(one(a.lo + 2), one(b.hi + 2)),
+                             _mm_sub_sd(one(b.lo + 2), one(a.hi + 2)));
 }
 
 inline double cubeGap2(const Node& a, const Node& b) {
