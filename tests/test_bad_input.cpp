@@ -419,4 +419,38 @@ TEST(BadInput, NullQueryObjectManagerOrCallbackThrows) {
   expectAnswersLikeNaive(m, w.all());
 }
 
+TEST(BadInput, QueryAgainstEmptyManagerReadsNoQueryObject) {
+  World w(3);
+  w.poison(0);
+  int calls = 0;
+  auto counting = [](Object*, Object*, void* c) {
+    ++*static_cast<int*>(c);
+    return false;
+  };
+  auto counting_d = [](Object*, Object*, void* c, S&) {
+    ++*static_cast<int*>(c);
+    return false;
+  };
+  Manager e;
+  e.setup();
+  EXPECT_NO_THROW(e.collide(w[0], &calls, counting));
+  EXPECT_NO_THROW(e.distance(w[0], &calls, counting_d));
+  // Another manager's NaN object is not read either while this one is empty.
+  fcl::NaiveCollisionManager<S> naive;
+  naive.registerObject(w[0]);
+  EXPECT_NO_THROW(e.collide(&naive, &calls, counting));
+  EXPECT_NO_THROW(e.distance(&naive, &calls, counting_d));
+  EXPECT_EQ(calls, 0);
+  // Null pointers are still refused, and once there is an object to pair with, so is the NaN.
+  const fcl::CollisionCallBack<S> no_c = nullptr;
+  EXPECT_THROW(e.collide(static_cast<Object*>(nullptr), nullptr, noCollide), std::invalid_argument);
+  EXPECT_THROW(e.collide(w[1], nullptr, no_c), std::invalid_argument);
+  e.registerObject(w[1]);
+  EXPECT_THROW(e.collide(w[0], &calls, counting), std::invalid_argument);
+  EXPECT_THROW(e.distance(w[0], &calls, counting_d), std::invalid_argument);
+  EXPECT_THROW(e.collide(&naive, &calls, counting), std::invalid_argument);
+  EXPECT_EQ(calls, 0);
+  expectAnswersLikeNaive(e, {w[1]});
+}
+
 }  // namespace

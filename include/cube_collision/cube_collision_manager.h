@@ -63,15 +63,19 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   /// The registered objects, in registration order.
   void getObjects(std::vector<Object*>& objs) const override;
 
-  /// callback(managed, obj, cdata) for each other managed object whose AABB overlaps obj's.
+  /// callback(managed, obj, cdata) for each other managed object whose AABB overlaps obj's. On
+  /// an empty manager it returns without reading obj (a NaN AABB goes undetected there; a null
+  /// obj or callback still throws).
   void collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback) const override;
-  /// Branch and bound: callback(managed, obj, cdata, dist), nearest first, pruning on dist.
+  /// Branch and bound: callback(managed, obj, cdata, dist), nearest first, pruning on dist. On
+  /// an empty manager, as collide(obj).
   void distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback) const override;
   /// callback once for each unordered pair of managed objects whose AABBs overlap.
   void collide(void* cdata, fcl::CollisionCallBack<S> callback) const override;
   /// Branch and bound over every unordered pair of managed objects.
   void distance(void* cdata, fcl::DistanceCallBack<S> callback) const override;
-  /// callback(object of this, object of other) for overlapping AABBs; any manager type.
+  /// callback(object of this, object of other) for overlapping AABBs; any manager type. If this
+  /// manager is empty, the other's objects are not read.
   void collide(Base* other_manager, void* cdata, fcl::CollisionCallBack<S> callback) const override;
   /// Distance between this manager's objects and other's, as collide(other).
   void distance(Base* other_manager, void* cdata, fcl::DistanceCallBack<S> callback) const override;

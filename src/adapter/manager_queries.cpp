@@ -122,9 +122,12 @@ template <typename S>
 [[gnu::always_inline]] inline void runObjectCollide(const detail::Broadphase<S>& core,
                                                     fcl::CollisionObject<S>* obj, void* cdata,
                                                     detail::CollideFn<S> fn, QueryStats* stats) {
-  const Box<S> box = checkedQueryBox(obj, "collide");
+  if (obj == nullptr) fail("collide", "null query object");
   if (isNull(fn)) fail("collide", "null callback");
-  if (core.size() == 0) return;  // checked, nothing to meet: skip the set-up of a walk
+  // Nothing to meet: return before reading the query object, whose AABB is most likely out of
+  // cache (FCL's managers read nothing either); the NaN check needs an object to pair with.
+  if (core.size() == 0) return;
+  const Box<S> box = checkedQueryBox(obj, "collide");
   const QueryScope scope(&core);
   core.collide(obj, box, cdata, fn, stats);
 }
@@ -161,9 +164,10 @@ bool isNull(const detail::DistanceFn<S>& fn) {
 template <typename S>
 void runObjectDistance(const detail::Broadphase<S>& core, fcl::CollisionObject<S>* obj, void* cdata,
                        detail::DistanceFn<S> fn, QueryStats* stats) {
-  const Box<S> box = checkedQueryBox(obj, "distance");
+  if (obj == nullptr) fail("distance", "null query object");
   if (isNull(fn)) fail("distance", "null callback");
-  if (core.size() == 0) return;
+  if (core.size() == 0) return;  // as runObjectCollide
+  const Box<S> box = checkedQueryBox(obj, "distance");
   const QueryScope scope(&core);
   S best = std::numeric_limits<S>::max();
   core.distance(obj, box, cdata, fn, best, stats);
@@ -222,6 +226,8 @@ void againstManager(const CubeCollisionManager<S>& self, fcl::BroadPhaseCollisio
     cube_run(detail::coreOf(*cube));
     return;
   }
+  // This manager empty: no pair, and the other's objects are not read (as runObjectCollide).
+  if (detail::coreOf(self).size() == 0) return;
   std::vector<fcl::CollisionObject<S>*> objs;
   other->getObjects(objs);
   std::vector<Box<S>> boxes;
