@@ -376,31 +376,32 @@ struct DistancePolicy {
 
 // A leaf against the query object, nearest object first: the first callbacks then lower `best`
 // as much as they can, and fewer narrow-phase calls follow. Small leaves only (a depth-capped
-// leaf may be large; it is scanned in order).
+// leaf may be large; it is scanned in order). The nearest is selected afresh before each call
+// rather than the leaf sorted: most leaves make one or two calls before `best` prunes the rest,
+// and an insertion sort's branches mispredicted on about every other key. Among equal keys the
+// first slot goes first, as a stable sort would have it.
 template <typename S, class Policy>
 [[gnu::always_inline]] inline bool leafNearestFirst(const View<S>& tree, const Node& n,
                                                     const Item<S>& q, const Policy& p) {
   constexpr std::uint32_t kMax = 16;
-  typename Policy::Key key[kMax];
-  std::uint32_t order[kMax];
-  std::uint32_t m = 0;
-  for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
-    if (tree.items[i].obj == q.obj) continue;
+  using Key = typename Policy::Key;
+  constexpr Key kDone = std::numeric_limits<Key>::infinity();  // gapKey's keys are finite
+  Key key[kMax];
+  const Item<S>* items = tree.items + n.first;
+  for (std::uint32_t i = 0; i < n.count; ++i) {
+    key[i] = kDone;
+    if (items[i].obj == q.obj) continue;
     p.count.test();
-    const auto k = Policy::gapKey(tree.items[i].box, q.box);
-    std::uint32_t j = m++;
-    for (; j > 0 && key[j - 1] > k; --j) {
-      key[j] = key[j - 1];
-      order[j] = order[j - 1];
-    }
-    key[j] = k;
-    order[j] = i;
+    key[i] = Policy::gapKey(items[i].box, q.box);
   }
-  for (std::uint32_t j = 0; j < m; ++j) {
-    if (!p.worth(key[j])) continue;  // not break: a callback may raise `best` again
-    if (p.call(tree.items[order[j]], q)) return true;
+  for (;;) {
+    std::uint32_t near = 0;
+    for (std::uint32_t i = 1; i < n.count; ++i) near = key[i] < key[near] ? i : near;
+    // Every key left is at least this one: none is worth a call if it is not.
+    if (key[near] == kDone || !p.worth(key[near])) return false;
+    key[near] = kDone;
+    if (p.call(items[near], q)) return true;
   }
-  return false;
 }
 
 template <typename S, class Policy>
