@@ -78,12 +78,16 @@ struct CulledCallback {
 template <typename S>
 void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
                                       fcl::CollisionCallBack<S> callback) const {
+  // An empty manager answers here, without the calls below (FCL's managers test their size
+  // first too); bad pointers go on to be refused.
+  if (core_->size() == 0 && obj != nullptr && callback != nullptr) return;
   collide(obj, cdata, callback, nullptr);
 }
 
 template <typename S>
 void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
                                        fcl::DistanceCallBack<S> callback) const {
+  if (core_->size() == 0 && obj != nullptr && callback != nullptr) return;  // as collide(obj)
   distance(obj, cdata, callback, nullptr);
 }
 
