@@ -195,11 +195,12 @@ template <bool Groups, typename S, class Sink>
 [[gnu::always_inline]] inline bool collideRun(const View<S>& a, const View<S>& b, bool self,
                                               const Sink& sink, QueryStats* stats,
                                               const PairGate<S>* gate,
-                                              const PairKernels<S>* kernels, const Columns* use) {
+                                              const PairKernels<S>* kernels, const Columns* use,
+                                              bool fill_columns = false) {
   std::vector<Filter> bits;
   gatherSlotBits(a, self, gate, bits);
   const auto run = [&](auto count) {
-    CollidePolicy<S, decltype(count), Sink> p{sink, count, kernels, use, gate};
+    CollidePolicy<S, decltype(count), Sink> p{sink, count, kernels, use, gate, fill_columns};
     if (!bits.empty()) {
       p.slot_bits = bits.data();
       p.slot_base = a.items;
@@ -215,9 +216,13 @@ template <bool Groups, typename S, class Sink>
                                       QueryStats* stats, const PairGate<S>* gate,
                                       const PairKernels<S>* kernels) {
   const ColumnStore store(a.slots);
-  fillColumns(
-      a.items, [](std::uint32_t i) { return i; }, a.slots, store.columns(), 0);
-  return collideRun<Groups>(a, b, true, sink, stats, gate, kernels, &store.columns());
+  // Without groups the walk writes each leaf's entries as it reaches it (CollidePolicy::
+  // fill_columns): a self-collide its callback stops at the first contact, as in "is anything
+  // touching?", then costs what it visits, not a pass over every object.
+  if (Groups)
+    fillColumns(
+        a.items, [](std::uint32_t i) { return i; }, a.slots, store.columns(), 0);
+  return collideRun<Groups>(a, b, true, sink, stats, gate, kernels, &store.columns(), !Groups);
 }
 
 template <bool Groups, typename S, class Sink>

@@ -70,6 +70,12 @@ struct CollidePolicy {
   const PairKernels<S>* kernels;      // null in object queries, which test one box at a time
   const Columns* columns = nullptr;   // null: leaves are tested on the exact boxes only
   const PairGate<S>* gate = nullptr;  // null: every pair of overlapping boxes is reported
+  // With columns: each leaf's entries are written at its test with itself rather than all before
+  // the walk, so that a query its callback stops early reads only what it visits. A self walk
+  // tests both children with themselves before pairing them (childPairs), so every leaf is
+  // written before any pair test reads it; not with filter groups, which may skip a cube's pairs
+  // with itself and still pair it with others.
+  bool fill_columns = false;
   // Self walks with filter bits: the bits per slot of the view starting at slot_base, gathered
   // once per call, so that a leaf's bits are read from one or two cache lines.
   const Filter* slot_bits = nullptr;
@@ -204,6 +210,11 @@ template <bool Self, typename S, class Policy>
                                                  std::uint32_t ny, const Policy& p,
                                                  bool bits_pass) {
   if (p.columns != nullptr) {
+    if constexpr (Self) {
+      if (p.fill_columns)
+        fillColumns(
+            v.items, [x0](std::uint32_t i) { return x0 + i; }, nx, *p.columns, x0);
+    }
     countLeafTests<Self>(p, nx, ny);
     const std::uint64_t hits = p.kernels->columnHits[Self](*p.columns, x0, nx, y0, ny);
     if (hits == 0) return false;
