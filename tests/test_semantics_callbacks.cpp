@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "support/semantics_world.h"
 
 namespace cube {
@@ -28,6 +31,46 @@ struct StopAtFirst {
     return true;
   }
 };
+
+// Records the pairs of a self-collide in call order and stops after `limit` of them.
+template <typename S>
+struct StopAfter {
+  std::size_t limit;
+  std::vector<std::pair<Obj<S>*, Obj<S>*>> pairs;
+  static bool collide(Obj<S>* a, Obj<S>* b, void* d) {
+    auto& self = *static_cast<StopAfter*>(d);
+    self.pairs.emplace_back(a, b);
+    return self.pairs.size() >= self.limit;
+  }
+};
+
+// A self-collide large enough for the float columns, stopped after k calls, makes exactly the
+// first k calls of the whole walk: stopping early skips work, never a pair.
+TYPED_TEST(Semantics, SelfCollideStoppedEarlyMakesTheWholeWalksFirstCalls) {
+  using S = TypeParam;
+  for (const auto layout : {scenes::Layout::uniform, scenes::Layout::clustered}) {
+    auto sc = scene<S>(1200, 21, layout, 2.0);
+    const auto objs = sc.pointers();
+    CubeCollisionManager<S> cube;
+    cube.registerObjects(objs);
+    cube.setup();
+    StopAfter<S> all{std::size_t(-1), {}};
+    cube.collide(&all, &StopAfter<S>::collide);
+    std::vector<Pair<S>> seen;
+    for (const auto& p : all.pairs) seen.push_back(oracle::unordered(p.first, p.second));
+    std::sort(seen.begin(), seen.end());
+    ASSERT_EQ(seen, oracle::bruteSelfPairs(objs));
+    ASSERT_GT(all.pairs.size(), 100u);
+    for (const std::size_t k : {std::size_t(1), std::size_t(2), std::size_t(7), std::size_t(64),
+                                all.pairs.size() / 2, all.pairs.size()}) {
+      StopAfter<S> some{k, {}};
+      cube.collide(&some, &StopAfter<S>::collide);
+      ASSERT_EQ(some.pairs.size(), k);
+      EXPECT_TRUE(std::equal(some.pairs.begin(), some.pairs.end(), all.pairs.begin()))
+          << "k = " << k;
+    }
+  }
+}
 
 // 3. Overlap is closed: AABBs that only touch (a face, an edge, a corner) are candidates; a gap
 // of one ulp is not.
