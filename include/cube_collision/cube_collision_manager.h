@@ -25,7 +25,8 @@ struct ManagerAccess;  // the library's and tests' way to the core (src/adapter/
 /// A drop-in fcl::BroadPhaseCollisionManager<S> backed by a cube hierarchy (axis-aligned cuboids
 /// split at the median object): the same callbacks for the same pairs. Touching AABBs count, an
 /// object never pairs with itself, a callback's true stops the query, const queries are
-/// thread-safe, bad input (null, NaN AABB) throws std::invalid_argument and changes nothing.
+/// thread-safe, bad input (null, NaN AABB) throws std::invalid_argument and changes nothing (a
+/// query against an empty manager reads no object, so a NaN there goes unseen: see collide(obj)).
 /// Full contract, callbacks that mutate included: docs/guarantees.md.
 template <typename S>
 class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
