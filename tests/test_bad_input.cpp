@@ -177,6 +177,45 @@ TEST(BadInput, RegisterObjectsWithNaNLateInALargeBatchUndoesEverythingItRead) {
   EXPECT_EQ(cube::collideAll<S>(kept, request).numContacts(), naive_data.result.numContacts());
 }
 
+// A batch that names new objects more than once registers each once, in the order of its first
+// entry, whether its ids are fresh or recycled from unregistered objects and whether the batch
+// is small or large; one with a NaN entry after such repeats is undone whole.
+TEST(BadInput, RegisterObjectsWithRepeatsRegistersEachOnceOrUndoesTheBatch) {
+  World w(300);
+  for (const std::size_t size : {std::size_t(6), std::size_t(120)}) {
+    Manager m;
+    std::vector<Object*> expected;
+    for (int i = 0; i < 40; ++i) expected.push_back(w[i]);
+    m.registerObjects(expected);
+    // Ids to recycle: every other one of the first 20.
+    for (int i = 0; i < 20; i += 2) m.unregisterObject(w[i]);
+    std::vector<Object*> kept;
+    for (int i = 0; i < 40; ++i)
+      if (i >= 20 || i % 2 == 1) kept.push_back(w[i]);
+    expectAnswersLikeNaive(m, kept);
+    // New objects 100.., each twice (the second time further on), and a registered one.
+    std::vector<Object*> batch;
+    std::vector<Object*> fresh;
+    for (std::size_t k = 0; k < size; ++k) {
+      fresh.push_back(w[int(100 + k)]);
+      batch.push_back(w[int(100 + k)]);
+      if (k % 3 == 0) batch.push_back(w[30]);
+      if (k >= 2) batch.push_back(w[int(100 + k - 2)]);
+    }
+    // With a NaN entry at the end: nothing of the batch stays.
+    std::vector<Object*> poisoned = batch;
+    poisoned.push_back(w[299]);
+    w.poison(299);
+    EXPECT_NE(messageOf([&] { m.registerObjects(poisoned); }).find("NaN"), std::string::npos);
+    expectAnswersLikeNaive(m, kept);
+    w.place(299, 0.9 * 299);
+    m.registerObjects(batch);
+    std::vector<Object*> all = kept;
+    all.insert(all.end(), fresh.begin(), fresh.end());
+    expectAnswersLikeNaive(m, all);
+  }
+}
+
 // Null entries are found before any AABB is read: a batch with a NaN entry before a null one
 // names the null one.
 TEST(BadInput, RegisterObjectsNamesANullEntryBeforeAnEarlierNaNOne) {

@@ -17,6 +17,7 @@ template <typename S>
 Broadphase<S>::Broadphase(const Config& config)
     : config_((config.check(), config)), tree_(config_), policy_(config_) {
   table_.keepVolumes(config_.tight_volumes);
+  table_.attach(&tree_.items(), &unbounded_.items());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -103,7 +104,7 @@ bool Broadphase<S>::remove(const Object* obj) {
   if (id == kNone) return false;
   pairs_.invalidate();
   unplace(id);
-  table_.remove(id);
+  table_.remove(id, obj);
   maintain();
   return true;
 }
@@ -140,7 +141,7 @@ void Broadphase<S>::updateSome(Object* const* objs, const Box<S>* boxes, std::si
   for (std::size_t i = 0; i < n; ++i) {
     const ObjectId id = table_.find(objs[i]);
     if (id == kNone) continue;
-    table_.rebuildVolume(id);  // named: rebuilt whatever changed (a geometry in place, too)
+    table_.rebuildVolume(id, *objs[i]);  // named: rebuilt whatever changed (a geometry too)
     move(objs[i], grown(boxes[i], id));
     if (keep) moved_.push_back(id);
   }
@@ -246,7 +247,7 @@ bool Broadphase<S>::validate(std::string* why) const {
   };
   for (const Item<S>& it : tree_.items()) {
     if (it.obj == nullptr) continue;
-    if (it.id >= table_.idBound() || table_.object(it.id) != it.obj)
+    if (it.id >= table_.idBound() || !table_.live(it.id) || table_.object(it.id) != it.obj)
       return msg << "a slot of the cubes names the wrong id", fail();
     if (classify(it.box, config_.unbounded_limit) != BoxKind::finite)
       return msg << "an unbounded object sits in the cubes", fail();

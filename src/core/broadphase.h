@@ -427,12 +427,12 @@ const typename Broadphase<S>::Object* Broadphase<S>::updateAll(Read&& read) {
       if (sameBox(it.box, b)) {  // unmoved: same kind, nothing to refit
         // But a rotation may keep the box.
         if constexpr (decltype(stale)::value)
-          table_.refreshStaleVolume(it.id);
+          table_.refreshStaleVolume(it.id, *it.obj);
         else
-          table_.refreshVolume(it.id);
+          table_.refreshVolume(it.id, *it.obj);
         continue;
       }
-      table_.moveVolume(it.id);
+      table_.moveVolume(it.id, *it.obj);
       const BoxKind kind = classify(b, config_.unbounded_limit);
       if (kind == home) {
         it.box = b;
@@ -481,11 +481,9 @@ std::size_t Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& re
   bounded.reserve(n);
   Box<S> box;
   std::size_t refused = n;
-  ObjectId refused_id = kNone;
   const std::size_t added = table_.addBatch(objs, n, [&](std::size_t i, ObjectId id) {
     if (!read(i, box)) {
       refused = i;
-      refused_id = id;
       return false;
     }
     const Item<S> item{grown(box, id), objs[i], kNone, id};
@@ -495,14 +493,7 @@ std::size_t Broadphase<S>::addMany(Object* const* objs, std::size_t n, Read&& re
       bounded.push_back(item);
     return true;
   });
-  if (refused != n) {
-    // Undone before anything is placed: the table alone holds the batch's ids (every one of
-    // them is in `bounded`, `loose` or refused_id, since the table stopped at the refusal).
-    table_.remove(refused_id);
-    for (const Item<S>& it : loose) table_.remove(it.id);
-    for (const Item<S>& it : bounded) table_.remove(it.id);
-    return refused;
-  }
+  if (refused != n) return refused;  // the table undid the batch: nothing was placed
   if (added != 0) placeBatch(std::move(bounded), loose);
   return n;
 }

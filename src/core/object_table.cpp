@@ -31,13 +31,13 @@ ObjectId ObjectTable<S>::find(const Object* obj) const {
   for (std::size_t i = homeOf(obj);; i = nextOf(i)) {
     const std::uint32_t e = index_[i];
     if (e == 0) return kNone;
-    if (obj_[e - 1] == obj) return e - 1;
+    if (object(e - 1) == obj) return e - 1;
   }
 }
 
 template <typename S>
-void ObjectTable<S>::put(ObjectId id) {
-  std::size_t i = homeOf(obj_[id]);
+void ObjectTable<S>::put(ObjectId id, const Object* obj) {
+  std::size_t i = homeOf(obj);
   while (index_[i] != 0) i = nextOf(i);
   index_[i] = id + 1;
 }
@@ -48,16 +48,16 @@ void ObjectTable<S>::grow(std::size_t objects) {
   const std::size_t cap = std::max<std::size_t>(16, (4 * (objects + 1) + 2) / 3);
   if (cap <= index_.size()) return;
   index_.assign(cap, 0);
-  for (ObjectId id = 0; id < obj_.size(); ++id)
-    if (obj_[id] != nullptr) put(id);
+  for (ObjectId id = 0; id < seq_.size(); ++id)
+    if (live(id)) put(id, object(id));
 }
 
 template <typename S>
 void ObjectTable<S>::renumber() {
   // Registration order kept, numbers from 0: happens once every four billion registrations.
   std::vector<ObjectId> live;
-  for (ObjectId id = 0; id < obj_.size(); ++id)
-    if (obj_[id] != nullptr) live.push_back(id);
+  for (ObjectId id = 0; id < seq_.size(); ++id)
+    if (this->live(id)) live.push_back(id);
   std::sort(live.begin(), live.end(), [&](ObjectId a, ObjectId b) { return seq_[a] < seq_[b]; });
   for (std::size_t i = 0; i < live.size(); ++i) seq_[live[i]] = static_cast<std::uint32_t>(i);
   next_seq_ = static_cast<std::uint32_t>(live.size());
@@ -67,32 +67,32 @@ template <typename S>
 void ObjectTable<S>::startKeeping() {
   // Room for what the ids already have room for (a batch reserved it): growing by doubling
   // from here left the arrays up to twice their size.
-  sphere_.reserve(obj_.capacity());
-  shape_.reserve(obj_.capacity());
-  source_.reserve(obj_.capacity());
-  sphere_.assign(obj_.size(), kNoVolume);
-  shape_.assign(obj_.size(), VolumeShape{});
-  source_.assign(obj_.size(), VolumeSource{});
-  for (ObjectId id = 0; id < obj_.size(); ++id)
-    if (obj_[id] != nullptr) detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  sphere_.reserve(seq_.capacity());
+  shape_.reserve(seq_.capacity());
+  source_.reserve(seq_.capacity());
+  sphere_.assign(seq_.size(), kNoVolume);
+  shape_.assign(seq_.size(), VolumeShape{});
+  source_.assign(seq_.size(), VolumeSource{});
+  for (ObjectId id = 0; id < seq_.size(); ++id)
+    if (live(id)) detail::rebuildVolume(*object(id), source_[id], sphere_[id], shape_[id]);
   stale_ = 0;
   keeping_.store(true, std::memory_order_release);
 }
 
 template <typename S>
-void ObjectTable<S>::rebuildStale(ObjectId id) {
+void ObjectTable<S>::rebuildStale(ObjectId id, const Object& obj) {
   --stale_;
-  detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+  detail::rebuildVolume(obj, source_[id], sphere_[id], shape_[id]);
 }
 
 template <typename S>
-void ObjectTable<S>::moveKept(ObjectId id) {
+void ObjectTable<S>::moveKept(ObjectId id, const Object& obj) {
   if (!rebuildsOnMotion())
     markStale(id);
   else if (stale_ != 0 && isStale(sphere_[id]))
-    rebuildStale(id);  // a stale record's geometry part may be out of date too
+    rebuildStale(id, obj);  // a stale record's geometry part may be out of date too
   else
-    detail::moveVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    detail::moveVolume(obj, source_[id], sphere_[id], shape_[id]);
 }
 
 template <typename S>
@@ -116,12 +116,11 @@ void ObjectTable<S>::dropVolumes() {
 template <typename S>
 ObjectId ObjectTable<S>::add(Object* obj) {
   assert(obj != nullptr && find(obj) == kNone);
+  // Grown before the id is taken: the map's growth reads placed ids' objects only. Doubles, as
+  // one at a time comes the next.
+  if ((live_ + 1) * 4 > index_.size() * 3) grow(2 * (live_ + 1));
   const ObjectId id = take(obj);
-  if (live_ * 4 > index_.size() * 3)
-    grow(2 * live_);  // puts every live id, this one included; doubles, as one at a time
-                      // comes the next
-  else
-    put(id);
+  put(id, obj);
   return id;
 }
 
@@ -131,8 +130,9 @@ void ObjectTable<S>::reserve(std::size_t n) {
   // object, a batch of one would put every live id again.
   const std::size_t objects = live_ + n;
   if (objects * 4 > index_.size() * 3) grow(std::max(objects, 2 * live_));
+  // A batch's registration numbers are consecutive (addBatch tells its ids by them).
+  if (n > std::size_t(kNone - next_seq_)) renumber();
   const std::size_t fresh = n > free_.size() ? n - free_.size() : 0;
-  reserveMore(obj_, fresh);
   reserveMore(seq_, fresh);
   reserveMore(loc_, fresh);
   if (keeping_.load(std::memory_order_relaxed)) {
@@ -148,28 +148,21 @@ void ObjectTable<S>::reserve(std::size_t n) {
 }
 
 template <typename S>
-void ObjectTable<S>::remove(ObjectId id) {
-  assert(id < obj_.size() && obj_[id] != nullptr);
-  // Backward-shift deletion keeps probe chains unbroken without tombstones.
-  std::size_t hole = homeOf(obj_[id]);
-  while (index_[hole] != id + 1) hole = nextOf(hole);
-  for (std::size_t j = nextOf(hole); index_[j] != 0; j = nextOf(j)) {
-    const std::size_t home = homeOf(obj_[index_[j] - 1]);
-    // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
-    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
-    if (!stays) {
-      index_[hole] = index_[j];
-      hole = j;
-    }
-  }
-  index_[hole] = 0;
+void ObjectTable<S>::remove(ObjectId id, const Object* obj) {
+  assert(id < seq_.size() && live(id) && object(id) == obj);
+  unmap(id, obj, [this](ObjectId other) { return object(other); });
+  release(id);
+}
+
+template <typename S>
+void ObjectTable<S>::release(ObjectId id) {
   leaveGroup(id);
   if (id < excluded_count_.size() && excluded_count_[id] != 0) dropExcluded(id);
   if (stale_ != 0 && keeping_.load(std::memory_order_relaxed) && isStale(sphere_[id])) {
     --stale_;
     sphere_[id] = kNoVolume;  // a free id's record counts as no one's
   }
-  obj_[id] = nullptr;
+  seq_[id] = kNone;
   loc_[id] = kNone;
   free_.push_back(id);
   --live_;
@@ -213,8 +206,8 @@ template <typename S>
 bool ObjectTable<S>::setFilter(ObjectId id, const Filter& f) {
   if (filter(id) == f) return false;
   if (filter_.empty()) {  // the first bits other than the default: everyone else in group 0
-    filter_.assign(obj_.size(), Filter{});
-    group_.assign(obj_.size(), 0);
+    filter_.assign(seq_.size(), Filter{});
+    group_.assign(seq_.size(), 0);
     group_filter_.assign(1, Filter{});
     group_users_.assign(1, std::uint32_t(live_));
   }
@@ -229,7 +222,7 @@ template <typename S>
 void ObjectTable<S>::setOwnMargin(ObjectId id, S margin) {
   if (margin_.empty()) {
     if (margin < S(0)) return;  // what every id has already
-    margin_.assign(obj_.size(), S(-1));
+    margin_.assign(seq_.size(), S(-1));
   }
   margin_[id] = margin;
 }
@@ -273,7 +266,7 @@ void ObjectTable<S>::eraseExcluded(std::uint64_t key) {
 
 template <typename S>
 bool ObjectTable<S>::exclude(ObjectId a, ObjectId b, bool on) {
-  assert(a != b && a < obj_.size() && b < obj_.size() && obj_[a] != nullptr && obj_[b] != nullptr);
+  assert(a != b && a < seq_.size() && b < seq_.size() && live(a) && live(b));
   const std::uint64_t key = pairKey(a, b);
   if (excluded(a, b) == on) return false;
   if (!on) {
@@ -284,7 +277,7 @@ bool ObjectTable<S>::exclude(ObjectId a, ObjectId b, bool on) {
   const std::size_t need = std::size_t(std::max(a, b)) + 1;
   std::vector<std::uint32_t> count;
   if (need > excluded_count_.size()) {  // up to every id there is: one growth per id bound
-    count.assign(obj_.size(), 0);
+    count.assign(seq_.size(), 0);
     std::copy(excluded_count_.begin(), excluded_count_.end(), count.begin());
   }
   std::vector<std::uint64_t> keys;
@@ -327,7 +320,7 @@ bool ObjectTable<S>::validateExcluded(std::string* why) const {
   }
   const std::size_t cap = excluded_keys_.size();
   if (cap < 16 || (cap & (cap - 1)) != 0 || 2 * excluded_ > cap ||
-      excluded_count_.size() > obj_.size() || excluded_set_.count != excluded_count_.data() ||
+      excluded_count_.size() > seq_.size() || excluded_set_.count != excluded_count_.data() ||
       excluded_set_.n != excluded_count_.size() || excluded_set_.keys != excluded_keys_.data() ||
       excluded_set_.mask != cap - 1)
     return msg << "object table: the excluded-pair set is misshapen", fail();
@@ -337,7 +330,7 @@ bool ObjectTable<S>::validateExcluded(std::string* why) const {
     if (k == kNoPair) continue;
     ++pairs;
     const ObjectId x = ObjectId(k >> 32), y = ObjectId(k);
-    if (!(x < y) || y >= count.size() || obj_[x] == nullptr || obj_[y] == nullptr)
+    if (!(x < y) || y >= count.size() || !live(x) || !live(y))
       return msg << "object table: excluded pair (" << x << ", " << y << ") is not of two live ids",
              fail();
     if (!excluded_set_.has(x, y))
@@ -385,7 +378,6 @@ bool ObjectTable<S>::separable(int limit) const {
 
 template <typename S>
 void ObjectTable<S>::clear() {
-  obj_ = {};
   seq_ = {};
   loc_ = {};
   keeping_.store(false, std::memory_order_relaxed);
@@ -413,17 +405,16 @@ template <typename S>
 void ObjectTable<S>::objects(std::vector<Object*>& out) const {
   std::vector<ObjectId> live;
   live.reserve(live_);
-  for (ObjectId id = 0; id < obj_.size(); ++id)
-    if (obj_[id] != nullptr) live.push_back(id);
+  for (ObjectId id = 0; id < seq_.size(); ++id)
+    if (this->live(id)) live.push_back(id);
   std::sort(live.begin(), live.end(), [&](ObjectId a, ObjectId b) { return seq_[a] < seq_[b]; });
   out.resize(live.size());
-  for (std::size_t i = 0; i < live.size(); ++i) out[i] = obj_[live[i]];
+  for (std::size_t i = 0; i < live.size(); ++i) out[i] = object(live[i]);
 }
 
 template <typename S>
 std::size_t ObjectTable<S>::bytes() const {
-  return obj_.capacity() * sizeof(Object*) +
-         (seq_.capacity() + loc_.capacity() + free_.capacity() + index_.capacity()) *
+  return (seq_.capacity() + loc_.capacity() + free_.capacity() + index_.capacity()) *
              sizeof(std::uint32_t) +
          (filter_.capacity() + group_filter_.capacity()) * sizeof(Filter) +
          group_.capacity() * sizeof(Group) + group_users_.capacity() * sizeof(std::uint32_t) +
@@ -441,33 +432,41 @@ bool ObjectTable<S>::validate(std::string* why) const {
     return false;
   };
   const bool filters = !filter_.empty(), margins = !margin_.empty();
-  if (seq_.size() != obj_.size() || loc_.size() != obj_.size() ||
-      (keeping_ && (!volumes_ || sphere_.size() != obj_.size() || shape_.size() != obj_.size() ||
-                    source_.size() != obj_.size())) ||
+  const std::size_t ids = seq_.size();
+  if (loc_.size() != ids ||
+      (keeping_ &&
+       (!volumes_ || sphere_.size() != ids || shape_.size() != ids || source_.size() != ids)) ||
       (!keeping_ && !(sphere_.empty() && shape_.empty() && source_.empty())) ||
-      (filters && (filter_.size() != obj_.size() || group_.size() != obj_.size())) ||
+      (filters && (filter_.size() != ids || group_.size() != ids)) ||
       (!filters && (!group_.empty() || !group_filter_.empty())) ||
-      (margins && margin_.size() != obj_.size()) || group_users_.size() != group_filter_.size() ||
+      (margins && margin_.size() != ids) || group_users_.size() != group_filter_.size() ||
       group_filter_.size() > kMixedGroup || (filters && group_filter_.empty()))
     return msg << "object table: per-id arrays differ in length", fail();
   std::size_t live = 0;
-  std::vector<char> is_free(obj_.size(), 0);
+  std::vector<char> is_free(ids, 0);
   for (ObjectId id : free_) {
-    if (id >= obj_.size() || obj_[id] != nullptr || is_free[id])
+    if (id >= ids || this->live(id) || loc_[id] != kNone || is_free[id])
       return msg << "object table: bad free id " << id, fail();
     is_free[id] = 1;
   }
   std::vector<std::uint32_t> seqs;
   std::vector<std::uint32_t> users(group_filter_.size(), 0);
   std::size_t mixed = 0, stale = 0;
-  for (ObjectId id = 0; id < obj_.size(); ++id) {
-    if (obj_[id] == nullptr) {
+  for (ObjectId id = 0; id < ids; ++id) {
+    if (!this->live(id)) {
       if (!is_free[id]) return msg << "object table: id " << id << " lost", fail();
       continue;
     }
     ++live;
     stale += keeping_ && isStale(sphere_[id]) ? 1 : 0;
-    if (find(obj_[id]) != id) return msg << "object table: map misses id " << id, fail();
+    // Its slot names it back (the core checks the slot's place in the cubes or the list).
+    const std::uint32_t loc = loc_[id];
+    if (loc == kNone ||
+        ((loc & kUnboundedBit) ? (loc & ~kUnboundedBit) >= unbounded_->size()
+                               : loc >= cubes_->size()) ||
+        slotOf(loc).id != id || slotOf(loc).obj == nullptr)
+      return msg << "object table: id " << id << " has no slot naming it", fail();
+    if (find(object(id)) != id) return msg << "object table: map misses id " << id, fail();
     if (seq_[id] >= next_seq_) return msg << "object table: id " << id << " seq ahead", fail();
     seqs.push_back(seq_[id]);
     if (margins && !std::isfinite(margin_[id]))

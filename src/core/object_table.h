@@ -2,6 +2,8 @@
 
 // The object table: one stable ObjectId per registered object, the map from the user's pointer
 // to it, and what the core keeps per object outside the walks (registration order, location).
+// The object pointer itself lives only in its slot (Item::obj), found through the location: a
+// second copy per id would cost 8 bytes an object that the walks never read.
 // Ids are dense and reused through a free list (as Box2D's proxy ids): registering and
 // unregistering are O(1), and nothing ever renumbers them, so the pair list and anything else
 // keyed by id survives rebuilds and compactions of the cubes untouched.
@@ -48,24 +50,32 @@ class ObjectTable {
   ObjectId add(Object* obj);
   /// Registers the entries of a batch (not null) that are neither registered nor repeated
   /// earlier in it, in batch order, the map sized once, and calls `added(i, id)` for each with
-  /// its new id (nothing for the skipped ones); stops after the first call that returns false
-  /// (that entry registered too: the caller removes what it wants undone). Returns the number
-  /// registered. Inline, with the
+  /// its new id (nothing for the skipped ones). The caller places each id before the next
+  /// operation on the table. A call that returns false undoes the batch: every id it registered
+  /// is forgotten and 0 is returned. Otherwise returns the number registered. Inline, with the
   /// caller's `added` inlined too: a build of a few dozen objects is a few microseconds, and a
   /// call per entry or an array of ids handed back showed in it.
   template <class Added>
   std::size_t addBatch(Object* const* objs, std::size_t n, Added&& added);
-  /// Forgets a registered id; it will be handed out again.
-  void remove(ObjectId id);
+  /// Forgets a registered id, `obj` its object; it will be handed out again.
+  void remove(ObjectId id, const Object* obj);
   /// Forgets everything (keeps no memory).
   void clear();
 
   /// Registered objects.
   std::size_t size() const { return live_; }
+  /// Names where the slots live that locations point into (the core's cubes and unbounded list):
+  /// object() reads them. The arrays must outlive the table.
+  void attach(const ItemArray<S>* cubes, const ItemArray<S>* unbounded) {
+    cubes_ = cubes;
+    unbounded_ = unbounded;
+  }
   /// One past the largest id ever handed out since the last clear(): the length of per-id arrays.
-  std::size_t idBound() const { return obj_.size(); }
-  /// The object of a live id (nullptr for a free one).
-  Object* object(ObjectId id) const { return obj_[id]; }
+  std::size_t idBound() const { return seq_.size(); }
+  /// Whether an id below idBound() is registered.
+  bool live(ObjectId id) const { return seq_[id] != kNone; }
+  /// The object of a live, placed id, read from its slot.
+  Object* object(ObjectId id) const { return slotOf(loc_[id]).obj; }
   /// Registration order: a later registration has a larger number.
   std::uint32_t seq(ObjectId id) const { return seq_[id]; }
   const std::uint32_t* seqs() const { return seq_.data(); }
@@ -133,19 +143,19 @@ class ObjectTable {
   const VolumeShape* shapes() const {
     return keeping_.load(std::memory_order_acquire) ? shape_.data() : nullptr;
   }
-  /// A live id's object changed in a way the caller does not know (update(obj) names it): its
-  /// volumes rebuilt from its geometry and transform, or marked stale (a small table).
-  void rebuildVolume(ObjectId id) {
+  /// A live id's object `obj` changed in a way the caller does not know (update(obj) names it):
+  /// its volumes rebuilt from its geometry and transform, or marked stale (a small table).
+  void rebuildVolume(ObjectId id, const Object& obj) {
     if (!keeping_.load(std::memory_order_relaxed)) return;
     if (rebuildsOnMotion())
-      rebuildNow(id);
+      rebuildNow(id, obj);
     else
       markStale(id);
   }
-  /// Its object moved: its volumes placed anew for the transform (its geometry read again only if
-  /// its local AABB changed), or marked stale (a small table).
-  void moveVolume(ObjectId id) {
-    if (keeping_.load(std::memory_order_relaxed)) moveKept(id);
+  /// Its object `obj` moved: its volumes placed anew for the transform (its geometry read again
+  /// only if its local AABB changed), or marked stale (a small table).
+  void moveVolume(ObjectId id, const Object& obj) {
+    if (keeping_.load(std::memory_order_relaxed)) moveKept(id, obj);
   }
   /// Whether some live id's records are stale: update() asks once, before its loop (records
   /// that go stale in the loop are of objects it has passed), and calls refreshStaleVolume
@@ -154,17 +164,17 @@ class ObjectTable {
   /// Its object's box stands (update() calls it for every such object): its volumes placed anew
   /// if its transform changed since (a rotation may leave FCL's box as it was). No record of the
   /// table is stale.
-  void refreshVolume(ObjectId id) {
+  void refreshVolume(ObjectId id, const Object& obj) {
     if (keeping_.load(std::memory_order_relaxed))
-      detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+      detail::refreshVolume(obj, source_[id], sphere_[id], shape_[id]);
   }
   /// The same, and built again if they are stale.
-  void refreshStaleVolume(ObjectId id) {
+  void refreshStaleVolume(ObjectId id, const Object& obj) {
     if (!keeping_.load(std::memory_order_relaxed)) return;
     if (isStale(sphere_[id]))
-      rebuildStale(id);
+      rebuildStale(id, obj);
     else
-      detail::refreshVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+      detail::refreshVolume(obj, source_[id], sphere_[id], shape_[id]);
   }
 
   /// Registered objects in registration order.
@@ -185,13 +195,16 @@ class ObjectTable {
   }
   void renumber();
   bool rebuildsOnMotion() const { return live_ >= kVolumeRebuildMinObjects; }
-  void rebuildNow(ObjectId id) {
+  void rebuildNow(ObjectId id, const Object& obj) {
     stale_ -= isStale(sphere_[id]) ? 1 : 0;
-    detail::rebuildVolume(*obj_[id], source_[id], sphere_[id], shape_[id]);
+    detail::rebuildVolume(obj, source_[id], sphere_[id], shape_[id]);
   }
   // Out of line: update()'s loop stays as small as it was without stale records.
-  void rebuildStale(ObjectId id);
-  void moveKept(ObjectId id);
+  void rebuildStale(ObjectId id, const Object& obj);
+  void moveKept(ObjectId id, const Object& obj);
+  const Item<S>& slotOf(std::uint32_t loc) const {
+    return (loc & kUnboundedBit) ? (*unbounded_)[loc & ~kUnboundedBit] : (*cubes_)[loc];
+  }
   void markStale(ObjectId id) {
     stale_ += isStale(sphere_[id]) ? 0 : 1;
     sphere_[id].r = kStaleRadius;
@@ -200,8 +213,13 @@ class ObjectTable {
   void reserve(std::size_t n);  // room for n more ids: the map and the per-id arrays
   // A fresh or recycled id for obj, not yet in the map. Inline: addBatch calls it per entry.
   ObjectId take(Object* obj);
-  void put(ObjectId id);
-  void grow(std::size_t objects);  // sizes the map for `objects` live ids and puts them all
+  void put(ObjectId id, const Object* obj);
+  void release(ObjectId id);  // remove() but the map
+  // Sizes the map for `objects` live ids and puts them all (each placed: read from its slot).
+  void grow(std::size_t objects);
+  // Takes id (its object `obj`) out of the map; `key(other)` is the object of another id in it.
+  template <class Key>
+  void unmap(ObjectId id, const Object* obj, Key&& key);
   void leaveGroup(ObjectId id);
   Group joinGroup(const Filter& f);  // the group of bits f, made if new; counts one user
   void dropExcluded(ObjectId id);    // forgets every excluded pair of id
@@ -210,10 +228,11 @@ class ObjectTable {
   void viewExcluded();                    // excluded_set_ from the arrays
   bool validateExcluded(std::string* why) const;
 
-  std::vector<Object*> obj_;          // per id; nullptr: free
-  std::vector<std::uint32_t> seq_;    // per id: registration number
-  std::vector<std::uint32_t> loc_;    // per id: location (see location())
-  std::vector<VolumeSphere> sphere_;  // per id: the cull's volumes (see spheres())
+  const ItemArray<S>* cubes_ = nullptr;      // the slots locations point into (attach)
+  const ItemArray<S>* unbounded_ = nullptr;  // those of locations with kUnboundedBit
+  std::vector<std::uint32_t> seq_;           // per id: registration number; kNone: free
+  std::vector<std::uint32_t> loc_;           // per id: location (see location())
+  std::vector<VolumeSphere> sphere_;         // per id: the cull's volumes (see spheres())
   std::vector<VolumeShape> shape_;
   std::vector<VolumeSource> source_;  // per id: what its volumes were built from
   bool volumes_ = true;               // Config::tight_volumes
@@ -238,7 +257,7 @@ class ObjectTable {
   std::size_t excluded_ = 0;
   ExcludedSet excluded_set_;
   std::vector<ObjectId> free_;  // ids to hand out again, last freed first
-  // Open addressing with linear probing: 0 empty, else id + 1 (key: obj_[id]). Any length (a
+  // Open addressing with linear probing: 0 empty, else id + 1 (key: the id's object). Any length (a
   // pointer's first place is its hash scaled to the length, homeOf), so that a batch sizes it
   // to its load limit of 3/4 exactly: 5.3 bytes an object rather than up to twice that.
   std::vector<std::uint32_t> index_;
@@ -255,8 +274,7 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
   const std::uint32_t seq = nextSeq();  // before obj is in: a renumbering counts live ids only
   ObjectId id;
   if (free_.empty()) {
-    id = static_cast<ObjectId>(obj_.size());
-    obj_.push_back(obj);
+    id = static_cast<ObjectId>(seq_.size());
     seq_.push_back(seq);
     loc_.push_back(kNone);
     if (keeping_.load(std::memory_order_relaxed)) {
@@ -272,7 +290,6 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
   } else {
     id = free_.back();
     free_.pop_back();
-    obj_[id] = obj;
     seq_[id] = seq;
     loc_[id] = kNone;
     if (!filter_.empty()) {
@@ -290,25 +307,64 @@ inline ObjectId ObjectTable<S>::take(Object* obj) {
 }
 
 template <typename S>
+template <class Key>
+void ObjectTable<S>::unmap(ObjectId id, const Object* obj, Key&& key) {
+  // Backward-shift deletion keeps probe chains unbroken without tombstones.
+  std::size_t hole = homeOf(obj);
+  while (index_[hole] != id + 1) hole = nextOf(hole);
+  for (std::size_t j = nextOf(hole); index_[j] != 0; j = nextOf(j)) {
+    const std::size_t home = homeOf(key(index_[j] - 1));
+    // The entry at j may fill the hole unless its home lies cyclically in (hole, j].
+    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+    if (!stays) {
+      index_[hole] = index_[j];
+      hole = j;
+    }
+  }
+  index_[hole] = 0;
+}
+
+template <typename S>
 template <class Added>
 inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, Added&& added) {
   // Sized once for the whole batch; each pointer is then looked up and put with one probe
   // sequence, which also finds the batch's own repeats.
   reserve(n);
+  // The batch's ids are not placed until it ends: their objects are read from here, by
+  // registration number (the batch's are first_seq and on, reserve() having renumbered if the
+  // numbers would run out within it).
+  const std::uint32_t first_seq = next_seq_;
+  // On the stack for small batches (one object at a time is common: Python's add_object).
+  constexpr std::size_t kSmall = 16;
+  std::pair<ObjectId, Object*> small[kSmall];
+  std::vector<std::pair<ObjectId, Object*>> large(n > kSmall ? n : 0);
+  std::pair<ObjectId, Object*>* const taken = n > kSmall ? large.data() : small;
+  std::size_t count = 0;
+  const auto key = [&](ObjectId id) -> const Object* {
+    const std::uint32_t s = seq_[id];
+    return s >= first_seq ? taken[s - first_seq].second : object(id);
+  };
   // A pointer's first place is anywhere in the map: in a map larger than the caches, a miss per
   // object unless asked for a few objects ahead.
   constexpr std::size_t kAhead = 16;
   const std::size_t ahead = index_.size() >= kPrefetchMapSlots ? kAhead : 0;
-  std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (i + ahead < n && ahead != 0) __builtin_prefetch(&index_[homeOf(objs[i + ahead])]);
     std::size_t h = homeOf(objs[i]);
-    while (index_[h] != 0 && obj_[index_[h] - 1] != objs[i]) h = nextOf(h);
+    while (index_[h] != 0 && key(index_[h] - 1) != objs[i]) h = nextOf(h);
     if (index_[h] != 0) continue;  // registered already, or earlier in the batch
     const ObjectId id = take(objs[i]);
+    taken[count++] = {id, objs[i]};
     index_[h] = id + 1;
-    ++count;
-    if (!added(i, id)) break;
+    if (!added(i, id)) {
+      // Last taken first: the ones left in the map are still found by `key`.
+      while (count != 0) {
+        const auto [tid, tobj] = taken[--count];
+        unmap(tid, tobj, key);
+        release(tid);
+      }
+      return 0;
+    }
   }
   return count;
 }

@@ -84,7 +84,7 @@ class UnboundedList {
     if (node_.count != size()) return msg << "unbounded count wrong", fail();
     for (std::uint32_t p = 0; p < size(); ++p) {
       const Item<S>& it = items_[p];
-      if (it.id >= table.idBound() || table.object(it.id) != it.obj)
+      if (it.id >= table.idBound() || !table.live(it.id) || table.object(it.id) != it.obj)
         return msg << "an entry of the unbounded list names the wrong id", fail();
       if (classify(it.box, limit) != BoxKind::unbounded)
         return msg << "bounded object in the unbounded list", fail();
