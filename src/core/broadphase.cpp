@@ -167,7 +167,7 @@ void Broadphase<S>::afterMotion(bool keep, bool was_valid) {
   if (was_valid)
     pairs_.refresh(scene(), moved_, table_.idBound());
   else
-    pairs_.list(scene());
+    pairs_.list(scene(), table_);
 }
 
 template <typename S>
@@ -257,7 +257,7 @@ bool Broadphase<S>::validate(std::string* why) const {
     return msg << "the cubes and the list hold " << tree_.size() + unbounded_.size()
                << " objects, the table " << table_.size(),
            fail();
-  return pairs_.validate(scene(), why);
+  return pairs_.validate(scene(), table_, why);
 }
 
 template class Broadphase<float>;

@@ -8,6 +8,7 @@
 // unregistering are O(1), and nothing ever renumbers them, so the pair list and anything else
 // keyed by id survives rebuilds and compactions of the cubes untouched.
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -330,19 +331,26 @@ inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, 
   // Sized once for the whole batch; each pointer is then looked up and put with one probe
   // sequence, which also finds the batch's own repeats.
   reserve(n);
-  // The batch's ids are not placed until it ends: their objects are read from here, by
-  // registration number (the batch's are first_seq and on, reserve() having renumbered if the
-  // numbers would run out within it).
+  // The batch's ids are not placed until it ends: their objects are read from `taken`, in the
+  // order taken. The first `recycled` ids come from the free list (told by registration number,
+  // first_seq and on: reserve() renumbered if the numbers would run out within the batch), the
+  // rest are fresh, fresh_from and on (told by the id alone: a build's only kind).
   const std::uint32_t first_seq = next_seq_;
+  const ObjectId fresh_from = ObjectId(seq_.size());
+  const std::size_t recycled = std::min(free_.size(), n);
   // On the stack for small batches (one object at a time is common: Python's add_object).
   constexpr std::size_t kSmall = 16;
-  std::pair<ObjectId, Object*> small[kSmall];
-  std::vector<std::pair<ObjectId, Object*>> large(n > kSmall ? n : 0);
-  std::pair<ObjectId, Object*>* const taken = n > kSmall ? large.data() : small;
+  Object* small[kSmall];
+  ObjectId small_ids[kSmall];
+  std::vector<Object*> large(n > kSmall ? n : 0);
+  std::vector<ObjectId> large_ids(recycled > kSmall ? recycled : 0);
+  Object** const taken = n > kSmall ? large.data() : small;
+  ObjectId* const recycled_ids = recycled > kSmall ? large_ids.data() : small_ids;
   std::size_t count = 0;
   const auto key = [&](ObjectId id) -> const Object* {
+    if (id >= fresh_from) return taken[recycled + (id - fresh_from)];
     const std::uint32_t s = seq_[id];
-    return s >= first_seq ? taken[s - first_seq].second : object(id);
+    return s >= first_seq ? taken[s - first_seq] : object(id);
   };
   // A pointer's first place is anywhere in the map: in a map larger than the caches, a miss per
   // object unless asked for a few objects ahead.
@@ -354,14 +362,16 @@ inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, 
     while (index_[h] != 0 && key(index_[h] - 1) != objs[i]) h = nextOf(h);
     if (index_[h] != 0) continue;  // registered already, or earlier in the batch
     const ObjectId id = take(objs[i]);
-    taken[count++] = {id, objs[i]};
+    if (count < recycled) recycled_ids[count] = id;
+    taken[count++] = objs[i];
     index_[h] = id + 1;
     if (!added(i, id)) {
       // Last taken first: the ones left in the map are still found by `key`.
       while (count != 0) {
-        const auto [tid, tobj] = taken[--count];
-        unmap(tid, tobj, key);
-        release(tid);
+        --count;
+        const ObjectId t = count < recycled ? recycled_ids[count] : fresh_from + (count - recycled);
+        unmap(t, taken[count], key);
+        release(t);
       }
       return 0;
     }

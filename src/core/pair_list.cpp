@@ -39,13 +39,17 @@ void PairList<S>::release() {
     v->clear();
     v->shrink_to_fit();
   }
+  objs_ = {};
 }
 
 template <typename S>
-void PairList<S>::list(const Scene<S>& scene) {
+void PairList<S>::list(const Scene<S>& scene, const ObjectTable<S>& table) {
   valid_ = false;
   pairs_.clear();
   listAll(scene, pairs_);
+  objs_.resize(table.idBound());
+  for (ObjectId id = 0; id < objs_.size(); ++id)
+    objs_[id] = table.live(id) ? table.object(id) : nullptr;
   valid_ = true;
 }
 
@@ -84,22 +88,20 @@ void PairList<S>::refresh(const Scene<S>& scene, const std::vector<ObjectId>& mo
 }
 
 template <typename S>
-bool PairList<S>::collide(const ObjectTable<S>& table, void* data, CollideFn<S> fn,
-                          QueryStats* stats) const {
+bool PairList<S>::collide(void* data, CollideFn<S> fn, QueryStats* stats) const {
   for (const std::uint64_t p : pairs_) {
     if (stats) ++stats->callbacks;
     const auto a = static_cast<ObjectId>(p >> 32), b = static_cast<ObjectId>(p);
-    if (fn(table.object(a), a, table.object(b), b, data)) return true;
+    if (fn(objs_[a], a, objs_[b], b, data)) return true;
   }
   return false;
 }
 
 template <typename S>
 template <class Then>
-bool PairList<S>::forPassing(const ObjectTable<S>& table, const PairGate<S>& gate,
-                             Then&& then) const {
+bool PairList<S>::forPassing(const PairGate<S>& gate, Then&& then) const {
   const auto id = [](ObjectId i) { return i; };
-  const auto obj = [&](ObjectId i) { return table.object(i); };
+  const auto obj = [&](ObjectId i) { return objs_[i]; };
   // Blocks of 64 pairs: the bits first, without a branch per pair, then the rest of the rules
   // and the calls for the pairs left. Only ids and the per-id arrays are read, never a record.
   for (std::size_t base = 0; base < pairs_.size(); base += 64) {
@@ -120,18 +122,17 @@ bool PairList<S>::forPassing(const ObjectTable<S>& table, const PairGate<S>& gat
 }
 
 template <typename S>
-bool PairList<S>::collide(const ObjectTable<S>& table, const PairGate<S>& gate, void* data,
-                          CollideFn<S> fn, QueryStats* stats) const {
-  return forPassing(table, gate, [&](ObjectId a, ObjectId b) {
+bool PairList<S>::collide(const PairGate<S>& gate, void* data, CollideFn<S> fn,
+                          QueryStats* stats) const {
+  return forPassing(gate, [&](ObjectId a, ObjectId b) {
     if (stats) ++stats->callbacks;
-    return fn(table.object(a), a, table.object(b), b, data);
+    return fn(objs_[a], a, objs_[b], b, data);
   });
 }
 
 template <typename S>
-void PairList<S>::collect(const ObjectTable<S>& table, const PairGate<S>& gate,
-                          std::vector<std::uint64_t>& out) const {
-  forPassing(table, gate, [&](ObjectId a, ObjectId b) {
+void PairList<S>::collect(const PairGate<S>& gate, std::vector<std::uint64_t>& out) const {
+  forPassing(gate, [&](ObjectId a, ObjectId b) {
     out.push_back(std::uint64_t(a) << 32 | b);
     return false;
   });
@@ -139,12 +140,20 @@ void PairList<S>::collect(const ObjectTable<S>& table, const PairGate<S>& gate,
 
 template <typename S>
 std::size_t PairList<S>::bytes() const {
-  return (pairs_.capacity() + marks_.capacity() + found_.capacity()) * sizeof(std::uint64_t);
+  return (pairs_.capacity() + marks_.capacity() + found_.capacity()) * sizeof(std::uint64_t) +
+         objs_.capacity() * sizeof(objs_[0]);
 }
 
 template <typename S>
-bool PairList<S>::validate(const Scene<S>& scene, std::string* why) const {
+bool PairList<S>::validate(const Scene<S>& scene, const ObjectTable<S>& table,
+                           std::string* why) const {
   if (!valid_) return true;
+  // Ids past the listed ones may exist (a refused batch leaves its fresh ids free), none live.
+  for (ObjectId id = 0; id < table.idBound(); ++id)
+    if (table.live(id) && (id >= objs_.size() || objs_[id] != table.object(id))) {
+      if (why) *why = "the pair list names the wrong object of an id";
+      return false;
+    }
   std::vector<std::uint64_t> want, got(pairs_);
   listAll(scene, want);
   orderAll(want);

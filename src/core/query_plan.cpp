@@ -137,8 +137,7 @@ template <typename S>
   const PairGate<S>* g = p.walkGate();
   if (!p.canonical) {
     if (p.from_list)
-      return g != nullptr ? pairs_.collide(table_, *g, data, fn, stats)
-                          : pairs_.collide(table_, data, fn, stats);
+      return g != nullptr ? pairs_.collide(*g, data, fn, stats) : pairs_.collide(data, fn, stats);
     if (p.split) return collideSplit(p, data, fn, nullptr);
     if (p.one_object)
       return forViews(b, [&](const View<S>& x, const View<S>&, bool) {
@@ -150,7 +149,7 @@ template <typename S>
   }
   std::vector<std::uint64_t> found;
   if (p.from_list) {
-    pairs_.collect(table_, *p.gate, found);  // canonical order is a rule: the gate is set
+    pairs_.collect(*p.gate, found);  // canonical order is a rule: the gate is set
   } else if (p.split) {
     collideSplit(p, data, fn, &found);
   } else {
