@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <utility>
@@ -342,12 +343,14 @@ inline std::size_t ObjectTable<S>::addBatch(Object* const* objs, std::size_t n, 
   constexpr std::size_t kSmall = 16;
   Object* small[kSmall];
   ObjectId small_ids[kSmall];
-  std::vector<Object*> large(n > kSmall ? n : 0);
-  std::vector<ObjectId> large_ids(recycled > kSmall ? recycled : 0);
-  Object** const taken = n > kSmall ? large.data() : small;
-  ObjectId* const recycled_ids = recycled > kSmall ? large_ids.data() : small_ids;
+  // Not value-initialised: every entry is written before it is read.
+  const std::unique_ptr<Object*[]> large(n > kSmall ? new Object*[n] : nullptr);
+  const std::unique_ptr<ObjectId[]> large_ids(recycled > kSmall ? new ObjectId[recycled] : nullptr);
+  Object** const taken = n > kSmall ? large.get() : small;
+  ObjectId* const recycled_ids = recycled > kSmall ? large_ids.get() : small_ids;
   std::size_t count = 0;
-  const auto key = [&](ObjectId id) -> const Object* {
+  // By value: the probe loop keeps them in registers across the stores of take().
+  const auto key = [this, taken, fresh_from, recycled, first_seq](ObjectId id) -> const Object* {
     if (id >= fresh_from) return taken[recycled + (id - fresh_from)];
     const std::uint32_t s = seq_[id];
     return s >= first_seq ? taken[s - first_seq] : object(id);
