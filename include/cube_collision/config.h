@@ -47,7 +47,8 @@ struct Config {
   /// for the list without hidden mutable state, so the caller says so. Trade-off: each update
   /// costs more (a query per moved object and a pass over the list, or a listing: about a self
   /// walk), which a caller who runs only object queries would pay for nothing; a self-collide
-  /// after small motions reads the list instead of walking. 8 bytes per overlapping pair. Same
+  /// after small motions reads the list instead of walking. 8 bytes per overlapping pair and 8
+  /// per object (each object's pointer beside its id, kept while the list is valid). Same
   /// pairs either way; right after a listing in the same order, later the moved objects' pairs
   /// last.
   bool keep_pairs = false;
