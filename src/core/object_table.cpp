@@ -149,7 +149,7 @@ void ObjectTable<S>::reserve(std::size_t n) {
 
 template <typename S>
 void ObjectTable<S>::remove(ObjectId id, const Object* obj) {
-  assert(id < seq_.size() && live(id) && object(id) == obj);
+  assert(id < seq_.size() && live(id));  // its slot is gone already: obj comes from the caller
   unmap(id, obj, [this](ObjectId other) { return object(other); });
   release(id);
 }
