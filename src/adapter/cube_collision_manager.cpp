@@ -50,6 +50,7 @@ void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_
   // an array of boxes would cost 48 bytes an object at the build's peak). Each AABB sits in an
   // object of its own, out of cache in a large batch: ask for a few ahead.
   const std::size_t n = other_objs.size();
+  if (n == 0) return;  // nothing changes: no pass over the core's state
   for (std::size_t i = 0; i < n; ++i)
     if (other_objs[i] == nullptr)
       fail("registerObjects", "entry #" + std::to_string(i) + " is null; nothing registered");
