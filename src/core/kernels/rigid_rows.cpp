@@ -57,14 +57,9 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
 
 #if defined(CUBE_RIGID_AVX2)
 
-// (v1, v2, v0, v3): each lane's partner column for the dot products, and the cross product's
-// first factor.
+// (v1, v2, v0, v3): each lane's partner column for the dot products.
 [[gnu::target("avx2")]] inline __m256d rotate(__m256d v) {
   return _mm256_permute4x64_pd(v, 0xC9);  // lanes 1, 2, 0, 3
-}
-// (v2, v0, v1, v3).
-[[gnu::target("avx2")]] inline __m256d rotateBack(__m256d v) {
-  return _mm256_permute4x64_pd(v, 0xD2);  // lanes 2, 0, 1, 3
 }
 
 [[gnu::target("avx2")]] std::size_t avx2(const double* rows, std::size_t n, double* cols) {
@@ -83,23 +78,22 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
                       _mm256_mul_pd(r2, rotate(r2)));
     const __m256d fin = _mm256_add_pd(_mm256_add_pd(_mm256_sub_pd(r0, r0), _mm256_sub_pd(r1, r1)),
                                       _mm256_sub_pd(r2, r2));
-    // r1 x r2 in lanes 0-2.
-    const __m256d x = _mm256_sub_pd(_mm256_mul_pd(rotate(r1), rotateBack(r2)),
-                                    _mm256_mul_pd(rotateBack(r1), rotate(r2)));
-    const __m256d d = _mm256_mul_pd(r0, x);
-    alignas(32) double dl[4];
-    _mm256_store_pd(dl, d);
-    const double det = (dl[0] + dl[1]) + dl[2];
-    // Lanes 0-2: norms and dot products; lane 3: the translation finite.
+    // The determinant from the matrix in memory, in the portable order: in registers, the
+    // cross product's lane rotations would queue behind the transpose's on the one shuffle port.
+    const double x0 = m[5] * m[10] - m[6] * m[9];
+    const double x1 = m[6] * m[8] - m[4] * m[10];
+    const double x2 = m[4] * m[9] - m[5] * m[8];
+    const double det = (m[0] * x0 + m[1] * x1) + m[2] * x2;
+    // Lanes 0-2: norms and dot products; lane 3: the translation finite; and the last row. One
+    // mask for all of them.
     const __m256d norm_ok =
         _mm256_cmp_pd(_mm256_andnot_pd(sign, _mm256_sub_pd(s, one)), tol, _CMP_LE_OQ);
     const __m256d dot_ok = _mm256_cmp_pd(_mm256_andnot_pd(sign, q), tol, _CMP_LE_OQ);
     const __m256d fin_ok = _mm256_cmp_pd(fin, _mm256_setzero_pd(), _CMP_EQ_OQ);
     const __m256d last_ok = _mm256_cmp_pd(r3, last, _CMP_EQ_OQ);
-    const int mask = _mm256_movemask_pd(_mm256_and_pd(norm_ok, dot_ok)) & 7;
-    if (!((mask == 7) & ((_mm256_movemask_pd(fin_ok) & 8) != 0) &
-          (_mm256_movemask_pd(last_ok) == 15) & (det > 0.5)))
-      return k;
+    const __m256d ok =
+        _mm256_and_pd(_mm256_blend_pd(_mm256_and_pd(norm_ok, dot_ok), fin_ok, 0x8), last_ok);
+    if (!((_mm256_movemask_pd(ok) == 15) & (det > 0.5))) return k;
     // The transpose: column j is (r0[j], r1[j], r2[j], r3[j]).
     const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
     const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
