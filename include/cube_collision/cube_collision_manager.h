@@ -51,7 +51,8 @@ class CubeCollisionManager final : public fcl::BroadPhaseCollisionManager<S> {
   void registerObject(Object* obj) override;
   /// Removes obj; no effect if it is not registered.
   void unregisterObject(Object* obj) override;
-  /// Optional and idempotent: builds the hierarchy (first call), later rebuilds a degraded one.
+  /// Optional and idempotent: builds the hierarchy (the first call with objects registered; on a
+  /// manager that has never held one it does nothing), later rebuilds a degraded one.
   void setup() override;
   /// Re-reads every AABB and refits; a NaN AABB throws once the others are updated (its own not).
   void update() override;
