@@ -14,7 +14,9 @@
 // 30-link robot, one thread), edges (checkMotions of 20 collision-free edges of 32 states of that
 // robot, one thread), single (the states of states, one call each), singlekept (the same with one
 // BatchScratch kept for every call), edgeeach / edgekept (the edges of edges, one checkMotion
-// over a pose function each, without / with a kept BatchScratch), first (the first pipeline query
+// over a pose function each, without / with a kept BatchScratch), se3edges / boundedges (the edges
+// of edges checked continuously: SE(3) bounds from the poses / the caller's bounds), first (the
+// first pipeline query
 // of a manager: collideAll with FCL's default request, which builds the per-object volumes), still
 // (update() with nothing moved, then a self-collide, counting callback, 10 steps), keep (the same
 // with Config::keep_pairs and 1% of the objects moved before each step, the motion not counted),
@@ -116,7 +118,7 @@ int main(int argc, char** argv) {
   Run run;
   if (which == "distance" || which == "contacts" || which == "states" || which == "edges" ||
       which == "single" || which == "long" || which == "singlekept" || which == "edgeeach" ||
-      which == "edgekept")
+      which == "edgekept" || which == "se3edges" || which == "boundedges")
     cube::collideAll<S>(world);  // the volumes the first pipeline query builds ("first")
 
   if (which == "self") {
@@ -208,10 +210,13 @@ int main(int argc, char** argv) {
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = 1;
   } else if (which == "states" || which == "edges" || which == "single" || which == "long" ||
-             which == "singlekept" || which == "edgeeach" || which == "edgekept") {
+             which == "singlekept" || which == "edgeeach" || which == "edgekept" ||
+             which == "se3edges" || which == "boundedges") {
     // states: 50 random states; edges: 20 edges of 32 states each, joints interpolated between
     // a random state and one near it (a planner's edges), checked in path order; long: 50
     // random states of links 8 typical sizes long among meshes (most states meet several).
+    // se3edges, boundedges: the edges checked continuously, with the SE(3) bounds from the poses
+    // and with the caller's bounds (each link a fiftieth of its length a step).
     cube::BodySet<S> body;
     const double len = scenes::typicalSize(o) * (which == "long" ? 8 : 1);
     for (int i = 0; i < 30; ++i)
@@ -233,7 +238,8 @@ int main(int argc, char** argv) {
         t.translate(fcl::Vector3d(0, 0, len));
       }
     };
-    const bool edges = which == "edges" || which == "edgeeach" || which == "edgekept";
+    const bool edges = which == "edges" || which == "edgeeach" || which == "edgekept" ||
+                       which == "se3edges" || which == "boundedges";
     const int count = edges ? 20 : 50, per_edge = edges ? 32 : 1;
     std::vector<std::size_t> starts;
     cube::BatchOptions probe;
@@ -269,6 +275,8 @@ int main(int argc, char** argv) {
     one.threads = 1;
     cube::BatchScratch kept;
     if (which == "singlekept" || which == "edgekept") one.scratch = &kept;
+    one.continuous = which == "se3edges";
+    const std::vector<S> bounds(which == "boundedges" ? poses.size() : 0, len / 50);
     CALLGRIND_START_INSTRUMENTATION;
     if (which == "edgeeach" || which == "edgekept") {  // each edge a call of its own
       for (std::size_t e = 0; e < starts.size(); ++e) {
@@ -283,6 +291,10 @@ int main(int argc, char** argv) {
             cube::checkMotion(world, body, n, pose_of, cube::MotionOrder::path, one);
         run.checksum += f == cube::kNoIndex ? 0 : f + 1;
       }
+    } else if (which == "boundedges") {
+      for (const std::size_t f :
+           cube::checkMotions(world, body, poses, starts, bounds, cube::MotionOrder::path, one))
+        run.checksum += f == cube::kNoIndex ? 0 : f + 1;
     } else if (edges) {
       for (const std::size_t f :
            cube::checkMotions(world, body, poses, starts, cube::MotionOrder::path, one))

@@ -230,12 +230,17 @@ class CubeMotion final : public ob::MotionValidator {
     const cube::BatchOptions options = withThreadScratch(options_);
     if (refine_ == 0)
       return {cube::checkMotion(world_, body_, states, pose_of, order, options), nd};
-    std::vector<S> bounds(states * kJoints);
+    double step[kJoints];  // per link, the same for every step of the edge
     for (int l = 0; l < kJoints; ++l) {
       double b = 0;
       for (int j = 0; j <= l; ++j) b += std::abs(to[j] - from[j]) * (l - j + 1.01) * kLength;
-      for (std::size_t k = 0; k < states; ++k) bounds[k * kJoints + l] = b / double(nd);
+      step[l] = b / double(nd);
     }
+    // Kept between calls on this thread (a planner checks many edges): no allocation per edge.
+    thread_local std::vector<S> bounds;
+    bounds.resize(states * kJoints);
+    for (std::size_t k = 0; k < states; ++k)
+      std::copy(step, step + kJoints, bounds.begin() + std::ptrdiff_t(k * kJoints));
     return {cube::checkMotion(world_, body_, states, pose_of, bounds, order, options), nd};
   }
 

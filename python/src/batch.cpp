@@ -16,6 +16,7 @@
 #include <string>
 
 #include "manager.h"
+#include "queries/motion_bounds.h"
 
 namespace cubepy {
 
@@ -95,11 +96,8 @@ Array motionBounds(py::handle obj, std::size_t states, std::size_t links) {
                    {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
   const double* d = b.data();
   const std::size_t count = states * links;
-  // One pass without a branch per value (NaN fails both tests), the offender sought only then.
-  bool ok = true;
-  for (std::size_t i = 0; i < count; ++i)
-    ok &= (d[i] >= 0) & (d[i] <= std::numeric_limits<double>::max());
-  if (ok) return b;
+  // One pass without a branch per value, the offender sought only then.
+  if (cube::detail::allFiniteNonNegative(d, count)) return b;
   for (std::size_t i = 0; i < count; ++i)
     if (!(d[i] >= 0) || !std::isfinite(d[i]))
       throw py::value_error("motion_bounds[" + std::to_string(i / links) + ", " +

@@ -11,7 +11,12 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "queries/body_links.h"
 
@@ -50,6 +55,36 @@ S se3MotionBound(const fcl::Transform3<S>& a, const fcl::Transform3<S>& b, S rea
   return (b.translation() - a.translation()).norm() + angle * reach;
 }
 
+// Whether v[0 .. n) are all finite and >= 0 (-0 included): one pass without a branch per value
+// (a NaN fails both tests), so that a check that reads few states of a long edge pays little for
+// its bounds; the offender is sought only where one is found.
+template <typename S>
+bool allFiniteNonNegative(const S* v, std::size_t n) {
+  // Masks of integers: the compiler makes vector compares of this loop for float.
+  using Mask = std::conditional_t<sizeof(S) == 8, std::int64_t, std::int32_t>;
+  Mask good = -1;
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  if constexpr (std::is_same<S, double>::value) {  // not vectorized by the compiler: two by two
+    const __m128d zero = _mm_setzero_pd();
+    const __m128d top = _mm_set1_pd(std::numeric_limits<double>::max());
+    __m128d g0 = _mm_cmpeq_pd(zero, zero), g1 = g0;
+    for (; i + 4 <= n; i += 4) {
+      const __m128d x0 = _mm_loadu_pd(v + i), x1 = _mm_loadu_pd(v + i + 2);
+      g0 = _mm_and_pd(g0, _mm_and_pd(_mm_cmpge_pd(x0, zero), _mm_cmple_pd(x0, top)));
+      g1 = _mm_and_pd(g1, _mm_and_pd(_mm_cmpge_pd(x1, zero), _mm_cmple_pd(x1, top)));
+    }
+    if (_mm_movemask_pd(_mm_and_pd(g0, g1)) != 3) return false;
+  }
+#endif
+  for (; i < n; ++i) {
+    const Mask ge = v[i] >= S(0) ? -1 : 0;
+    const Mask le = v[i] <= std::numeric_limits<S>::max() ? -1 : 0;
+    good &= ge & le;
+  }
+  return good != 0;
+}
+
 // Throws unless `bounds` holds `expected` finite values >= 0 (and a pointer where it holds any).
 template <typename S>
 void checkMotionBounds(const MotionBounds<S>& bounds, std::size_t expected, const char* where) {
@@ -58,11 +93,7 @@ void checkMotionBounds(const MotionBounds<S>& bounds, std::size_t expected, cons
                           " values where the states need " + std::to_string(expected));
   if (bounds.size != 0 && bounds.data == nullptr)
     batchError(where, "motion_bounds has a null pointer");
-  // One pass without a branch per value (NaN fails both tests); the offender sought only then.
-  bool ok = true;
-  for (std::size_t i = 0; i < bounds.size; ++i)
-    ok &= (bounds.data[i] >= S(0)) & (bounds.data[i] <= std::numeric_limits<S>::max());
-  if (ok) return;
+  if (allFiniteNonNegative(bounds.data, bounds.size)) return;
   for (std::size_t i = 0; i < bounds.size; ++i)
     if (!(bounds.data[i] >= S(0)) || !std::isfinite(bounds.data[i]))
       batchError(where, "motion bound " + std::to_string(i) + " (" +
