@@ -263,11 +263,12 @@ answer is the first state in `order` whose raised check fails. Conservative: an 
 refused though nothing is touched. Every state the discrete check finds colliding fails too.
 continuous=True computes the bounds from the poses, for each link moving in SE(3) between states
 (translation linear, rotation along the geodesic): |t1 - t0| + angle * the farthest corner of
-the link's local box from its origin; they do not hold for other motions (a joint-space edge of
-an arm): give those bounds instead. motion_bounds: (states, links) float array, [k, l] bounds
-link l's motion from state k to k + 1 of the same edge (each edge's last state's values are not
-used, but checked); with it the check is continuous whatever `continuous` says. Nothing is said
-of the motion before an edge's first state or after its last.
+the link's local box from its origin (the angle never below the rotation's, at most 2e-14
+above it); they do not hold for other motions (a joint-space edge of an arm): give those bounds
+instead. motion_bounds: (states, links) float array, [k, l] bounds link l's motion from state k
+to k + 1 of the same edge (each edge's last state's values are not used, but checked); with it
+the check is continuous whatever `continuous` says. Nothing is said of the motion before an
+edge's first state or after its last.
 
 Raises ValueError for edge_starts not starting at 0 or not increasing, motion_bounds of another
 shape or with a negative, NaN or infinite value (before any work), or as check_states; TypeError
