@@ -332,16 +332,16 @@ std::vector<std::size_t> checkMotions(
 // edge's first state or after its last.
 // Bounds computed for motion interpolated in SE(3) (BatchOptions::continuous): each link's
 // translation linear and its rotation along the geodesic between its two orientations, b =
-// |t1 - t0| + theta * rho, theta the rotation angle of R0^T R1 (computed never below it, and at
-// most 2e-14 rad above it) and rho the largest distance from the link frame's origin to a corner
-// of the link's local AABB. They hold only if the caller's links move that way between states; a
-// robot interpolated in joint space needs bounds from its kinematics (the overloads that take
-// them). Cost: runs of an edge's states share the world's walk as in checkMotions, each state
-// with its own raised margins; a state's check with raised margins meets more candidate pairs,
-// and a pair within the raised margins but apart costs FCL calls the records do not settle (on
-// meshes, walks of their BVH): per state, from about the discrete check's cost where the raises
-// are small against the gaps between links and objects, to many times it where they are not;
-// computing SE(3) bounds reads the neighbours' poses.
+// |t1 - t0| + theta * rho, theta the rotation angle of R0^T R1 (computed never below it: at most
+// 2e-14 rad above it in double, then rounded up in float) and rho the largest distance from the
+// link frame's origin to a corner of the link's local AABB. They hold only if the caller's links
+// move that way between states; a robot interpolated in joint space needs bounds from its
+// kinematics (the overloads that take them). Cost: runs of an edge's states share the world's walk
+// as in checkMotions, each state with its own raised margins; a state's check with raised margins
+// meets more candidate pairs, and a pair within the raised margins but apart costs FCL calls the
+// records do not settle (on meshes, walks of their BVH): per state, from about the discrete check's
+// cost where the raises are small against the gaps between links and objects, to many times it
+// where they are not; computing SE(3) bounds reads the neighbours' poses.
 
 /// checkMotions with continuous checking (see above) and the caller's bounds: motion_bounds[k *
 /// body.size() + l] bounds link l's motion from state k to state k + 1 of the same edge, one
