@@ -16,11 +16,10 @@
 // BatchScratch kept for every call), edgeeach / edgekept (the edges of edges, one checkMotion
 // over a pose function each, without / with a kept BatchScratch), se3edges / boundedges (the edges
 // of edges checked continuously: SE(3) bounds from the poses / the caller's bounds), first (the
-// first pipeline query
-// of a manager: collideAll with FCL's default request, which builds the per-object volumes), still
-// (update() with nothing moved, then a self-collide, counting callback, 10 steps), keep (the same
-// with Config::keep_pairs and 1% of the objects moved before each step, the motion not counted),
-// keepstill (keep_pairs, nothing moved). distance, contacts and states count steady queries: one
+// first pipeline query of a manager: collideAll with FCL's default request, which builds the
+// per-object volumes), still (update() with nothing moved, then a self-collide, counting
+// callback, 10 steps), keep (the same with Config::keep_pairs and 1% of the objects moved before
+// each step, the motion not counted), keepstill (keep_pairs, nothing moved). distance, contacts and states count steady queries: one
 // pipeline query runs before the count, as it would have in a program that queries the world
 // repeatedly. The paths that cull pairs of no object table, from the FCL objects: merged
 // (collideMerged of the world's candidate pairs, every contact, one thread), pairs (collidePairs
