@@ -17,18 +17,20 @@
 // over a pose function each, without / with a kept BatchScratch), se3edges / boundedges (the edges
 // of edges checked continuously: SE(3) bounds from the poses / the caller's bounds), first (the
 // first pipeline query of a manager: collideAll with FCL's default request, which builds the
-// per-object volumes), still (update() with nothing moved, then a self-collide, counting
+// per-object volumes), build (a new manager: registerObjects and setup(), 3 times), turn (every
+// object turned about the origin as FCL's update program turns them, then update(), which
+// rebuilds; 3 motions), still (update() with nothing moved, then a self-collide, counting
 // callback, 10 steps), keep (the same with Config::keep_pairs and 1% of the objects moved before
-// each step, the motion not counted), keepstill (keep_pairs, nothing moved). distance, contacts and states count steady queries: one
-// pipeline query runs before the count, as it would have in a program that queries the world
-// repeatedly. The paths that cull pairs of no object table, from the FCL objects: merged
-// (collideMerged of the world's candidate pairs, every contact, one thread), pairs (collidePairs
-// of them, FCL's default request, one thread), callback (the world's self-collide with
-// cube::defaultCollisionCallback, every contact), margins (contactsWithinMargin of a self-collide
-// with a margin on every object, one thread), fcltree (collideAll on FCL's dynamic AABB tree of
-// the scene, every contact, one thread). cullpairs: a self-collide of a small manager (170
-// objects) with Config::cull_pairs and a callback running fcl::collide, after a first one that
-// builds its records.
+// each step, the motion not counted), keepstill (keep_pairs, nothing moved). distance, contacts and
+// states count steady queries: one pipeline query runs before the count, as it would have in a
+// program that queries the world repeatedly. The paths that cull pairs of no object table, from the
+// FCL objects: merged (collideMerged of the world's candidate pairs, every contact, one thread),
+// pairs (collidePairs of them, FCL's default request, one thread), callback (the world's
+// self-collide with cube::defaultCollisionCallback, every contact), margins (contactsWithinMargin
+// of a self-collide with a margin on every object, one thread), fcltree (collideAll on FCL's
+// dynamic AABB tree of the scene, every contact, one thread). cullpairs: a self-collide of a small
+// manager (170 objects) with Config::cull_pairs and a callback running fcl::collide, after a first
+// one that builds its records.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/default_broadphase_callbacks.h>
@@ -165,6 +167,45 @@ int main(int argc, char** argv) {
     CALLGRIND_STOP_INSTRUMENTATION;
     world.collide(&run.checksum, countPair);
     run.calls = 10;
+  } else if (which == "build") {
+    // A drop-in user's build: a new manager, registerObjects, setup(); three times.
+    CALLGRIND_START_INSTRUMENTATION;
+    for (int k = 0; k < 3; ++k) {
+      cube::CubeCollisionManager<S> fresh;
+      fresh.registerObjects(scene.pointers());
+      fresh.setup();
+      run.checksum += fresh.size();
+    }
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = 3;
+  } else if (which == "turn") {
+    // FCL's update program's motion (test_fcl_broadphase_collision_1.cpp): every object turned
+    // about the origin by up to 10 degrees about each axis and moved by up to 1% of the scene,
+    // then update(), which finds the cubes far past the rebuild threshold and rebuilds; three
+    // motions from the scene's poses, the motion not counted.
+    std::vector<fcl::Transform3d> home;
+    for (const auto& obj : scene.objects) home.push_back(obj->getTransform());
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const double max_angle = 10.0 / 180.0 * 3.14159265358979323846;
+    for (int step = 0; step < 3; ++step) {
+      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const fcl::Matrix3d dr(fcl::AngleAxisd(u(rng) * max_angle, fcl::Vector3d::UnitX()) *
+                               fcl::AngleAxisd(u(rng) * max_angle, fcl::Vector3d::UnitY()) *
+                               fcl::AngleAxisd(u(rng) * max_angle, fcl::Vector3d::UnitZ()));
+        const fcl::Vector3d dt = 0.01 * o.half_extent * fcl::Vector3d(u(rng), u(rng), u(rng));
+        fcl::Transform3d moved = fcl::Transform3d::Identity();
+        moved.linear() = dr * home[i].linear();
+        moved.translation() = dr * home[i].translation() + dt;
+        scene.objects[i]->setTransform(moved);
+        scene.objects[i]->computeAABB();
+      }
+      CALLGRIND_START_INSTRUMENTATION;
+      world.update();
+      CALLGRIND_STOP_INSTRUMENTATION;
+      world.collide(&run.checksum, countPair);
+    }
+    run.calls = 3;
   } else if (which == "still" || which == "keep" || which == "keepstill") {
     // A motion loop's steps as a user of FCL's interface runs them: update(), then a
     // self-collide with the user's callback, 10 steps; 1% of the objects moved before each
