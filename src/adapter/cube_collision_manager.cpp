@@ -44,6 +44,9 @@ const Config& CubeCollisionManager<S>::config() const {
 
 template <typename S>
 void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_objs) {
+  // Nothing to register on an empty manager: return before touching any other code (an empty
+  // manager is never inside one of its queries, so the guard below could not refuse).
+  if (other_objs.empty() && core_->size() == 0) return;
   refuseInsideQuery(core_.get(), "registerObjects");
   // Null entries first (the pointers alone); the AABBs are then read once, as the core
   // registers them, and a NaN one undoes the batch (a pass of its own read each AABB twice, and
@@ -87,6 +90,7 @@ void CubeCollisionManager<S>::unregisterObject(Object* obj) {
 
 template <typename S>
 void CubeCollisionManager<S>::setup() {
+  if (core_->setupIsNoOp()) return;  // as registerObjects: an empty manager runs no query
   refuseInsideQuery(core_.get(), "setup");
   core_->setup();
 }

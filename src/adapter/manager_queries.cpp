@@ -76,22 +76,6 @@ struct CulledCallback {
 }  // namespace
 
 template <typename S>
-void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
-                                      fcl::CollisionCallBack<S> callback) const {
-  // An empty manager answers here, without the calls below (FCL's managers test their size
-  // first too); bad pointers go on to be refused.
-  if (core_->size() == 0 && obj != nullptr && callback != nullptr) return;
-  collide(obj, cdata, callback, nullptr);
-}
-
-template <typename S>
-void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
-                                       fcl::DistanceCallBack<S> callback) const {
-  if (core_->size() == 0 && obj != nullptr && callback != nullptr) return;  // as collide(obj)
-  distance(obj, cdata, callback, nullptr);
-}
-
-template <typename S>
 void CubeCollisionManager<S>::collide(void* cdata, fcl::CollisionCallBack<S> callback) const {
   collide(cdata, callback, nullptr);
 }
@@ -145,17 +129,26 @@ void runSelfCollide(const detail::Broadphase<S>& core, void* cdata, detail::Coll
   core.collideSelf(cdata, fn, stats);
 }
 
+// collide(obj) with the user's callback, culled by Config::cull_pairs if set. Out of line: see
+// the FCL entries below.
+template <typename S>
+[[gnu::noinline]] void collideObject(const detail::Broadphase<S>& core,
+                                     fcl::CollisionObject<S>* obj, void* cdata,
+                                     fcl::CollisionCallBack<S> callback, QueryStats* stats) {
+  // Without the cull, the user's callback straight: none of the cull's set-up in a short query.
+  if (!core.config().cull_pairs)
+    return runObjectCollide(core, obj, cdata, detail::CollideFn<S>(callback), stats);
+  CulledCallback<S> culled{cdata, callback};
+  const auto fn = culled.install(true, cdata, core.table(), nullptr);
+  runObjectCollide(core, obj, cdata, fn, stats);
+}
+
 }  // namespace
 
 template <typename S>
 void CubeCollisionManager<S>::collide(Object* obj, void* cdata, fcl::CollisionCallBack<S> callback,
                                       QueryStats* stats) const {
-  // Without the cull, the user's callback straight: none of the cull's set-up in a short query.
-  if (!core_->config().cull_pairs)
-    return runObjectCollide(*core_, obj, cdata, detail::CollideFn<S>(callback), stats);
-  CulledCallback<S> culled{cdata, callback};
-  const auto fn = culled.install(core_->config().cull_pairs, cdata, core_->table(), nullptr);
-  runObjectCollide(*core_, obj, cdata, fn, stats);
+  collideObject(*core_, obj, cdata, callback, stats);
 }
 
 namespace {
@@ -166,8 +159,9 @@ bool isNull(const detail::DistanceFn<S>& fn) {
 }
 
 template <typename S>
-void runObjectDistance(const detail::Broadphase<S>& core, fcl::CollisionObject<S>* obj, void* cdata,
-                       detail::DistanceFn<S> fn, QueryStats* stats) {
+[[gnu::noinline]] void runObjectDistance(const detail::Broadphase<S>& core,
+                                         fcl::CollisionObject<S>* obj, void* cdata,
+                                         detail::DistanceFn<S> fn, QueryStats* stats) {
   if (obj == nullptr) fail("distance", "null query object");
   if (isNull(fn)) fail("distance", "null callback");
   if (core.size() == 0) return;  // as runObjectCollide
@@ -193,6 +187,24 @@ template <typename S>
 void CubeCollisionManager<S>::distance(Object* obj, void* cdata, fcl::DistanceCallBack<S> callback,
                                        QueryStats* stats) const {
   runObjectDistance(*core_, obj, cdata, detail::DistanceFn<S>(callback), stats);
+}
+
+// An empty manager answers in the FCL entries themselves, without the calls below (FCL's
+// managers test their size first too); bad pointers go on to be refused. The query proper is
+// kept out of line so that this test is all an empty manager's query runs: inlined, its register
+// saves and stack frame would come first.
+template <typename S>
+void CubeCollisionManager<S>::collide(Object* obj, void* cdata,
+                                      fcl::CollisionCallBack<S> callback) const {
+  if (core_->size() == 0 && obj != nullptr && callback != nullptr) return;
+  collideObject(*core_, obj, cdata, callback, nullptr);
+}
+
+template <typename S>
+void CubeCollisionManager<S>::distance(Object* obj, void* cdata,
+                                       fcl::DistanceCallBack<S> callback) const {
+  if (core_->size() == 0 && obj != nullptr && callback != nullptr) return;
+  runObjectDistance(*core_, obj, cdata, detail::DistanceFn<S>(callback), nullptr);
 }
 
 template <typename S>

@@ -174,7 +174,7 @@ template <typename S>
 void Broadphase<S>::setup() {
   // A manager that has never held an object has nothing to build: it stays as before any
   // setup(), and the first setup() after registrations builds.
-  if (size() == 0 && !tree_.built()) return;
+  if (setupIsNoOp()) return;
   if (regroupDue() || policy_.dueAtSetup(tree_, !setup_done_)) rebuild();
   // A removal swaps the list's last object into the gap: put the list in registration order, so
   // that the first setup() makes the callback order a function of the live registrations alone.

@@ -124,6 +124,9 @@ class Broadphase {
   void updateSome(Object* const* objs, const Box<S>* boxes, std::size_t n, bool keep_list);
   /// setup(): builds or rebuilds as RebuildPolicy::dueAtSetup says.
   void setup();
+  /// Whether setup() has nothing to do: no object now and no tree ever built (a manager that has
+  /// never held an object stays as it was constructed until its first registrations).
+  bool setupIsNoOp() const { return size() == 0 && !tree_.built(); }
   void clear();
 
   // Per-object properties. Boxes handed to the core are the objects' own (FCL's AABBs): the core
