@@ -44,8 +44,8 @@ const Config& CubeCollisionManager<S>::config() const {
 
 template <typename S>
 void CubeCollisionManager<S>::registerObjects(const std::vector<Object*>& other_objs) {
-  // Nothing to register on an empty manager: return before touching any other code (an empty
-  // manager is never inside one of its queries, so the guard below could not refuse).
+  // An empty batch on an empty manager changes nothing: return before any other call (an empty
+  // manager runs no query, so the guard below could not refuse).
   if (other_objs.empty() && core_->size() == 0) return;
   refuseInsideQuery(core_.get(), "registerObjects");
   // Null entries first (the pointers alone); the AABBs are then read once, as the core
