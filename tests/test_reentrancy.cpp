@@ -354,7 +354,7 @@ struct GuardWorld {
   }
 };
 
-constexpr int kGuardMutations = 12;
+constexpr int kGuardMutations = 13;
 
 // Mutation k of m; throws what the manager throws.
 void guardMutate(GuardWorld& w, int k) {
@@ -396,6 +396,9 @@ void guardMutate(GuardWorld& w, int k) {
       return;
     case 11:
       w.m.setMargin(first, 0.5);
+      return;
+    case 12:
+      w.m.registerObjects({});  // an empty batch too: the manager being queried is not empty
       return;
     default:
       return;
