@@ -232,8 +232,9 @@ def check_states_text(path):
            f"average at the start of each: {loads}): {objects:,} world objects, {states:,} "
            f"states of a {links}-link chain ({edges} edges of {edge_states:,} states for the "
            "motions). Per run, the Python call's time / the C++ call's on the same manager, "
-           "body and poses (the C++ poses made before its clock starts), each the best of its "
-           "repeats, the two called in turn.", "",
+           "body and poses (the C++ poses made just before its clock starts, the Python call's "
+           "arrays read just before its own: both start with their input in the cache), each "
+           "the best of its repeats, the two called in turn.", "",
            "| call | " + " | ".join(head) + " |", "|---|" + "---|" * len(threads)]
     for call in calls:
         cells = []

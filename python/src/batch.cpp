@@ -145,25 +145,38 @@ void bindManagerBatch(ManagerClass& cls) {
            py::array_t<bool> colliding(n);
            py::array_t<std::int64_t> link(n), other_link(n);
            py::array_t<double> clear(n);
-           py::list names;
+           bool* c = colliding.mutable_data();
+           std::int64_t* l = link.mutable_data();
+           std::int64_t* o = other_link.mutable_data();
+           double* d = clear.mutable_data();
+           const auto index = [](std::size_t i) {
+             return i == cube::kNoIndex ? std::int64_t(-1) : static_cast<std::int64_t>(i);
+           };
            for (py::ssize_t i = 0; i < n; ++i) {
              const auto& r = res[i];
-             colliding.mutable_at(i) = r.colliding;
-             link.mutable_at(i) = r.link == cube::kNoIndex ? -1 : static_cast<std::int64_t>(r.link);
-             other_link.mutable_at(i) =
-                 r.other_link == cube::kNoIndex ? -1 : static_cast<std::int64_t>(r.other_link);
-             clear.mutable_at(i) =
-                 r.clearance >= std::numeric_limits<double>::max() ? INFINITY : r.clearance;
-             names.append(r.object ? py::object(py::str(objects[i])) : py::none());
+             c[i] = r.colliding;
+             l[i] = index(r.link);
+             o[i] = index(r.other_link);
+             d[i] = r.clearance >= std::numeric_limits<double>::max() ? INFINITY : r.clearance;
            }
-           py::dict d;
-           d["colliding"] = colliding;
-           d["link"] = link;
-           d["object"] =
-               py::module_::import("numpy").attr("array")(names, py::arg("dtype") = "object");
-           d["other_link"] = other_link;
-           d["clearance"] = clear;
-           return d;
+           // An object array holds None throughout (numpy's empty); the named entries replace
+           // theirs (the array owns one reference to each item).
+           py::array names =
+               py::module_::import("numpy").attr("empty")(n, py::arg("dtype") = "object");
+           PyObject** item = static_cast<PyObject**>(names.mutable_data());
+           for (py::ssize_t i = 0; i < n; ++i)
+             if (res[i].object) {
+               PyObject* name = py::str(objects[i]).release().ptr();
+               Py_DECREF(item[i]);
+               item[i] = name;
+             }
+           py::dict out;
+           out["colliding"] = colliding;
+           out["link"] = link;
+           out["object"] = names;
+           out["other_link"] = other_link;
+           out["clearance"] = clear;
+           return out;
          },
          py::arg("body"), py::arg("poses"), py::kw_only(), py::arg("self_collision") = false,
          py::arg("first_pair") = false, py::arg("clearance") = false,
