@@ -200,8 +200,60 @@ def timed(repeat, py, cpp, inputs):
     return t_py, t_cpp
 
 
+class Instructions:
+    """The instructions of one call of each side instead of times, under callgrind: the Python
+    call inside cb.counted, the C++ call given count_as, each dumped as a profile of its own into
+    `folder` (valgrind's --callgrind-out-file), whose total is read back."""
+
+    def __init__(self, folder):
+        self.folder = folder
+        self.dumps = 0
+
+    def _last(self):
+        self.dumps += 1
+        path = os.path.join(self.folder, f"cg.out.{self.dumps}")
+        with open(path) as f:
+            for line in f:
+                if line.startswith("totals:"):
+                    return int(line.split()[1])
+        raise RuntimeError(f"{path}: no total")
+
+    def __call__(self, label, py, cpp):
+        cb.counted(label + " python", py)
+        a = self._last()
+        cpp(count_as=label + " C++")
+        return a, self._last()
+
+
+def instructions_run(argv):
+    """Runs this script again under callgrind (instrumentation off until a counted call) with
+    --count-into a fresh folder; its exit status."""
+    import shutil
+    import subprocess
+    import tempfile
+    if shutil.which("valgrind") is None:
+        print("--instructions needs valgrind (Debian: apt-get install valgrind)", file=sys.stderr)
+        return 2
+    folder = tempfile.mkdtemp(prefix="cube_counts_")
+    try:
+        rest = [a for a in argv if a != "--instructions"]
+        cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
+               f"--callgrind-out-file={os.path.join(folder, 'cg.out')}",
+               sys.executable, os.path.abspath(__file__), "--count-into", folder] + rest
+        return subprocess.run(cmd, stderr=subprocess.DEVNULL).returncode
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if "--instructions" in argv:
+        return instructions_run(argv)
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--instructions", action="store_true",
+                    help="instead of times, the instructions of one call of each side on one "
+                    "thread, under callgrind (valgrind runs this script again)")
+    ap.add_argument("--count-into", help=argparse.SUPPRESS)
     ap.add_argument("--objects", type=int, default=10000)
     ap.add_argument("--states", type=int, default=10000)
     ap.add_argument("--repeat", type=int, default=5)
@@ -211,6 +263,21 @@ def main(argv=None):
     ap.add_argument("--link", type=float, default=1.0,
                     help="link length in the world's typical object sizes")
     args = ap.parse_args(argv)
+    counts = None
+    if args.count_into:
+        if not cb.on_valgrind():
+            print("--count-into: not under valgrind", file=sys.stderr)
+            return 2
+        counts = Instructions(args.count_into)
+        args.threads = [1]
+
+    def measure(label, py, cpp, inputs):
+        """'python A, C++ B, ratio A / B': times (best of --repeat), or instructions."""
+        if counts is not None:
+            a, b = counts(label, py, cpp)
+            return f"python {a:13d} instructions, C++ {b:13d} instructions, ratio {a / b:.3f}"
+        a, b = timed(args.repeat, py, cpp, inputs)
+        return f"python {1e3 * a:8.2f} ms, C++ {1e3 * b:8.2f} ms, ratio {a / b:.3f}"
     rng = np.random.default_rng(7)
     scene, typical = world(args.objects, rng)
     m = scenes.build(scene)
@@ -235,28 +302,27 @@ def main(argv=None):
                 print("check_states: answers differ", file=sys.stderr)
                 failed = True
                 continue
-            t_py, t_cpp = timed(
-                args.repeat,
+            got = measure(
+                f"check_states self={int(self_collision)}",
                 lambda: m.check_states(body, poses, self_collision=self_collision,
                                        threads=threads),
-                lambda: cb.check_states_cpp(m, body, poses, threads, 1, self_collision)[0],
+                lambda **c: cb.check_states_cpp(m, body, poses, threads, 1, self_collision,
+                                                **c)[0],
                 (poses,))
             print(f"check_states  threads={threads} self={int(self_collision)} "
-                  f"colliding={int(cpp.sum())}/{len(cpp)}: python {1e3 * t_py:8.2f} ms, "
-                  f"C++ {1e3 * t_cpp:8.2f} ms, ratio {t_py / t_cpp:.3f}")
+                  f"colliding={int(cpp.sum())}/{len(cpp)}: {got}")
         py = m.check_motions(body, edge_poses, starts, threads=threads)
         _, cpp = cb.check_motions_cpp(m, body, edge_poses, list(starts), threads, 1)
         if not np.array_equal(py, cpp):
             print("check_motions: answers differ", file=sys.stderr)
             failed = True
             continue
-        t_py, t_cpp = timed(
-            args.repeat, lambda: m.check_motions(body, edge_poses, starts, threads=threads),
-            lambda: cb.check_motions_cpp(m, body, edge_poses, list(starts), threads, 1)[0],
+        got = measure(
+            "check_motions", lambda: m.check_motions(body, edge_poses, starts, threads=threads),
+            lambda **c: cb.check_motions_cpp(m, body, edge_poses, list(starts), threads, 1,
+                                             **c)[0],
             (edge_poses,))
-        print(f"check_motions threads={threads} free={int((cpp < 0).sum())}/{len(cpp)}: "
-              f"python {1e3 * t_py:8.2f} ms, C++ {1e3 * t_cpp:8.2f} ms, "
-              f"ratio {t_py / t_cpp:.3f}")
+        print(f"check_motions threads={threads} free={int((cpp < 0).sum())}/{len(cpp)}: {got}")
         for label, kw in (("se3", {"continuous": True}),
                           ("bounds", {"motion_bounds": bounds})):
             py = m.check_motions(body, near_poses, near_starts, threads=threads, **kw)
@@ -267,15 +333,14 @@ def main(argv=None):
                 print(f"check_motions_continuous ({label}): answers differ", file=sys.stderr)
                 failed = True
                 continue
-            t_py, t_cpp = timed(
-                args.repeat,
+            got = measure(
+                f"check_motions_continuous {label}",
                 lambda: m.check_motions(body, near_poses, near_starts, threads=threads, **kw),
-                lambda: cb.check_motions_cpp(m, body, near_poses, list(near_starts), threads, 1,
-                                             **flat)[0],
+                lambda **c: cb.check_motions_cpp(m, body, near_poses, list(near_starts), threads,
+                                                 1, **flat, **c)[0],
                 (near_poses, bounds) if "motion_bounds" in kw else (near_poses,))
             print(f"check_motions_continuous {label:6} threads={threads} "
-                  f"free={int((cpp < 0).sum())}/{len(cpp)}: python {1e3 * t_py:8.2f} ms, "
-                  f"C++ {1e3 * t_cpp:8.2f} ms, ratio {t_py / t_cpp:.3f}")
+                  f"free={int((cpp < 0).sum())}/{len(cpp)}: {got}")
     return 1 if failed else 0
 
 

@@ -16,7 +16,6 @@
 #include <string>
 
 #include "manager.h"
-#include "queries/motion_bounds.h"
 
 namespace cubepy {
 
@@ -89,21 +88,23 @@ class BadPoses {
 };
 
 // motion_bounds in the library's layout (state-major: k * links + l), read in place by the call
-// (no copy): shape (states, links), every value finite and >= 0 (ValueError naming the first
-// other one).
+// (no copy): shape (states, links). Its values are checked by the library before any work (one
+// pass, which a second here would double): boundsError names the first bad one.
 Array motionBounds(py::handle obj, std::size_t states, std::size_t links) {
-  Array b = floats(obj, "motion_bounds",
-                   {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
-  const double* d = b.data();
-  const std::size_t count = states * links;
-  // One pass without a branch per value, the offender sought only then.
-  if (cube::detail::allFiniteNonNegative(d, count)) return b;
+  return floats(obj, "motion_bounds",
+                {static_cast<py::ssize_t>(states), static_cast<py::ssize_t>(links)}, false);
+}
+
+// The ValueError for bounds the library refused (a value negative, NaN or infinite), naming the
+// first such as [state, link]; returns if every value is finite and >= 0 (the error was another).
+void boundsError(const Array& bounds, std::size_t links) {
+  const double* d = bounds.data();
+  const std::size_t count = static_cast<std::size_t>(bounds.size());
   for (std::size_t i = 0; i < count; ++i)
     if (!(d[i] >= 0) || !std::isfinite(d[i]))
       throw py::value_error("motion_bounds[" + std::to_string(i / links) + ", " +
                             std::to_string(i % links) + "] is " + std::to_string(d[i]) +
                             ": each bound must be finite and >= 0");
-  return b;
 }
 
 void needCube(const Manager& m, const char* what) {
@@ -247,8 +248,11 @@ TypeError (non-numeric poses).)doc")
                     res = cube::checkMotions<double>(*m.cube(), body.set, states, s, read, mo, opt);
                   }
                 } catch (const std::invalid_argument& e) {
+                  if (given) boundsError(bounds, n);
                   bad.rethrow(e, 0);
                 }
+              } else if (given) {
+                boundsError(bounds, n);  // no edge: the library is not called
               }
             }
             py::array_t<std::int64_t> out(static_cast<py::ssize_t>(res.size()));

@@ -315,6 +315,24 @@ def test_bad_motion_bounds_raise_and_leave_the_manager_usable(bounds, error, mes
     assert list(m.check_motions(body, poses, starts, motion_bounds=good)) == list(want)
 
 
+def test_a_bad_motion_bound_raises_before_any_state_is_checked():
+    # Wherever it lies: in no edge at all, or past every edge's first colliding state.
+    m = build(world(73))
+    body, geoms, _ = robot()
+    poses, starts, _ = se3_edges(np.random.default_rng(74), 8, len(geoms))
+    bad = np.full(poses.shape[:2], 1e9)  # every state collides once raised that far
+    bad[-1, -1] = -1.0
+    last = f"motion_bounds\\[{len(poses) - 1}, {len(geoms) - 1}\\]"
+    for edges in (starts, np.zeros(0, dtype=np.int64)):
+        with pytest.raises(ValueError, match=last):
+            m.check_motions(body, poses, edges, motion_bounds=bad)
+    bad[-1, -1] = 1e9
+    # With that value fixed, every edge of two states or more collides at its first state.
+    sizes = np.diff(np.append(starts, len(poses)))
+    got = m.check_motions(body, poses, starts, motion_bounds=bad)
+    assert (got[sizes > 1] == 0).all() and (sizes > 1).sum() >= 4
+
+
 @pytest.mark.parametrize("call, error", [
     (lambda m, b, p, s: m.check_motions(b, p, s, continuous="yes"), TypeError),
     (lambda m, b, p, s: m.check_motions(b, p[:, :2], s, continuous=True), ValueError),
