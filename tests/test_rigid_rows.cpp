@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -63,8 +64,8 @@ int contract(const double* m) {
 
 // Matrices of every kind: rigid, and rigid with one defect (a NaN, an infinity, a scaled,
 // sheared or mirrored rotation, a perturbation inside or outside the tolerance, a wrong last
-// row, an infinite translation).
-std::vector<double> matrices(std::mt19937& rng, std::size_t n) {
+// row, an infinite translation). only_at: only that matrix may have a defect, the others rigid.
+std::vector<double> matrices(std::mt19937& rng, std::size_t n, std::size_t only_at = SIZE_MAX) {
   std::uniform_int_distribution<int> kind(0, 11), entry(0, 15), rot(0, 11);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
@@ -73,7 +74,8 @@ std::vector<double> matrices(std::mt19937& rng, std::size_t n) {
     std::vector<double> m = randomRigid(rng);
     int e = rot(rng);
     if (e % 4 == 3) e -= 1;  // a rotation entry
-    switch (kind(rng)) {
+    const int defect = kind(rng);
+    switch (only_at == SIZE_MAX || only_at == k ? defect : 11) {
       case 0:
         m[entry(rng)] = nan;
         break;
@@ -120,6 +122,27 @@ TEST(RigidRows, Avx2EqualsPortableBitForBit) {
     ASSERT_EQ(na, nb);
     EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(double)));
   }
+}
+
+// Long runs of rigid matrices with at most one defect, anywhere: the matrices taken several at a
+// time, and the one that fails found wherever it lies among them.
+TEST(RigidRows, Avx2EqualsPortableOnLongRunsWithOneDefect) {
+  std::mt19937 rng(13);
+  std::size_t whole = 0, stopped = 0;
+  for (int round = 0; round < 600; ++round) {
+    const std::size_t n = 1 + round % 67;
+    const std::size_t at = std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+    const std::vector<double> rows = matrices(rng, n, at);
+    std::vector<double> a(16 * n, -7.0), b(16 * n, -7.0);
+    const std::size_t na = rigidRows(rows.data(), n, a.data());
+    const std::size_t nb = rigidRowsPortable(rows.data(), n, b.data());
+    ASSERT_EQ(na, nb);
+    ASSERT_TRUE(na == n || na == at);
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(double)));
+    (na == n ? whole : stopped) += 1;
+  }
+  EXPECT_GT(whole, 100u);
+  EXPECT_GT(stopped, 100u);
 }
 
 TEST(RigidRows, TakesTheMatricesThatPassAndStopsAtTheFirstThatFails) {

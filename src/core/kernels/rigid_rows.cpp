@@ -1,6 +1,7 @@
-// Rigid transforms from row-major matrices (rigid_rows.h): portable, and AVX2 (one matrix row
-// per register). Both compute every test with the same operations in the same order, without
-// fused multiply-adds, so they agree bit for bit.
+// Rigid transforms from row-major matrices (rigid_rows.h): portable, and AVX2 (four matrices at a
+// time, one per lane, and one matrix row per register for the last few). Both compute every test
+// with the same operations in the same order, without fused multiply-adds, so they agree bit for
+// bit.
 
 #include "core/kernels/rigid_rows.h"
 
@@ -62,47 +63,111 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
   return _mm256_permute4x64_pd(v, 0xC9);  // lanes 1, 2, 0, 3
 }
 
-[[gnu::target("avx2")]] std::size_t avx2(const double* rows, std::size_t n, double* cols) {
-  const __m256d sign = _mm256_set1_pd(-0.0);
+// (lo[0], lo[1], hi[0], hi[1]): the upper half loaded into place (a load, not a shuffle).
+[[gnu::target("avx2")]] inline __m256d halves(const double* lo, const double* hi) {
+  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(lo)), _mm_loadu_pd(hi), 1);
+}
+
+// Matrix m (row-major) into o (column-major): column j is (r0[j], r1[j], r2[j], r3[j]).
+[[gnu::target("avx2")]] inline void transpose(const double* m, double* o) {
+  const __m256d a = halves(m, m + 8), b = halves(m + 4, m + 12);
+  const __m256d c = halves(m + 2, m + 10), d = halves(m + 6, m + 14);
+  _mm256_storeu_pd(o, _mm256_unpacklo_pd(a, b));
+  _mm256_storeu_pd(o + 4, _mm256_unpackhi_pd(a, b));
+  _mm256_storeu_pd(o + 8, _mm256_unpacklo_pd(c, d));
+  _mm256_storeu_pd(o + 12, _mm256_unpackhi_pd(c, d));
+}
+
+[[gnu::target("avx2")]] inline __m256d mul(__m256d x, __m256d y) {
+  return _mm256_mul_pd(x, y);
+}
+[[gnu::target("avx2")]] inline __m256d add(__m256d x, __m256d y) {
+  return _mm256_add_pd(x, y);
+}
+[[gnu::target("avx2")]] inline __m256d sub(__m256d x, __m256d y) {
+  return _mm256_sub_pd(x, y);
+}
+// |x| <= tol, false for a NaN.
+[[gnu::target("avx2")]] inline __m256d within(__m256d x, __m256d tol) {
+  return _mm256_cmp_pd(_mm256_andnot_pd(_mm256_set1_pd(-0.0), x), tol, _CMP_LE_OQ);
+}
+
+// Whether the four matrices m[0 .. 64) all pass, with lane p holding matrix p's entries and
+// rigidPortable's operations in its order per lane; all four written to o if so, none if not.
+[[gnu::target("avx2"), gnu::always_inline]] inline bool fourPass(const double* m, double* o) {
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d tol = _mm256_set1_pd(kRigidRowsTolerance);
+  // e[r][j]: entry (r, j) of the four. Rows 0-2: the last row is compared whole below.
+  __m256d e[3][4];
+  for (int r = 0; r < 3; ++r) {
+    const double* a = m + 4 * r;
+    const __m256d t0 = halves(a, a + 32), t1 = halves(a + 16, a + 48);
+    const __m256d t2 = halves(a + 2, a + 34), t3 = halves(a + 18, a + 50);
+    e[r][0] = _mm256_unpacklo_pd(t0, t1);
+    e[r][1] = _mm256_unpackhi_pd(t0, t1);
+    e[r][2] = _mm256_unpacklo_pd(t2, t3);
+    e[r][3] = _mm256_unpackhi_pd(t2, t3);
+  }
+  __m256d ok = _mm256_cmp_pd(one, _mm256_set1_pd(0.5), _CMP_GT_OQ);  // all true
+  for (int j = 0; j < 3; ++j) {
+    const int p = (j + 1) % 3;  // the portable lane rotation
+    const __m256d s = add(add(mul(e[0][j], e[0][j]), mul(e[1][j], e[1][j])), mul(e[2][j], e[2][j]));
+    const __m256d q = add(add(mul(e[0][j], e[0][p]), mul(e[1][j], e[1][p])), mul(e[2][j], e[2][p]));
+    ok = _mm256_and_pd(ok, _mm256_and_pd(within(sub(s, one), tol), within(q, tol)));
+  }
+  const __m256d fin = add(add(sub(e[0][3], e[0][3]), sub(e[1][3], e[1][3])), sub(e[2][3], e[2][3]));
+  const __m256d x0 = sub(mul(e[1][1], e[2][2]), mul(e[1][2], e[2][1]));
+  const __m256d x1 = sub(mul(e[1][2], e[2][0]), mul(e[1][0], e[2][2]));
+  const __m256d x2 = sub(mul(e[1][0], e[2][1]), mul(e[1][1], e[2][0]));
+  const __m256d det = add(add(mul(e[0][0], x0), mul(e[0][1], x1)), mul(e[0][2], x2));
+  ok = _mm256_and_pd(ok, _mm256_cmp_pd(fin, _mm256_setzero_pd(), _CMP_EQ_OQ));
+  ok = _mm256_and_pd(ok, _mm256_cmp_pd(det, _mm256_set1_pd(0.5), _CMP_GT_OQ));
+  const __m256d last = _mm256_set_pd(1.0, 0.0, 0.0, 0.0);
+  const __m256d rows_ok =
+      _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_loadu_pd(m + 12), last, _CMP_EQ_OQ),
+                                  _mm256_cmp_pd(_mm256_loadu_pd(m + 28), last, _CMP_EQ_OQ)),
+                    _mm256_and_pd(_mm256_cmp_pd(_mm256_loadu_pd(m + 44), last, _CMP_EQ_OQ),
+                                  _mm256_cmp_pd(_mm256_loadu_pd(m + 60), last, _CMP_EQ_OQ)));
+  if (_mm256_movemask_pd(_mm256_and_pd(ok, rows_ok)) != 15) return false;
+  for (int k = 0; k < 4; ++k) transpose(m + 16 * k, o + 16 * k);
+  return true;
+}
+
+// Whether matrix m passes (one row per register); written to o if so.
+[[gnu::target("avx2")]] inline bool onePasses(const double* m, double* o) {
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d tol = _mm256_set1_pd(kRigidRowsTolerance);
   const __m256d last = _mm256_set_pd(1.0, 0.0, 0.0, 0.0);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double* m = rows + 16 * k;
-    const __m256d r0 = _mm256_loadu_pd(m), r1 = _mm256_loadu_pd(m + 4);
-    const __m256d r2 = _mm256_loadu_pd(m + 8), r3 = _mm256_loadu_pd(m + 12);
-    const __m256d s = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, r0), _mm256_mul_pd(r1, r1)),
-                                    _mm256_mul_pd(r2, r2));
-    const __m256d q =
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r0, rotate(r0)), _mm256_mul_pd(r1, rotate(r1))),
-                      _mm256_mul_pd(r2, rotate(r2)));
-    const __m256d fin = _mm256_add_pd(_mm256_add_pd(_mm256_sub_pd(r0, r0), _mm256_sub_pd(r1, r1)),
-                                      _mm256_sub_pd(r2, r2));
-    // The determinant from the matrix in memory, in the portable order: in registers, the
-    // cross product's lane rotations would queue behind the transpose's on the one shuffle port.
-    const double x0 = m[5] * m[10] - m[6] * m[9];
-    const double x1 = m[6] * m[8] - m[4] * m[10];
-    const double x2 = m[4] * m[9] - m[5] * m[8];
-    const double det = (m[0] * x0 + m[1] * x1) + m[2] * x2;
-    // Lanes 0-2: norms and dot products; lane 3: the translation finite; and the last row. One
-    // mask for all of them.
-    const __m256d norm_ok =
-        _mm256_cmp_pd(_mm256_andnot_pd(sign, _mm256_sub_pd(s, one)), tol, _CMP_LE_OQ);
-    const __m256d dot_ok = _mm256_cmp_pd(_mm256_andnot_pd(sign, q), tol, _CMP_LE_OQ);
-    const __m256d fin_ok = _mm256_cmp_pd(fin, _mm256_setzero_pd(), _CMP_EQ_OQ);
-    const __m256d last_ok = _mm256_cmp_pd(r3, last, _CMP_EQ_OQ);
-    const __m256d ok =
-        _mm256_and_pd(_mm256_blend_pd(_mm256_and_pd(norm_ok, dot_ok), fin_ok, 0x8), last_ok);
-    if (!((_mm256_movemask_pd(ok) == 15) & (det > 0.5))) return k;
-    // The transpose: column j is (r0[j], r1[j], r2[j], r3[j]).
-    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
-    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
-    double* o = cols + 16 * k;
-    _mm256_storeu_pd(o, _mm256_permute2f128_pd(t0, t2, 0x20));
-    _mm256_storeu_pd(o + 4, _mm256_permute2f128_pd(t1, t3, 0x20));
-    _mm256_storeu_pd(o + 8, _mm256_permute2f128_pd(t0, t2, 0x31));
-    _mm256_storeu_pd(o + 12, _mm256_permute2f128_pd(t1, t3, 0x31));
-  }
+  const __m256d r0 = _mm256_loadu_pd(m), r1 = _mm256_loadu_pd(m + 4);
+  const __m256d r2 = _mm256_loadu_pd(m + 8), r3 = _mm256_loadu_pd(m + 12);
+  const __m256d s = add(add(mul(r0, r0), mul(r1, r1)), mul(r2, r2));
+  const __m256d q = add(add(mul(r0, rotate(r0)), mul(r1, rotate(r1))), mul(r2, rotate(r2)));
+  const __m256d fin = add(add(sub(r0, r0), sub(r1, r1)), sub(r2, r2));
+  // The determinant from the matrix in memory, in the portable order: in registers, the cross
+  // product's lane rotations would queue behind the transpose's on the one shuffle port.
+  const double x0 = m[5] * m[10] - m[6] * m[9];
+  const double x1 = m[6] * m[8] - m[4] * m[10];
+  const double x2 = m[4] * m[9] - m[5] * m[8];
+  const double det = (m[0] * x0 + m[1] * x1) + m[2] * x2;
+  // Lanes 0-2: norms and dot products; lane 3: the translation finite; and the last row. One
+  // mask for all of them.
+  const __m256d fin_ok = _mm256_cmp_pd(fin, _mm256_setzero_pd(), _CMP_EQ_OQ);
+  const __m256d last_ok = _mm256_cmp_pd(r3, last, _CMP_EQ_OQ);
+  const __m256d ok = _mm256_and_pd(
+      _mm256_blend_pd(_mm256_and_pd(within(sub(s, one), tol), within(q, tol)), fin_ok, 0x8),
+      last_ok);
+  if (!((_mm256_movemask_pd(ok) == 15) & (det > 0.5))) return false;
+  transpose(m, o);
+  return true;
+}
+
+[[gnu::target("avx2")]] std::size_t avx2(const double* rows, std::size_t n, double* cols) {
+  std::size_t k = 0;
+  // Four at a time while all four pass; from four with one that fails, and for the last few,
+  // one at a time up to the first that fails.
+  while (k + 4 <= n && fourPass(rows + 16 * k, cols + 16 * k)) k += 4;
+  for (; k < n; ++k)
+    if (!onePasses(rows + 16 * k, cols + 16 * k)) return k;
   return n;
 }
 
