@@ -12,8 +12,8 @@ packages=(build-essential cmake pkg-config libfcl-dev libccd-dev libeigen3-dev l
           python3-distributed python3-venv)
 # CI's ThreadSanitizer stage (.ci/run) builds with clang and LLVM's OpenMP runtime, whose Archer
 # tool tells ThreadSanitizer about OpenMP's synchronisation (GCC's libgomp is not instrumented);
-# CI builds with Ninja.
-[ "${1:-demo}" = test ] && packages+=(clang libomp-dev ninja-build)
+# CI builds with Ninja; the Python benchmark's instruction counts (a test runs them) use valgrind.
+[ "${1:-demo}" = test ] && packages+=(clang libomp-dev ninja-build valgrind)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -255,3 +255,37 @@ def check_states_text(path):
                  if (call, t) in best else "–" for t in threads]
         out.append(f"| {labels.get(call, call)} | " + " | ".join(cells) + " |")
     return "\n".join(out) + "\n"
+
+
+def check_states_instructions_text(path):
+    """bench_check_states.py --instructions' output: per call, the instructions of one Python
+    call and of the C++ call it wraps, on one thread, as callgrind counts them."""
+    rows = []
+    about = None
+    for line in open(path):
+        m = re.match(r"^world: (\d+) objects; (\d+) states of (\d+) links", line)
+        if m:
+            about = tuple(int(m.group(i)) for i in (1, 2, 3))
+            continue
+        m = re.match(r"^(check_states|check_motions_continuous \w+|check_motions)\s+threads=1"
+                     r"(?: self=(\d))?.*?: python\s+(\d+) instructions, C\+\+\s+(\d+) "
+                     r"instructions", line)
+        if m:
+            call = m.group(1) + (" (self pairs)" if m.group(2) == "1" else "")
+            rows.append((call, int(m.group(3)), int(m.group(4))))
+    if not rows or about is None:
+        return ""
+    labels = {"check_states": "`check_states`",
+              "check_states (self pairs)": "`check_states(self_collision=True)`",
+              "check_motions": "`check_motions`",
+              "check_motions_continuous se3": "`check_motions(continuous=True)` (SE(3) bounds)",
+              "check_motions_continuous bounds": "`check_motions(motion_bounds=B)`"}
+    out = ["Instructions of one call on one thread, the same worlds and calls "
+           f"(`{os.path.relpath(path, os.path.join(HERE, '..'))}`, `bench_check_states.py "
+           "--instructions`, under callgrind: the Python call whole, binding and conversion of "
+           "the poses included, against the library's call alone):", "",
+           "| call | Python | C++ | Python / C++ |", "|---|---:|---:|---:|"]
+    for call, py, cpp in rows:
+        out.append(f"| {labels.get(call, call)} | {py / 1e6:.1f}M | {cpp / 1e6:.1f}M | "
+                   f"{py / cpp:.3f} |")
+    return "\n".join(out) + "\n"

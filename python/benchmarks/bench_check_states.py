@@ -15,10 +15,12 @@ bounds computed here), against checkMotions with BatchOptions::continuous and th
 takes motion bounds. The world:
 boxes, spheres and cylinders at uniform random poses, about one overlap per object. Answers are
 compared before any time is printed; each time is the best of --repeat calls, the Python and
-the C++ call in turn, each after a pause (PAUSE, below); ratio = Python / C++.
+the C++ call in turn, each after a pause (PAUSE, below) with the Python call's arrays read just
+before its clock (warm); ratio = Python / C++. With --instructions, one call of each side on one
+thread is counted under callgrind instead (the script runs itself again under valgrind).
 
   PYTHONPATH=build/python python3 python/benchmarks/bench_check_states.py [--objects 10000]
-      [--states 10000] [--repeat 5] [--threads 1 0] [--near 0.02]
+      [--states 10000] [--repeat 5] [--threads 1 0] [--near 0.02] [--instructions]
 """
 
 import argparse

@@ -1,6 +1,8 @@
 """The Dask example on a LocalCluster of two workers, and the benchmark scripts, at tiny sizes
 (speed lives in the scripts' output, not here)."""
 
+import re
+
 import dask_states
 
 import bench_check_states
@@ -38,3 +40,14 @@ def test_check_states_benchmark_runs(capsys):
     assert out.count("check_states ") == 4 and out.count("check_motions ") == 2
     # continuous edges, with SE(3) bounds and with given bounds, per thread count
     assert out.count("check_motions_continuous ") == 4
+
+
+def test_check_states_benchmark_counts_instructions_under_callgrind(capfd):
+    # the script runs itself again under valgrind: one counted call of each side per case, the
+    # answers compared first (exit status 1 otherwise)
+    assert bench_check_states.main(["--instructions", "--objects", "300", "--states", "200"]) == 0
+    lines = [l for l in capfd.readouterr().out.splitlines() if "instructions" in l]
+    assert len(lines) == 5
+    for line in lines:
+        py, cpp = (int(x) for x in re.findall(r"(\d+) instructions", line))
+        assert 0 < cpp < py  # the Python call does the C++ call's work and converts its poses
