@@ -168,7 +168,7 @@ void bindManagerBatch(ManagerClass& cls) {
            for (py::ssize_t i = 0; i < n; ++i)
              if (res[i].object) {
                PyObject* name = py::str(objects[i]).release().ptr();
-               Py_DECREF(item[i]);
+               Py_XDECREF(item[i]);  // None, or nothing in an array numpy left empty
                item[i] = name;
              }
            py::dict out;
