@@ -108,6 +108,7 @@ struct MotionScratch {
     if (continuous && raise.size() < StateChecker<S>::kGroupStates * n)
       raise.resize(StateChecker<S>::kGroupStates * n);
     memo.after.resize(continuous ? n : 0);
+    memo.before.resize(continuous ? n : 0);
     memo.interval = SIZE_MAX;
     ahead = SIZE_MAX;
   }

@@ -1,9 +1,8 @@
 #pragma once
 
-// Continuous edges' motion bounds (batch.h, "Continuous edges"): the bound of a link's motion
-// between two poses interpolated in SE(3), the caller's bounds checked, and the raise of each
-// link's margin at a state of an edge, from the caller's bounds or from the poses. Private to
-// the library.
+// Continuous edges' motion bounds (batch.h, "Continuous edges"): the caller's bounds checked, and
+// the raise of each link's margin at a state of an edge, from the caller's bounds or from the
+// poses (the links' SE(3) bounds, kernels/se3_bounds.h). Private to the library.
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +17,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/kernels/se3_bounds.h"
 #include "queries/body_links.h"
 
 namespace cube {
@@ -37,56 +37,6 @@ std::vector<S> linkReach(const typename BodySet<S>::Links& links) {
     reach[l] = std::sqrt(r2);
   }
   return reach;
-}
-
-// Upper bound on the angle whose sine and cosine are proportional to `sine` >= 0 and `cosine`
-// (std::atan2(sine, cosine), in [0, pi]): at least the exact angle and at most 2 kAnglePad above
-// it; NaN if either is NaN. For the SE(3) bounds, which take one per link for every two states a
-// continuous check reads: a short polynomial instead of std::atan2's correctly rounded result,
-// which cost several times as much there. The octant's angle comes from atan(t), t in [0, 1],
-// reduced to |u| <= tan(pi / 8) by atan(t) = pi / 4 + atan((t - 1) / (t + 1)), where an odd
-// polynomial of degree 21 (a least-squares fit on Chebyshev nodes) is within 4e-15 of it;
-// kAnglePad is added to stay above the exact angle.
-inline constexpr double kAnglePad = 1e-14;
-inline double angleAbove(double sine, double cosine) {
-  constexpr double kPi = 3.14159265358979323846, kTanPi8 = 0.41421356237309504880;
-  constexpr double c[10] = {-0.33333333333330023, 0.1999999999995909,   -0.14285714276157827,
-                            0.11111110283465862,  -0.09090873365654059, 0.07691429922184825,
-                            -0.06653564590250108, 0.0576052489486998,   -0.04562968023044902,
-                            0.023839526937867637};
-  const double ac = std::fabs(cosine);
-  const bool swap = sine > ac;  // past the diagonal: from the other side's angle
-  const double num = swap ? ac : sine, den = swap ? sine : ac;
-  if (!(den > 0)) return (sine + cosine) * 0 + kAnglePad;  // both 0 (no rotation), or a NaN
-  const double t = num / den;
-  const bool far = t > kTanPi8;
-  const double u = far ? (t - 1) / (t + 1) : t;
-  const double z = u * u;
-  double p = c[9];
-  for (int i = 8; i >= 0; --i) p = p * z + c[i];
-  double a = u + u * z * p;
-  if (far) a += kPi / 4;
-  if (swap) a = kPi / 2 - a;
-  if (cosine < 0) a = kPi - a;
-  return a + kAnglePad;
-}
-
-// The length bound of the path of any point within `reach` of the frame's origin, moving from
-// pose a to pose b with the translation linear and the rotation along the geodesic: the
-// translation's length plus the rotation angle (angleAbove) times the reach. NaN or infinite for
-// a pose that is.
-template <typename S>
-S se3MotionBound(const fcl::Transform3<S>& a, const fcl::Transform3<S>& b, S reach) {
-  const fcl::Matrix3<S> m = a.linear().transpose() * b.linear();
-  // The angle from its sine (the skew part) and cosine (the trace): accurate near 0 and pi,
-  // where acos of the trace alone is not.
-  const S sx = m(2, 1) - m(1, 2), sy = m(0, 2) - m(2, 0), sz = m(1, 0) - m(0, 1);
-  const S sine = S(0.5) * std::sqrt(sx * sx + sy * sy + sz * sz);
-  const S cosine = S(0.5) * (m.trace() - S(1));
-  const double above = angleAbove(double(sine), double(cosine));
-  S angle = S(above);
-  if (double(angle) < above) angle = std::nextafter(angle, std::numeric_limits<S>::infinity());
-  return (b.translation() - a.translation()).norm() + angle * reach;
 }
 
 // Whether v[0 .. n) are all finite and >= 0 (-0 included): one pass without a branch per value
@@ -163,6 +113,7 @@ bool raiseAt(std::size_t n, std::size_t k, std::size_t begin, std::size_t end, c
 template <typename S>
 struct RaiseMemo {
   std::vector<S> after;             // per link (sized by the scratch that holds it)
+  std::vector<S> before;            // room for the interval before, the same size
   std::size_t interval = SIZE_MAX;  // its first state; SIZE_MAX: none
 };
 
@@ -196,13 +147,18 @@ struct Se3Raise {
     const fcl::Transform3<S>* prev = before && !known ? poses_of(state - 1) : nullptr;
     const fcl::Transform3<S>* cur = poses_of(state);
     const fcl::Transform3<S>* next = after ? poses_of(state + 1) : nullptr;
-    // The interval before from the memo where it holds it; the one after into it.
+    // Every link's bounds of the interval before (from the memo where it holds it) and of the one
+    // after (into it), each interval's in one pass over the links.
+    static_assert(sizeof(fcl::Transform3<S>) == 16 * sizeof(S), "a pose is 16 numbers");
+    if (known)
+      memo.before.swap(memo.after);
+    else if (before)
+      se3Bounds(prev->data(), cur->data(), reach.data(), n, memo.before.data());
+    if (after) se3Bounds(cur->data(), next->data(), reach.data(), n, memo.after.data());
     const bool finite = raiseAt<S>(
         n, state, begin, end,
         [&](std::size_t k, std::size_t l) {
-          if (k + 1 == state)
-            return known ? memo.after[l] : se3MotionBound(prev[l], cur[l], reach[l]);
-          return memo.after[l] = se3MotionBound(cur[l], next[l], reach[l]);
+          return k + 1 == state ? memo.before[l] : memo.after[l];
         },
         raise);
     memo.interval = after ? state : SIZE_MAX;
