@@ -189,6 +189,15 @@ def fcl_compat_text(path):
     return "\n".join(out) + "\n"
 
 
+# bench_check_states.py's calls as the tables name them.
+CHECK_STATES_LABELS = {
+    "check_states": "`check_states`",
+    "check_states (self pairs)": "`check_states(self_collision=True)`",
+    "check_motions": "`check_motions`",
+    "check_motions_continuous se3": "`check_motions(continuous=True)` (SE(3) bounds)",
+    "check_motions_continuous bounds": "`check_motions(motion_bounds=B)`"}
+
+
 def check_states_text(path):
     """python/benchmarks/bench_check_states.py's output (one or more runs in one file): per call
     and thread count, the Python call's time against the C++ call's on the same world, body and
@@ -215,11 +224,6 @@ def check_states_text(path):
     runs = [r for r in runs if r["times"]]
     if not runs:
         return ""
-    labels = {"check_states": "`check_states`",
-              "check_states (self pairs)": "`check_states(self_collision=True)`",
-              "check_motions": "`check_motions`",
-              "check_motions_continuous se3": "`check_motions(continuous=True)` (SE(3) bounds)",
-              "check_motions_continuous bounds": "`check_motions(motion_bounds=B)`"}
     calls = list(dict.fromkeys(c for r in runs for c, _ in r["times"]))
     threads = sorted({t for r in runs for _, t in r["times"]}, key=lambda t: (t == 0, t))
     objects, states, links, edges, edge_states = runs[0]["about"]
@@ -241,7 +245,7 @@ def check_states_text(path):
         for t in threads:
             rs = [r["times"][(call, t)] for r in runs if (call, t) in r["times"]]
             cells.append(", ".join(f"{p / c:.2f}x" for p, c in rs) or "–")
-        out.append(f"| {labels.get(call, call)} | " + " | ".join(cells) + " |")
+        out.append(f"| {CHECK_STATES_LABELS.get(call, call)} | " + " | ".join(cells) + " |")
     best = {}
     for call in calls:
         for t in threads:
@@ -253,7 +257,7 @@ def check_states_text(path):
     for call in calls:
         cells = [f"{best[(call, t)][0]:.2f} / {best[(call, t)][1]:.2f} ms"
                  if (call, t) in best else "–" for t in threads]
-        out.append(f"| {labels.get(call, call)} | " + " | ".join(cells) + " |")
+        out.append(f"| {CHECK_STATES_LABELS.get(call, call)} | " + " | ".join(cells) + " |")
     return "\n".join(out) + "\n"
 
 
@@ -275,17 +279,12 @@ def check_states_instructions_text(path):
             rows.append((call, int(m.group(3)), int(m.group(4))))
     if not rows or about is None:
         return ""
-    labels = {"check_states": "`check_states`",
-              "check_states (self pairs)": "`check_states(self_collision=True)`",
-              "check_motions": "`check_motions`",
-              "check_motions_continuous se3": "`check_motions(continuous=True)` (SE(3) bounds)",
-              "check_motions_continuous bounds": "`check_motions(motion_bounds=B)`"}
     out = ["Instructions of one call on one thread, the same worlds and calls "
            f"(`{os.path.relpath(path, os.path.join(HERE, '..'))}`, `bench_check_states.py "
            "--instructions`, under callgrind: the Python call whole, binding and conversion of "
            "the poses included, against the library's call alone):", "",
            "| call | Python | C++ | Python / C++ |", "|---|---:|---:|---:|"]
     for call, py, cpp in rows:
-        out.append(f"| {labels.get(call, call)} | {py / 1e6:.1f}M | {cpp / 1e6:.1f}M | "
+        out.append(f"| {CHECK_STATES_LABELS.get(call, call)} | {py / 1e6:.1f}M | {cpp / 1e6:.1f}M | "
                    f"{py / cpp:.3f} |")
     return "\n".join(out) + "\n"

@@ -7,12 +7,8 @@
 
 #include <cmath>
 
+#include "core/kernels/avx2_lanes.h"
 #include "core/kernels/cpu_features.h"
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define CUBE_RIGID_AVX2 1
-#endif
 
 namespace cube {
 namespace detail {
@@ -56,17 +52,17 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
   return n;
 }
 
-#if defined(CUBE_RIGID_AVX2)
+#if defined(CUBE_KERNELS_AVX2)
 
 // (v1, v2, v0, v3): each lane's partner column for the dot products.
 [[gnu::target("avx2")]] inline __m256d rotate(__m256d v) {
   return _mm256_permute4x64_pd(v, 0xC9);  // lanes 1, 2, 0, 3
 }
 
-// (lo[0], lo[1], hi[0], hi[1]): the upper half loaded into place (a load, not a shuffle).
-[[gnu::target("avx2")]] inline __m256d halves(const double* lo, const double* hi) {
-  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(lo)), _mm_loadu_pd(hi), 1);
-}
+using avx2_lanes::add;
+using avx2_lanes::halves;
+using avx2_lanes::mul;
+using avx2_lanes::sub;
 
 // Matrix m (row-major) into o (column-major): column j is (r0[j], r1[j], r2[j], r3[j]).
 [[gnu::target("avx2")]] inline void transpose(const double* m, double* o) {
@@ -78,15 +74,6 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
   _mm256_storeu_pd(o + 12, _mm256_unpackhi_pd(c, d));
 }
 
-[[gnu::target("avx2")]] inline __m256d mul(__m256d x, __m256d y) {
-  return _mm256_mul_pd(x, y);
-}
-[[gnu::target("avx2")]] inline __m256d add(__m256d x, __m256d y) {
-  return _mm256_add_pd(x, y);
-}
-[[gnu::target("avx2")]] inline __m256d sub(__m256d x, __m256d y) {
-  return _mm256_sub_pd(x, y);
-}
 // |x| <= tol, false for a NaN.
 [[gnu::target("avx2")]] inline __m256d within(__m256d x, __m256d tol) {
   return _mm256_cmp_pd(_mm256_andnot_pd(_mm256_set1_pd(-0.0), x), tol, _CMP_LE_OQ);
@@ -99,15 +86,7 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
   const __m256d tol = _mm256_set1_pd(kRigidRowsTolerance);
   // e[r][j]: entry (r, j) of the four. Rows 0-2: the last row is compared whole below.
   __m256d e[3][4];
-  for (int r = 0; r < 3; ++r) {
-    const double* a = m + 4 * r;
-    const __m256d t0 = halves(a, a + 32), t1 = halves(a + 16, a + 48);
-    const __m256d t2 = halves(a + 2, a + 34), t3 = halves(a + 18, a + 50);
-    e[r][0] = _mm256_unpacklo_pd(t0, t1);
-    e[r][1] = _mm256_unpackhi_pd(t0, t1);
-    e[r][2] = _mm256_unpacklo_pd(t2, t3);
-    e[r][3] = _mm256_unpackhi_pd(t2, t3);
-  }
+  for (int r = 0; r < 3; ++r) avx2_lanes::lanes(m + 4 * r, e[r]);
   __m256d ok = _mm256_cmp_pd(one, _mm256_set1_pd(0.5), _CMP_GT_OQ);  // all true
   for (int j = 0; j < 3; ++j) {
     const int p = (j + 1) % 3;  // the portable lane rotation
@@ -176,7 +155,7 @@ std::size_t portable(const double* rows, std::size_t begin, std::size_t n, doubl
 }  // namespace
 
 std::size_t rigidRows(const double* rows, std::size_t n, double* cols) {
-#if defined(CUBE_RIGID_AVX2)
+#if defined(CUBE_KERNELS_AVX2)
   if (cpuHasAvx2()) return avx2(rows, n, cols);
 #endif
   return portable(rows, 0, n, cols);

@@ -4,12 +4,8 @@
 
 #include "core/kernels/se3_bounds.h"
 
+#include "core/kernels/avx2_lanes.h"
 #include "core/kernels/cpu_features.h"
-
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define CUBE_SE3_AVX2 1
-#endif
 
 namespace cube {
 namespace detail {
@@ -21,37 +17,17 @@ void portable(const S* a, const S* b, const S* reach, std::size_t begin, std::si
   for (std::size_t l = begin; l < n; ++l) out[l] = se3Bound(a + 16 * l, b + 16 * l, reach[l]);
 }
 
-#if defined(CUBE_SE3_AVX2)
+#if defined(CUBE_KERNELS_AVX2)
 
-// (lo[0], lo[1], hi[0], hi[1]): the upper half loaded into place (a load, not a shuffle).
-[[gnu::target("avx2")]] inline __m256d halves(const double* lo, const double* hi) {
-  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(lo)), _mm_loadu_pd(hi), 1);
-}
+using avx2_lanes::add;
+using avx2_lanes::mul;
+using avx2_lanes::sub;
 
-// Rows 0-2 of column c of the four poses p[0 .. 64): v[r] holds entry (r, c) of pose j in lane j.
-[[gnu::target("avx2")]] inline void column(const double* p, int c, __m256d v[3]) {
-  const double* q = p + 4 * c;
-  const __m256d t0 = halves(q, q + 32), t1 = halves(q + 16, q + 48);
-  const __m256d t2 = halves(q + 2, q + 34), t3 = halves(q + 18, q + 50);
-  v[0] = _mm256_unpacklo_pd(t0, t1);
-  v[1] = _mm256_unpackhi_pd(t0, t1);
-  v[2] = _mm256_unpacklo_pd(t2, t3);
-}
-
-[[gnu::target("avx2")]] inline __m256d mul(__m256d x, __m256d y) {
-  return _mm256_mul_pd(x, y);
-}
-[[gnu::target("avx2")]] inline __m256d add(__m256d x, __m256d y) {
-  return _mm256_add_pd(x, y);
-}
-[[gnu::target("avx2")]] inline __m256d sub(__m256d x, __m256d y) {
-  return _mm256_sub_pd(x, y);
-}
 [[gnu::target("avx2")]] inline __m256d num(double x) {
   return _mm256_set1_pd(x);
 }
 // Column i of one rotation . column j of another, lane by lane, in se3Bound's order.
-[[gnu::target("avx2")]] inline __m256d dot(const __m256d x[3], const __m256d y[3]) {
+[[gnu::target("avx2")]] inline __m256d dot(const __m256d x[4], const __m256d y[4]) {
   return add(add(mul(x[0], y[0]), mul(x[1], y[1])), mul(x[2], y[2]));
 }
 // when ? yes : no, lane by lane.
@@ -85,10 +61,10 @@ void portable(const S* a, const S* b, const S* reach, std::size_t begin, std::si
   for (; l + 4 <= n; l += 4) {
     const double* pa = a + 16 * l;
     const double* pb = b + 16 * l;
-    __m256d ca[4][3], cb[4][3];  // [column][row]
+    __m256d ca[4][4], cb[4][4];  // [column][row] over the four links
     for (int c = 0; c < 4; ++c) {
-      column(pa, c, ca[c]);
-      column(pb, c, cb[c]);
+      avx2_lanes::lanes(pa + 4 * c, ca[c]);
+      avx2_lanes::lanes(pb + 4 * c, cb[c]);
     }
     const __m256d sx = sub(dot(ca[2], cb[1]), dot(ca[1], cb[2]));
     const __m256d sy = sub(dot(ca[0], cb[2]), dot(ca[2], cb[0]));
@@ -111,7 +87,7 @@ void portable(const S* a, const S* b, const S* reach, std::size_t begin, std::si
 }  // namespace
 
 void se3Bounds(const double* a, const double* b, const double* reach, std::size_t n, double* out) {
-#if defined(CUBE_SE3_AVX2)
+#if defined(CUBE_KERNELS_AVX2)
   if (cpuHasAvx2()) return avx2(a, b, reach, n, out);
 #endif
   portable(a, b, reach, 0, n, out);
