@@ -239,10 +239,12 @@ def instructions_run(argv):
     folder = tempfile.mkdtemp(prefix="cube_counts_")
     try:
         rest = [a for a in argv if a != "--instructions"]
+        # valgrind's own lines into a file, the script's messages through
         cmd = ["valgrind", "--tool=callgrind", "--instr-atstart=no",
+               f"--log-file={os.path.join(folder, 'valgrind.log')}",
                f"--callgrind-out-file={os.path.join(folder, 'cg.out')}",
                sys.executable, os.path.abspath(__file__), "--count-into", folder] + rest
-        return subprocess.run(cmd, stderr=subprocess.DEVNULL).returncode
+        return subprocess.run(cmd).returncode
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 
