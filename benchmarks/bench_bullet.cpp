@@ -257,8 +257,10 @@ class FclPeer final : public Peer {
     mgr_->registerObjects(fcl_.ptrs);
     mgr_->setup();
   }
+  // Told as FCL's interface tells a manager: update() when every object moved, else
+  // update(the moved objects), an empty list when none did (as Bullet's peers are told nothing).
   void update(const std::vector<std::uint32_t>& idx, const std::vector<Box>&, bool all) override {
-    if (all || idx.empty()) {
+    if (all) {
       mgr_->update();
       return;
     }
