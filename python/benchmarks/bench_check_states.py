@@ -244,7 +244,13 @@ def instructions_run(argv):
                f"--log-file={os.path.join(folder, 'valgrind.log')}",
                f"--callgrind-out-file={os.path.join(folder, 'cg.out')}",
                sys.executable, os.path.abspath(__file__), "--count-into", folder] + rest
-        return subprocess.run(cmd).returncode
+        code = subprocess.run(cmd).returncode
+        if code != 0:  # valgrind's own reason, which goes with the folder
+            log = os.path.join(folder, "valgrind.log")
+            if os.path.exists(log):
+                with open(log) as f:
+                    sys.stderr.write(f.read())
+        return code
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 

@@ -79,15 +79,33 @@ using avx2_lanes::sub;
   return _mm256_cmp_pd(_mm256_andnot_pd(_mm256_set1_pd(-0.0), x), tol, _CMP_LE_OQ);
 }
 
+// Columns j of the four matrices into o (column-major, 16 numbers apart) from their rows' lanes
+// e0, e1, e2 (lane p: matrix p's entry in that row and column j) and the last row's entry w.
+[[gnu::target("avx2")]] inline void columns(__m256d e0, __m256d e1, __m256d e2, __m256d w,
+                                            double* o) {
+  const __m256d lo01 = _mm256_unpacklo_pd(e0, e1), hi01 = _mm256_unpackhi_pd(e0, e1);
+  const __m256d lo2w = _mm256_unpacklo_pd(e2, w), hi2w = _mm256_unpackhi_pd(e2, w);
+  _mm256_storeu_pd(o, _mm256_permute2f128_pd(lo01, lo2w, 0x20));
+  _mm256_storeu_pd(o + 16, _mm256_permute2f128_pd(hi01, hi2w, 0x20));
+  _mm256_storeu_pd(o + 32, _mm256_permute2f128_pd(lo01, lo2w, 0x31));
+  _mm256_storeu_pd(o + 48, _mm256_permute2f128_pd(hi01, hi2w, 0x31));
+}
+
 // Whether the four matrices m[0 .. 64) all pass, with lane p holding matrix p's entries and
-// rigidPortable's operations in its order per lane; all four written to o if so, none if not.
+// rigidPortable's operations in its order per lane; all four written to o if so, none if not
+// (from the lanes already loaded: the last row is known once it passed).
 [[gnu::target("avx2"), gnu::always_inline]] inline bool fourPass(const double* m, double* o) {
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d tol = _mm256_set1_pd(kRigidRowsTolerance);
   // e[r][j]: entry (r, j) of the four. Rows 0-2: the last row is compared whole below.
   __m256d e[3][4];
   for (int r = 0; r < 3; ++r) avx2_lanes::lanes(m + 4 * r, e[r]);
-  __m256d ok = _mm256_cmp_pd(one, _mm256_set1_pd(0.5), _CMP_GT_OQ);  // all true
+  const __m256d last = _mm256_set_pd(1.0, 0.0, 0.0, 0.0);
+  __m256d ok =
+      _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_loadu_pd(m + 12), last, _CMP_EQ_OQ),
+                                  _mm256_cmp_pd(_mm256_loadu_pd(m + 28), last, _CMP_EQ_OQ)),
+                    _mm256_and_pd(_mm256_cmp_pd(_mm256_loadu_pd(m + 44), last, _CMP_EQ_OQ),
+                                  _mm256_cmp_pd(_mm256_loadu_pd(m + 60), last, _CMP_EQ_OQ)));
   for (int j = 0; j < 3; ++j) {
     const int p = (j + 1) % 3;  // the portable lane rotation
     const __m256d s = add(add(mul(e[0][j], e[0][j]), mul(e[1][j], e[1][j])), mul(e[2][j], e[2][j]));
@@ -101,14 +119,10 @@ using avx2_lanes::sub;
   const __m256d det = add(add(mul(e[0][0], x0), mul(e[0][1], x1)), mul(e[0][2], x2));
   ok = _mm256_and_pd(ok, _mm256_cmp_pd(fin, _mm256_setzero_pd(), _CMP_EQ_OQ));
   ok = _mm256_and_pd(ok, _mm256_cmp_pd(det, _mm256_set1_pd(0.5), _CMP_GT_OQ));
-  const __m256d last = _mm256_set_pd(1.0, 0.0, 0.0, 0.0);
-  const __m256d rows_ok =
-      _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_loadu_pd(m + 12), last, _CMP_EQ_OQ),
-                                  _mm256_cmp_pd(_mm256_loadu_pd(m + 28), last, _CMP_EQ_OQ)),
-                    _mm256_and_pd(_mm256_cmp_pd(_mm256_loadu_pd(m + 44), last, _CMP_EQ_OQ),
-                                  _mm256_cmp_pd(_mm256_loadu_pd(m + 60), last, _CMP_EQ_OQ)));
-  if (_mm256_movemask_pd(_mm256_and_pd(ok, rows_ok)) != 15) return false;
-  for (int k = 0; k < 4; ++k) transpose(m + 16 * k, o + 16 * k);
+  if (_mm256_movemask_pd(ok) != 15) return false;
+  const __m256d zero = _mm256_setzero_pd();
+  for (int j = 0; j < 3; ++j) columns(e[0][j], e[1][j], e[2][j], zero, o + 4 * j);
+  columns(e[0][3], e[1][3], e[2][3], one, o + 12);
   return true;
 }
 
