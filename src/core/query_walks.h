@@ -44,8 +44,13 @@ inline int groupsPass(const Policy& p, const View<S>& va, std::uint32_t a, const
 }
 
 // One object against a tree (walkTree): the common query, with a lighter stack than a walk of
-// cube pairs. Calls p.leaf(tree object, query object).
-template <typename S, class Policy, bool Groups>
+// cube pairs. Calls p.leaf(tree object, query object). Also a query view whose root is a leaf
+// of a few objects (a robot's group of links; unordered policies without filter groups only):
+// its cube is tested as the one object's would be and the tree's leaves against it as the walk
+// of cube pairs tests two leaves (leafPair), so the pairs come in that walk's order. Few: the
+// query may hold more than one object (a type of its own, so that one object's walk, the
+// common query, carries no test for it).
+template <typename S, class Policy, bool Groups, bool Few = false>
 struct ObjectVisitor {
   using State = typename Policy::Key;
   static constexpr bool kOrdered = Policy::kOrdered;
@@ -53,6 +58,7 @@ struct ObjectVisitor {
   // and a copy's 16-byte loads of them waited for those narrower stores (object queries with
   // the narrow phase on small managers were slower).
   const View<S>& tree;
+  const View<S>& query;
   const Node& qn;
   const Item<S>& q;
   const Policy p;
@@ -78,6 +84,10 @@ struct ObjectVisitor {
     if constexpr (Policy::kOrdered) {
       if (n.count <= 16) return leafNearestFirst(tree, n, q, p) ? Step::stop : Step::skip;
     } else {
+      static_assert(!(Few && Groups), "a few objects' walk tests no filter groups");
+      if constexpr (Few) {
+        if (qn.count > 1) return leafPair(tree, n, query, qn, p, false) ? Step::stop : Step::skip;
+      }
       if (n.count <= kMaskLeaf) {
         bool bits_pass = false;
         if constexpr (Groups) bits_pass = groupsPass(p, tree, cube, tree, kNone) == 1;
@@ -137,22 +147,28 @@ struct PairVisitor {
   }
 };
 
-// The walk below the roots of a tree `va` and a one-object view `vb`.
-template <bool Groups, typename S, class Policy>
+// The walk below the roots of a tree `va` and a view `vb` whose root is a leaf: one object, or
+// (unordered policies without filter groups) a few (ObjectVisitor).
+template <bool Groups, typename S, class Policy, bool Few = false>
 inline bool walkObject(const View<S>& va, const View<S>& vb, const Policy& p,
                        typename Policy::Key key) {
   const Node& qb = vb.nodes[vb.root];
-  ObjectVisitor<S, Policy, Groups> v{va, qb, vb.items[qb.first], p};
+  ObjectVisitor<S, Policy, Groups, Few> v{va, vb, qb, vb.items[qb.first], p};
   return walkTree(va.nodes, va.root, key, v);
 }
 
 // The walk below the roots: a single object (one-leaf view) against a tree goes through
-// walkTree, anything else through walkPair. Groups: whether cubes' filter groups are tested.
+// walkTree, and so does a leaf of a few objects where ObjectVisitor takes one; anything else
+// through walkPair. Groups: whether cubes' filter groups are tested.
 template <bool Groups, typename S, class Policy>
 inline bool walkFrom(const View<S>& va, const View<S>& vb, bool self, const Policy& p,
                      typename Policy::Key key) {
   const Node& qb = vb.nodes[vb.root];
   if (!self && qb.count == 1) return walkObject<Groups>(va, vb, p, key);
+  if constexpr (!Policy::kOrdered && !Groups) {
+    if (!self && qb.isLeaf() && qb.count <= kMaskLeaf)
+      return walkObject<Groups, S, Policy, true>(va, vb, p, key);
+  }
   PairVisitor<S, Policy, Groups> v{va, vb, p};
   return walkPair(va.nodes, vb.nodes, va.root, vb.root, key, self, v);
 }
