@@ -3,6 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
+#include <random>
+#include <vector>
+
 #include "support/dynamic_world.h"
 
 namespace cube {
@@ -42,6 +47,83 @@ TYPED_TEST(Dynamic, AutomaticPolicyRebuildsOnScatterNotOnJitter) {
     ASSERT_TRUE(valid(cube));
     EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
   }
+}
+
+// With the automatic policy an update rebuilds exactly when the tree is past rebuild_threshold
+// and the quality lost over the updates since the build (quality - 1, summed) has passed
+// rebuild_budget: checked update by update against a twin that only refits (same build, so the
+// same quality until the first rebuild), for a steady drift and for one large motion followed
+// by updates that move nothing, with budgets 0 (the threshold alone), the default, and one no
+// motion here spends.
+TYPED_TEST(Dynamic, AutomaticPolicyRebuildsOnceStaleTreeCostAboutABuild) {
+  using S = TypeParam;
+  for (double budget : {0.0, Config().rebuild_budget, 1e9}) {
+    for (bool drift : {true, false}) {
+      SCOPED_TRACE(::testing::Message() << "budget " << budget << (drift ? ", drift" : ", jump"));
+      auto sc = scene<S>(800, 161);
+      const auto objs = sc.pointers();
+      std::mt19937 rng(162);
+      std::normal_distribution<double> g(0, 1);
+      std::vector<fcl::Vector3<S>> step;
+      for (std::size_t i = 0; i < objs.size(); ++i)
+        step.push_back(fcl::Vector3<S>(S(g(rng)), S(g(rng)), S(g(rng))).normalized() *
+                       S(drift ? 20 : 700));
+      Config c;
+      c.rebuild_budget = budget;
+      CubeCollisionManager<S> cube(c);
+      c.update_policy = UpdatePolicy::refit;
+      CubeCollisionManager<S> twin(c);
+      for (auto* m : {&cube, &twin}) {
+        m->registerObjects(objs);
+        m->setup();
+      }
+      const auto& t = ::cube::detail::coreOf(cube).tree();
+      const auto& twin_tree = ::cube::detail::coreOf(twin).tree();
+      const auto built = t.buildCount();
+      double lost = 0;
+      bool rebuilt = false;
+      for (std::uint32_t round = 0; round < 40 && !rebuilt; ++round) {
+        if (drift || round == 0) {
+          for (std::size_t i = 0; i < objs.size(); ++i) {
+            objs[i]->setTranslation(objs[i]->getTranslation() + step[i]);
+            objs[i]->computeAABB();
+          }
+        }
+        cube.update();
+        twin.update();
+        const double q = twin_tree.quality();
+        lost += std::max(0.0, q - 1);
+        const bool due = q > c.rebuild_threshold && lost > budget;
+        EXPECT_EQ(t.buildCount(), built + (due ? 1 : 0))
+            << "round " << round << ", quality " << q << ", lost " << lost;
+        if (!due) {
+          EXPECT_DOUBLE_EQ(t.quality(), q);
+        }
+        if (round == 0 && !drift) {
+          EXPECT_TRUE(q > c.rebuild_threshold && q - 1 < Config().rebuild_budget)
+              << "the jump should leave the quality where only the budget decides: " << q;
+        }
+        rebuilt = due;
+        ASSERT_TRUE(valid(cube));
+        EXPECT_EQ(oracle::selfPairs<S>(cube), oracle::bruteSelfPairs(objs));
+      }
+      // Every case here degrades past the threshold; only the unspendable budget never rebuilds.
+      EXPECT_GT(twin_tree.quality(), c.rebuild_threshold);
+      EXPECT_EQ(rebuilt, budget < 1e9);
+    }
+  }
+}
+
+// A negative or NaN budget is refused.
+TEST(DynamicConfig, RebuildBudgetMustBeNonNegative) {
+  Config c;
+  c.rebuild_budget = -0.5;
+  EXPECT_THROW(c.check(), std::invalid_argument);
+  EXPECT_THROW(CubeCollisionManagerd{c}, std::invalid_argument);
+  c.rebuild_budget = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(c.check(), std::invalid_argument);
+  c.rebuild_budget = 0;
+  EXPECT_NO_THROW(c.check());
 }
 
 // UpdatePolicy::refit never rebuilds on update, however bad the tree gets, and stays correct.

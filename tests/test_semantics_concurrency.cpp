@@ -2,6 +2,10 @@
 // fcl::NaiveCollisionManager's answers.
 
 #include <gtest/gtest.h>
+#include <pthread.h>
+
+#include <utility>
+#include <vector>
 
 #include "support/semantics_world.h"
 
@@ -64,6 +68,38 @@ TYPED_TEST(Semantics, TwoThreadsQueryingAtOnceGetNaiveAnswers) {
   t1.join();
   EXPECT_TRUE(e0.empty()) << e0.size() << " mismatches, first: " << e0.front();
   EXPECT_TRUE(e1.empty()) << e1.size() << " mismatches, first: " << e1.front();
+}
+
+// The header promises a self-collide at most about 100 KB of the caller's stack: one on a thread
+// with a 256 KB stack (a quarter of what the smallest common defaults give) of 1,000 to 4,000
+// objects, whose float bounds are kept in the walk's frame, gets brute force's pairs.
+TYPED_TEST(Semantics, SelfCollideFitsInAThreadWithASmallStack) {
+  using S = TypeParam;
+  for (std::size_t n : {1000, 3000, 4000}) {
+    SCOPED_TRACE(n);
+    auto sc = scene<S>(n, 43);
+    const auto objs = sc.pointers();
+    CubeCollisionManager<S> cube;
+    cube.registerObjects(objs);
+    cube.setup();
+    struct Job {
+      const CubeCollisionManager<S>* m;
+      std::vector<Pair<S>> pairs;
+    } job{&cube, {}};
+    pthread_attr_t attr;
+    ASSERT_EQ(pthread_attr_init(&attr), 0);
+    ASSERT_EQ(pthread_attr_setstacksize(&attr, 256 * 1024), 0);
+    pthread_t thread;
+    auto run = [](void* arg) -> void* {
+      auto* j = static_cast<Job*>(arg);
+      j->pairs = oracle::selfPairs<S>(*j->m);
+      return nullptr;
+    };
+    ASSERT_EQ(pthread_create(&thread, &attr, run, &job), 0);
+    ASSERT_EQ(pthread_join(thread, nullptr), 0);
+    pthread_attr_destroy(&attr);
+    EXPECT_EQ(job.pairs, oracle::bruteSelfPairs(objs));
+  }
 }
 
 }  // namespace

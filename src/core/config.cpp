@@ -11,6 +11,8 @@ void Config::check() const {
   if (leaf_size < 1) throw std::invalid_argument("cube::Config: leaf_size must be >= 1");
   if (!(rebuild_threshold > 1.0))
     throw std::invalid_argument("cube::Config: rebuild_threshold must be > 1");
+  if (!(rebuild_budget >= 0.0))
+    throw std::invalid_argument("cube::Config: rebuild_budget must be >= 0");
   if (!(unbounded_limit > 0.0))
     throw std::invalid_argument("cube::Config: unbounded_limit must be > 0");
   if (all_pairs_limit > kMaxAllPairsLimit)

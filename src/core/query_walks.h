@@ -226,12 +226,14 @@ template <bool Groups, typename S, class Sink>
   return stats ? run(Count{stats}) : run(NoCount{});
 }
 
-// Self walks of many slots, with their float columns (on the heap, in this frame only).
+// Self walks of many slots, with their float columns (in this frame up to kFrameColumnFloats,
+// beyond on the heap).
 template <bool Groups, typename S, class Sink>
 [[gnu::noinline]] bool collideColumns(const View<S>& a, const View<S>& b, const Sink& sink,
                                       QueryStats* stats, const PairGate<S>* gate,
                                       const PairKernels<S>* kernels) {
-  const ColumnStore store(a.slots);
+  alignas(32) float frame[kFrameColumnFloats];
+  const ColumnStore store(a.slots, frame, kFrameColumnFloats);
   // Without groups the walk writes each leaf's entries as it reaches it (CollidePolicy::
   // fill_columns): a self-collide its callback stops at the first contact, as in "is anything
   // touching?", then costs what it visits, not a pass over every object.

@@ -24,10 +24,25 @@ class RebuildPolicy {
     if (tree.changesSinceBuild() > std::max<std::size_t>(64, tree.size() / 2)) return true;
     return tree.built() && tree.quality() > config_.rebuild_threshold;
   }
-  /// After objects moved (update()): as dueAfterChange, and always with UpdatePolicy::rebuild.
+  /// After objects moved (update()): always with UpdatePolicy::rebuild; with automatic, once
+  /// many objects came or went since the last build, or once the tree is past
+  /// Config::rebuild_threshold and the stretch of the updates since the last build, summed,
+  /// passes Config::rebuild_budget. Each call counts as one update.
   template <typename S>
-  bool dueAfterUpdate(const CubeTree<S>& tree) const {
-    return config_.update_policy == UpdatePolicy::rebuild || dueAfterChange(tree);
+  bool dueAfterUpdate(const CubeTree<S>& tree) {
+    if (config_.update_policy == UpdatePolicy::rebuild) return true;
+    if (config_.update_policy != UpdatePolicy::automatic) return false;
+    if (tree.changesSinceBuild() > std::max<std::size_t>(64, tree.size() / 2)) return true;
+    if (!tree.built()) return false;
+    if (tree.buildCount() != counted_build_) {
+      counted_build_ = tree.buildCount();
+      stretch_ = 0;
+    }
+    // Ski rental: a stale tree costs every walk about its stretch, a rebuild costs a few walks
+    // once; rebuild when what the stale tree has cost so far would have paid for it.
+    const double q = tree.quality();
+    stretch_ += std::max(0.0, q - 1.0);
+    return q > config_.rebuild_threshold && stretch_ > config_.rebuild_budget;
   }
   /// At setup(): the first one (`first`) gives the canonical tree if anything changed since the
   /// last build; later ones keep the incremental work, as FCL's tree manager does, and rebuild
@@ -41,6 +56,8 @@ class RebuildPolicy {
 
  private:
   const Config& config_;
+  std::size_t counted_build_ = 0;  // the build stretch_ counts from
+  double stretch_ = 0;             // quality - 1, summed over the updates since that build
 };
 
 }  // namespace detail

@@ -174,6 +174,11 @@ inline bool reportHits(std::uint64_t hits, const Item<S>* xs, const Item<S>* ys,
 // walk, and scenes up to all_pairs_limit do not walk at all.
 constexpr std::uint32_t kColumnsMin = 256;
 
+// The float columns of a serial self walk of up to about 4,000 slots live in its frame (96 KB
+// of the calling thread's stack), so that the first self-collide of a new manager does not
+// fault in a fresh heap block page by page.
+constexpr std::size_t kFrameColumnFloats = 24 * 1024;
+
 // The box tests between two runs of nx and ny objects (Self: one run, each pair once), for
 // QueryStats.
 template <bool Self, class Policy>

@@ -14,11 +14,13 @@
 namespace cube {
 namespace detail {
 
-ColumnStore::ColumnStore(std::uint32_t n) {
+ColumnStore::ColumnStore(std::uint32_t n, float* local, std::size_t local_floats) {
   const std::uint32_t stride = (n + kMaskLeaf + 7) & ~7u;
   const std::size_t floats = 6 * std::size_t(stride);
   float* cols = nullptr;
-  if (floats * sizeof(float) >= kHugeColumnBytes) {
+  if (floats <= local_floats) {
+    cols = local;
+  } else if (floats * sizeof(float) >= kHugeColumnBytes) {
     constexpr std::size_t kHuge = std::size_t(2) << 20;  // x86-64's huge page
     const std::size_t size = (floats * sizeof(float) + kHuge - 1) / kHuge * kHuge;
     huge_ = static_cast<float*>(std::aligned_alloc(kHuge, size));

@@ -69,14 +69,17 @@ inline void fillColumns(const Item<S>* items, Slot&& slot, std::uint32_t count, 
   }
 }
 
-/// Owns the storage of a Columns for at least n entries plus kMaskLeaf of padding (read by the
-/// lanes of a leaf past its end), padding zeroed: the float columns of a large self walk.
+/// The storage of a Columns for at least n entries plus kMaskLeaf of padding (read by the lanes
+/// of a leaf past its end), padding zeroed: the float columns of a large self walk. In the
+/// caller's buffer `local` (32-byte aligned, `local_floats` long) when they fit, else on the
+/// heap: a walk's frame is reused call after call, while a fresh heap block of a new manager or
+/// after glibc trimmed its heap faults in page by page as the walk first touches it.
 /// Stores of kHugeColumnBytes or more ask Linux for huge pages: glibc maps a block that large
 /// afresh at every call (smaller ones come back from its heap, already mapped), and the faults
 /// and TLB misses of its small pages weighed on a self-collide of millions of objects.
 class ColumnStore {
  public:
-  explicit ColumnStore(std::uint32_t n);
+  explicit ColumnStore(std::uint32_t n, float* local = nullptr, std::size_t local_floats = 0);
   ~ColumnStore();
   ColumnStore(const ColumnStore&) = delete;
   ColumnStore& operator=(const ColumnStore&) = delete;
