@@ -57,9 +57,9 @@ struct Config {
   /// With UpdatePolicy::automatic: the tree quality (total surface area of the cubes per object
   /// over its value right after the last build) past which the cubes may be rebuilt (must be
   /// > 1). Insertions and removals rebuild as soon as the quality exceeds it; updates, once it
-  /// exceeds it and `rebuild_budget` is spent too. Trade-off: a low value rebuilds often (a
-  /// build costs many refits); a high value lets queries slow down on a stale tree. The default
-  /// is where the drift benchmark (benchmarks/bench_drift.cpp, its table in
+  /// exceeds it and `rebuild_budget` (0 by default) is spent too. Trade-off: a low value rebuilds
+  /// often (a build costs many refits); a high value lets queries slow down on a stale tree. The
+  /// default is where the drift benchmark (benchmarks/bench_drift.cpp, its table in
   /// benchmarks/README.md) found update + queries fastest. With keep_pairs, a self-collide
   /// after small motions reads the pair list instead of walking, so higher values can pay off
   /// for update + self-collide, at the cost of object queries on a looser tree.
@@ -68,15 +68,15 @@ struct Config {
   /// With UpdatePolicy::automatic: an update rebuilds only once the quality minus 1, summed over
   /// the updates since the last build (each update(), update(obj) and update(objects) call
   /// adds the quality it leaves), exceeds this (>= 0), and the quality exceeds
-  /// `rebuild_threshold`. A stale tree costs every walk in proportion to its quality, a
-  /// rebuild costs a few walks: this rebuilds once the stale tree has cost about what a
-  /// rebuild would (the rent-or-buy rule), so objects drifting steadily rebuild as before and
-  /// a single large motion (every object moved far, once) is refitted, as FCL's managers do,
-  /// unless it leaves the quality above 1 + rebuild_budget. Trade-off: a high value keeps
-  /// refitting longer (cheap updates, slower walks until the next rebuild), as does a caller
-  /// who updates once and then queries many times; 0 rebuilds as soon as the quality exceeds
-  /// rebuild_threshold.
-  double rebuild_budget = 2.0;
+  /// `rebuild_threshold`: rent or buy, a stale tree costing every walk more and a rebuild
+  /// costing a few walks once. 0 (the default) rebuilds as soon as the quality exceeds
+  /// rebuild_threshold. Trade-off: a budget refits a single large motion (every object moved
+  /// far, once) as FCL's managers do, its update costing a refit instead of a build, and
+  /// rebuilds a steady drift where 0 does; but the walks until the rebuild run on the stretched
+  /// tree (up to a quality of 1 + budget after one update), whose cost grows faster than its
+  /// quality where objects crowd: worth it on sparse scenes, not on dense ones
+  /// (docs/tuning.md).
+  double rebuild_budget = 0.0;
 
   /// Objects whose AABB has a coordinate beyond +-unbounded_limit (or infinite: planes,
   /// halfspaces) are kept out of the cubes in a separate list that every query tests. Trade-off:
