@@ -38,8 +38,8 @@ class RebuildPolicy {
       counted_build_ = tree.buildCount();
       stretch_ = 0;
     }
-    // Ski rental: a stale tree costs every walk about its stretch, a rebuild costs a few walks
-    // once; rebuild when what the stale tree has cost so far would have paid for it.
+    // Rent or buy: each update's stretch stands for what the walks after it pay on the stale
+    // tree; rebuild once their sum passes what the caller says a rebuild is worth.
     const double q = tree.quality();
     stretch_ += std::max(0.0, q - 1.0);
     return q > config_.rebuild_threshold && stretch_ > config_.rebuild_budget;
