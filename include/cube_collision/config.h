@@ -59,8 +59,8 @@ struct Config {
   /// > 1). Insertions and removals rebuild as soon as the quality exceeds it; updates, once it
   /// exceeds it and `rebuild_budget` (0 by default) is spent too. Trade-off: a low value rebuilds
   /// often (a build costs many refits); a high value lets queries slow down on a stale tree. The
-  /// default is where the drift benchmark (benchmarks/bench_drift.cpp, its table in
-  /// benchmarks/README.md) found update + queries fastest. With keep_pairs, a self-collide
+  /// default is where the drift benchmark (benchmarks/bench_drift.cpp, its figures in
+  /// docs/tuning.md) found update + queries fastest. With keep_pairs, a self-collide
   /// after small motions reads the pair list instead of walking, so higher values can pay off
   /// for update + self-collide, at the cost of object queries on a looser tree.
   double rebuild_threshold = 1.25;
