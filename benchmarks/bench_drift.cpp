@@ -1,7 +1,7 @@
 // The rebuild-threshold study: a scene whose objects drift steadily, N steps of
 // move + update() + self-collide, for several values of Config::rebuild_threshold and the two
-// forced policies, with FCL's tree manager on the same motion for reference. The default
-// threshold in config.h was chosen from this case.
+// forced policies, and a few values of Config::rebuild_budget, with FCL's tree manager on the
+// same motion for reference. The default threshold in config.h was chosen from this case.
 
 #include <benchmark/benchmark.h>
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
@@ -95,10 +95,12 @@ void runDrift(benchmark::State& state, MakeManager make, After after) {
   }
 }
 
-void cubeDrift(benchmark::State& state, cube::UpdatePolicy policy, double threshold) {
+void cubeDrift(benchmark::State& state, cube::UpdatePolicy policy, double threshold,
+               double budget = 0) {
   cube::Config config;
   config.update_policy = policy;
   if (threshold > 1) config.rebuild_threshold = threshold;
+  config.rebuild_budget = budget;
   runDrift(
       state, [&] { return std::make_unique<cube::CubeCollisionManagerd>(config); },
       [&](const cube::CubeCollisionManagerd& m) {
@@ -111,6 +113,17 @@ void registerDrift() {
     benchmark::RegisterBenchmark(
         ("drift/threshold/" + std::to_string(t).substr(0, 4) + "/cube").c_str(),
         [t](benchmark::State& s) { cubeDrift(s, cube::UpdatePolicy::automatic, t); })
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(1)
+        ->Repetitions(3);
+  }
+  // Config::rebuild_budget at the default threshold: a steady drift should rebuild at the same
+  // steps (its "builds" counter) as with no budget.
+  for (double b : {1.0, 2.0, 4.0}) {
+    benchmark::RegisterBenchmark(
+        ("drift/budget/" + std::to_string(b).substr(0, 3) + "/cube").c_str(),
+        [b](benchmark::State& s) { cubeDrift(s, cube::UpdatePolicy::automatic, 0, b); })
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond)
         ->Iterations(1)

@@ -7,7 +7,7 @@
 //
 //   cube_fcl_programs [--reps N] [--json out.json] [--sizes 100,1000] [--self-sizes 512,1000,5000]
 //                     [--programs update,collision,distance,self_distance,empty]
-//                     [--naive-max OBJECTS] [--quick]
+//                     [--naive-max OBJECTS] [--rebuild-budget B] [--quick]
 //
 // Each cell is timed per manager with std::chrono::steady_clock, the manager order rotated
 // between repetitions (the first manager timed reads the query objects out of cache), and the
@@ -82,6 +82,7 @@ struct Options {
   std::vector<std::size_t> self_sizes = {512, 1000, 5000};
   std::vector<std::string> programs = {"update", "collision", "distance", "self_distance", "empty"};
   std::size_t naive_max = 3000;  // objects; Naive's self queries are quadratic
+  double rebuild_budget = cube::Config().rebuild_budget;  // the cube manager's
   std::size_t collide_queries = 1000;
   std::size_t distance_queries = 100;
   std::size_t empty_queries = 1000;
@@ -188,7 +189,8 @@ std::vector<Object*> raw(const std::vector<ObjectPtr>& objs) {
 // ---------------------------------------------------------------------------------------------
 // Managers
 
-std::unique_ptr<Manager> makeManager(int kind, std::vector<Object*>& env, S cells_per_axis) {
+std::unique_ptr<Manager> makeManager(int kind, std::vector<Object*>& env, S cells_per_axis,
+                                     const cube::Config& cube_config) {
   switch (kind) {
     case 0:
       return std::make_unique<fcl::NaiveCollisionManager<S>>();
@@ -224,7 +226,7 @@ std::unique_ptr<Manager> makeManager(int kind, std::vector<Object*>& env, S cell
       return m;
     }
     default:
-      return std::make_unique<cube::CubeCollisionManager<S>>();
+      return std::make_unique<cube::CubeCollisionManager<S>>(cube_config);
   }
 }
 
@@ -424,7 +426,10 @@ class Runner {
     auto envp = raw(env_);
     std::vector<std::unique_ptr<Manager>> mgr(m);
     const S cells_per_axis = p_.kind == Kind::self_distance ? 5 : 20;
-    for (std::size_t i = 0; i < m; ++i) mgr[i] = makeManager(r_.managers[i], envp, cells_per_axis);
+    cube::Config cube_config;
+    cube_config.rebuild_budget = o_.rebuild_budget;
+    for (std::size_t i = 0; i < m; ++i)
+      mgr[i] = makeManager(r_.managers[i], envp, cells_per_axis, cube_config);
 
     Cell& build = cell("register + setup");
     for (std::size_t at : order) {
@@ -817,7 +822,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: cube_fcl_programs [--reps N] [--json FILE] [--sizes 100,1000] "
                "[--self-sizes 512,1000,5000] [--programs update,collision,distance,"
-               "self_distance,empty] [--naive-max OBJECTS] [--quick]\n");
+               "self_distance,empty] [--naive-max OBJECTS] [--rebuild-budget B] [--quick]\n");
   return 2;
 }
 
@@ -845,6 +850,8 @@ int main(int argc, char** argv) {
       o.programs = parseList(argv[++i]);
     } else if (a == "--naive-max" && more) {
       o.naive_max = static_cast<std::size_t>(std::stoul(argv[++i]));
+    } else if (a == "--rebuild-budget" && more) {
+      o.rebuild_budget = std::stod(argv[++i]);
     } else if (a == "--quick") {
       o.quick = true;
     } else {
