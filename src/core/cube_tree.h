@@ -118,6 +118,9 @@ class CubeTree {
   bool canSplit(std::uint32_t depth) const;
   double refitCube(std::uint32_t cube);
   void startRoot(Item<S> item, IdArrays ids);
+  /// Lays the items out as items_[p] = old items_[order[p]] (order a permutation of all slots);
+  /// leaves order as the identity.
+  void permuteInPlace(std::vector<std::uint32_t>& order);
 
   Config config_;
   NodeArray nodes_;

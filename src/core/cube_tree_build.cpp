@@ -43,6 +43,29 @@ std::uint32_t CubeTree<S>::addChildren(std::uint32_t cube, std::uint32_t begin,
 // Build
 
 template <typename S>
+void CubeTree<S>::permuteInPlace(std::vector<std::uint32_t>& order) {
+  // items_[p] becomes the old items_[order[p]], cycle by cycle; order[p] = p marks p done. No
+  // second array: a build's peak is the items once, and a new manager's first build touches no
+  // fresh pages for a copy.
+  const std::uint32_t n = static_cast<std::uint32_t>(order.size());
+  for (std::uint32_t start = 0; start < n; ++start) {
+    if (order[start] == start) continue;
+    const Item<S> first = items_[start];
+    std::uint32_t to = start;
+    for (;;) {
+      const std::uint32_t from = order[to];
+      order[to] = to;
+      if (from == start) {
+        items_[to] = first;
+        break;
+      }
+      items_[to] = items_[from];
+      to = from;
+    }
+  }
+}
+
+template <typename S>
 void CubeTree<S>::rebuild(IdArrays ids, ItemArray<S>&& extra) {
   // The live items and `extra` in one array, in that order, without dead slots: a first build
   // takes `extra`'s array as its own, so that the objects are held once.
@@ -148,20 +171,23 @@ void CubeTree<S>::rebuild(IdArrays ids) {
         },
         [](int, std::uint32_t depth) { return depth + 1; });
     // The records go before the items are laid out: the build's peak is the items and the
-    // records, or the items twice and the order.
+    // records, or the items and the order.
     std::vector<std::uint32_t> order(n);
     for (std::uint32_t p = 0; p < n; ++p) order[p] = rec[p].item;
     std::vector<BuildRecord>().swap(records);
     std::vector<Group>().swap(rg);
-    ItemArray<S> sorted(n);
-    // A gather from all over the old array: fetch a few items ahead.
-    constexpr std::uint32_t kAhead = 8;
-    for (std::uint32_t p = 0; p < n; ++p) {
-      if (p + kAhead < n) __builtin_prefetch(&items_[order[p + kAhead]]);
-      sorted[p] = itemAt(order[p]);
+    if (old_slots == n) {
+      permuteInPlace(order);
+    } else {
+      // Dead slots among the old ones: a gather into a new array, from all over the old one.
+      ItemArray<S> sorted(n);
+      constexpr std::uint32_t kAhead = 8;
+      for (std::uint32_t p = 0; p < n; ++p) {
+        if (p + kAhead < n) __builtin_prefetch(&items_[order[p + kAhead]]);
+        sorted[p] = itemAt(order[p]);
+      }
+      items_.swap(sorted);
     }
-    items_.swap(sorted);
-    sorted = {};
     order = {};
     for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
       const Node& node = nodes_[i];
