@@ -30,7 +30,9 @@
 // of a self-collide with a margin on every object, one thread), fcltree (collideAll on FCL's
 // dynamic AABB tree of the scene, every contact, one thread). cullpairs: a self-collide of a small
 // manager (170 objects) with Config::cull_pairs and a callback running fcl::collide, after a first
-// one that builds its records.
+// one that builds its records. armstates / armedges: the OMPL example's validity and motion
+// checks of its 7-joint arm in its world (examples/ompl_planner.cpp; the objects argument is
+// its world's size before the arm's base is cleared, 2000 there), without OMPL.
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/default_broadphase_callbacks.h>
@@ -45,6 +47,8 @@
 #define CALLGRIND_STOP_INSTRUMENTATION
 #endif
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -53,6 +57,7 @@
 #include <string>
 #include <vector>
 
+#include "arm.h"
 #include "cube_collision/batch.h"
 #include "cube_collision/callbacks.h"
 #include "cube_collision/cube_collision_manager.h"
@@ -112,14 +117,24 @@ int main(int argc, char** argv) {
   o.n = std::strtoul(argv[2], nullptr, 10);
   o.seed = 5;
   o.meshes = which == "long";  // long: a world of meshes
+  const bool arm = which == "armstates" || which == "armedges";
+  if (arm) {  // the OMPL example's world around its arm (examples/ompl_planner.cpp)
+    o.half_extent = 8;
+    o.seed = 11;
+  }
   scenes::Scene<S> scene = scenes::makeScene<S>(o);
+  std::vector<Object*> objects = scene.pointers();
+  if (arm)  // nothing within the base's reach, as in the example
+    objects.erase(std::remove_if(objects.begin(), objects.end(),
+                                 [](const Object* x) { return x->getTranslation().norm() < 1.2; }),
+                  objects.end());
   cube::CubeCollisionManager<S> world;
-  world.registerObjects(scene.pointers());
+  world.registerObjects(objects);
   world.setup();
   Run run;
   if (which == "distance" || which == "contacts" || which == "states" || which == "edges" ||
       which == "single" || which == "long" || which == "singlekept" || which == "edgeeach" ||
-      which == "edgekept" || which == "se3edges" || which == "boundedges")
+      which == "edgekept" || which == "se3edges" || which == "boundedges" || arm)
     cube::collideAll<S>(world);  // the volumes the first pipeline query builds ("first")
 
   if (which == "self") {
@@ -350,6 +365,66 @@ int main(int argc, char** argv) {
     }
     CALLGRIND_STOP_INSTRUMENTATION;
     run.calls = std::size_t(count) * std::size_t(per_edge);
+  } else if (arm) {
+    // The OMPL example's checks without OMPL: armstates, 2,000 states drawn as RRTConnect draws
+    // its samples (uniform over the joints' range), one checkStates call each, as the example's
+    // validity checker makes them; armedges, 500 edges from such a state toward another, cut to
+    // RRTConnect's range (a fifth of the joint space's extent), each one checkMotion over a pose
+    // function in bisection order at OMPL's resolution (1% of the extent), as its motion
+    // validator. Self-collision on, one thread, one BatchScratch kept; the kinematics counted,
+    // as the example times it inside its checks.
+    constexpr int J = scenes::kArmJoints;
+    cube::BodySet<S> body;
+    for (const auto& g : scenes::armGeometry()) body.addLink(g);
+    for (int i = 0; i + 1 < J; ++i) body.excludePair(i, i + 1);
+    cube::BatchScratch kept;
+    cube::BatchOptions one;
+    one.threads = 1;
+    one.self_collision = true;
+    one.scratch = &kept;
+    const double extent = std::sqrt(double(J)) * 2 * M_PI;
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+    const int count = which == "armstates" ? 2000 : 500;
+    std::vector<double> from(std::size_t(count) * J), to(std::size_t(count) * J);
+    std::vector<int> segments(static_cast<std::size_t>(count));
+    for (int e = 0; e < count; ++e) {
+      double* a = &from[std::size_t(e) * J];
+      double* b = &to[std::size_t(e) * J];
+      double d2 = 0;
+      for (int i = 0; i < J; ++i) {
+        a[i] = angle(rng);
+        b[i] = angle(rng);
+        d2 += (b[i] - a[i]) * (b[i] - a[i]);
+      }
+      const double d = std::sqrt(d2), range = 0.2 * extent;
+      if (d > range)
+        for (int i = 0; i < J; ++i) b[i] = a[i] + (b[i] - a[i]) * (range / d);
+      segments[std::size_t(e)] = std::max(1, int(std::ceil(std::min(d, range) / (0.01 * extent))));
+    }
+    std::vector<fcl::Transform3d> poses(J);
+    CALLGRIND_START_INSTRUMENTATION;
+    for (int e = 0; e < count; ++e) {
+      const double* a = &from[std::size_t(e) * J];
+      const double* b = &to[std::size_t(e) * J];
+      if (which == "armstates") {
+        scenes::armPoses(a, poses.data());
+        run.checksum += cube::checkStates(world, body, poses, one)[0].colliding;
+        continue;
+      }
+      const int nd = segments[std::size_t(e)];
+      const cube::PoseFunction<S> pose_of = [&](std::size_t k, fcl::Transform3d* out) {
+        const double t = double(k + 1) / nd;
+        double q[J];
+        for (int i = 0; i < J; ++i) q[i] = a[i] + (b[i] - a[i]) * t;
+        scenes::armPoses(q, out);
+      };
+      const std::size_t f = cube::checkMotion(world, body, std::size_t(nd), pose_of,
+                                              cube::MotionOrder::bisection, one);
+      run.checksum += f == cube::kNoIndex ? 0 : f + 1;
+    }
+    CALLGRIND_STOP_INSTRUMENTATION;
+    run.calls = std::size_t(count);
   } else if (which == "merged" || which == "pairs") {
     const std::vector<cube::ObjectPair<S>> pairs = cube::overlappingPairs<S>(world);
     cube::NarrowPhaseOptions<S> one;

@@ -8,7 +8,7 @@
 # cube_instructions). CUBE_INSTRUCTION_CASES overrides the list ("case:objects ...").
 set -euo pipefail
 command -v valgrind >/dev/null || { echo "needs valgrind (Debian: apt-get install valgrind)" >&2; exit 2; }
-cases=${CUBE_INSTRUCTION_CASES:-"self:32 self:1000 self:10000 queries:1000 queries:10000 robot:1000 robot:10000 update:1000 update:10000 still:10000 keep:10000 keepstill:10000 distance:1000 contacts:1000 states:1000 states:10000 edges:1000 edges:10000 single:10000 singlekept:10000 edgeeach:10000 edgekept:10000 se3edges:10000 boundedges:10000 long:1000 first:10000 merged:1000 pairs:1000 callback:1000 margins:1000 fcltree:1000 cullpairs:170 build:10000 turn:3000"}
+cases=${CUBE_INSTRUCTION_CASES:-"self:32 self:1000 self:10000 queries:1000 queries:10000 robot:1000 robot:10000 update:1000 update:10000 still:10000 keep:10000 keepstill:10000 distance:1000 contacts:1000 states:1000 states:10000 edges:1000 edges:10000 single:10000 singlekept:10000 edgeeach:10000 edgekept:10000 se3edges:10000 boundedges:10000 long:1000 first:10000 merged:1000 pairs:1000 callback:1000 margins:1000 fcltree:1000 cullpairs:170 build:10000 turn:3000 armstates:2000 armedges:2000"}
 count() {  # build dir, case, objects -> "instructions calls checksum"
   local out
   out=$(valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=/dev/null \

@@ -21,8 +21,6 @@
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/broadphase/default_broadphase_callbacks.h>
-#include <fcl/geometry/shape/box.h>
-#include <fcl/geometry/shape/capsule.h>
 #include <ompl/base/DiscreteMotionValidator.h>
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/ProblemDefinition.h>
@@ -43,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "arm.h"
 #include "busy_load.h"
 #include "cube_collision/batch.h"
 #include "cube_collision/cube_collision_manager.h"
@@ -56,47 +55,17 @@ namespace {
 using S = double;
 using Object = fcl::CollisionObjectd;
 using Poses = std::vector<fcl::Transform3d>;
-constexpr int kJoints = 7;
-constexpr double kLength = 1.0;  // each link
+constexpr int kJoints = cube::scenes::kArmJoints;
+constexpr double kLength = cube::scenes::kArmLink;
 // The continuous run's states per state of OMPL's resolution: its motion bounds shrink with the
 // states' spacing, and with OMPL's own spacing they raise the links so much that links two apart
 // (always within one link length of each other) count as touching.
 constexpr int kRefine = 32;
 
-// ---- The arm ----------------------------------------------------------------------------------
+// ---- The arm (examples/scenes/arm.h) ------------------------------------------------------------
 
-std::vector<std::shared_ptr<fcl::CollisionGeometryd>> armGeometry() {
-  std::vector<std::shared_ptr<fcl::CollisionGeometryd>> g;
-  for (int i = 0; i < kJoints; ++i) {
-    if (i % 2 == 0)
-      g.push_back(std::make_shared<fcl::Boxd>(0.16, 0.16, kLength));
-    else
-      g.push_back(std::make_shared<fcl::Capsuled>(0.08, kLength - 0.16));
-  }
-  return g;
-}
-
-// Forward kinematics: a yaw joint at the base (the origin), then pitch and roll joints in turn;
-// each link's pose is the middle of its segment. One sine and cosine per joint and a rotation
-// about a frame axis applied to the columns (what a planner's own kinematics does): checks cost
-// a few microseconds, so a general 4x4 product per joint would be a large share of each.
-void forwardKinematics(const double* q, fcl::Transform3d* out) {
-  fcl::Matrix3d R = fcl::Matrix3d::Identity();
-  fcl::Vector3d p = fcl::Vector3d::Zero();
-  for (int i = 0; i < kJoints; ++i) {
-    const double c = std::cos(q[i]), s = std::sin(q[i]);
-    // R * rotation about local axis k (z for the base, then y and x in turn): two columns mix.
-    const int k = i == 0 ? 2 : (i % 2 ? 1 : 0);
-    const int a = (k + 1) % 3, b = (k + 2) % 3;
-    const fcl::Vector3d ca = R.col(a), cb = R.col(b);
-    R.col(a) = c * ca + s * cb;
-    R.col(b) = c * cb - s * ca;
-    out[i].linear() = R;
-    out[i].translation() = p + (kLength / 2) * R.col(2);
-    out[i].makeAffine();
-    p += kLength * R.col(2);
-  }
-}
+using cube::scenes::armGeometry;
+using cube::scenes::armPoses;  // forward kinematics
 
 const double* jointsOf(const ob::State* s) {
   return s->as<ob::RealVectorStateSpace::StateType>()->values;
@@ -155,7 +124,7 @@ class CubeValidity final : public ob::StateValidityChecker {
   bool isValid(const ob::State* s) const override {
     const CheckClock::Scope timed(clock_);
     Poses poses(kJoints);  // const and thread-safe, as OMPL asks: no member is written
-    forwardKinematics(jointsOf(s), poses.data());
+    armPoses(jointsOf(s), poses.data());
     return !cube::checkStates(world_, body_, poses, withThreadScratch(options_))[0].colliding;
   }
 
@@ -223,7 +192,7 @@ class CubeMotion final : public ob::MotionValidator {
       const double t = double(k + first_j) / double(nd);
       double q[kJoints];
       for (int i = 0; i < kJoints; ++i) q[i] = from[i] + (to[i] - from[i]) * t;
-      forwardKinematics(q, poses);
+      armPoses(q, poses);
     };
     const std::size_t states = std::size_t(nd) + 1 - first_j;
     states_ += states;
@@ -275,7 +244,7 @@ class FclValidity final : public ob::StateValidityChecker {
   bool isValid(const ob::State* s) const override {
     const CheckClock::Scope timed(clock_);
     Poses poses(kJoints);
-    forwardKinematics(jointsOf(s), poses.data());
+    armPoses(jointsOf(s), poses.data());
     for (int i = 0; i < kJoints; ++i) {
       links_[i]->setTransform(poses[i]);
       links_[i]->computeAABB();
@@ -417,7 +386,7 @@ bool touches(const std::vector<double>& q,
              const std::vector<std::shared_ptr<fcl::CollisionGeometryd>>& geometry,
              const Object& obj) {
   Poses poses(kJoints);
-  forwardKinematics(q.data(), poses.data());
+  armPoses(q.data(), poses.data());
   for (int i = 0; i < kJoints; ++i) {
     const Object link(geometry[i], poses[i]);
     fcl::CollisionRequestd req;
