@@ -11,11 +11,13 @@
 #include <cassert>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "adapter/manager_access.h"
 #include "core/parallel_for.h"
@@ -53,18 +55,17 @@ std::size_t checkedStates(const Links<S>& links, const std::vector<fcl::Transfor
 }
 
 // The states of an edge of n states in `order`: rank r visits state visit[r].
-void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visit) {
+void visitOrder(std::size_t n, MotionOrder order, std::vector<std::size_t>& visit,
+                std::vector<std::pair<std::size_t, std::size_t>>& open) {
   visit.clear();
-  visit.reserve(n);
   if (order == MotionOrder::path || n < 2) {
     for (std::size_t i = 0; i < n; ++i) visit.push_back(i);
     return;
   }
   visit.push_back(n - 1);
   // The closed intervals left, breadth first: each is taken once, so a list with a head serves
-  // as the queue (no allocation per interval).
-  std::vector<std::pair<std::size_t, std::size_t>> open;
-  open.reserve(n);
+  // as the queue.
+  open.clear();
   open.emplace_back(0, n - 2);
   for (std::size_t head = 0; head < open.size(); ++head) {
     const auto [lo, hi] = open[head];
@@ -131,8 +132,40 @@ struct ScratchSlot {
   std::uint64_t generation = 0;
 };
 
+// The bookkeeping of a motion check (firstCollisions), kept by a BatchScratch from call to call:
+// a planner checks its edges one call each, and making these for each call cost about a tenth of
+// a short edge's check.
+struct EdgePlan {
+  // A state of an edge at its rank in the edge's visiting order.
+  struct Item {
+    std::uint32_t edge;
+    std::uint32_t rank;
+    std::size_t state;
+  };
+  // Items placed together (StateChecker::placeGroup).
+  struct Run {
+    std::size_t first;  // item
+    std::size_t count;
+  };
+  std::vector<Item> items;
+  std::vector<Run> runs;
+  // visitOrder of an edge of visit_states states in visit_order (a planner's edges often have
+  // the same number of states, the planner's range over its resolution).
+  std::vector<std::size_t> visit;
+  std::size_t visit_states = SIZE_MAX;
+  MotionOrder visit_order = MotionOrder::path;
+  std::vector<std::pair<std::size_t, std::size_t>> open;  // visitOrder's queue
+  std::vector<std::atomic<std::size_t>> best;             // per edge
+  // `edges` entries in best, each kNoIndex.
+  void resetBest(std::size_t edges) {
+    if (best.size() != edges) std::vector<std::atomic<std::size_t>>(edges).swap(best);
+    for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
+  }
+};
+
 struct ScratchSlots {
   std::atomic<bool> busy{false};
+  EdgePlan plan;
   ScratchSlot<float> for_float;
   ScratchSlot<double> for_double;
   template <typename S>
@@ -179,6 +212,7 @@ class CallerScratch {
       throw std::logic_error(std::string("cube::") + where +
                              ": its BatchScratch is in use by another call");
     slots_ = &slots;
+    plan_ = &slots.plan;
     ScratchSlot<S>& kept = slots.slot<S>();
     if (kept.scratch != nullptr && kept.world == &world && kept.links == &links &&
         kept.generation == links.generation) {
@@ -205,6 +239,11 @@ class CallerScratch {
   CallerScratch(const CallerScratch&) = delete;
   CallerScratch& operator=(const CallerScratch&) = delete;
 
+  // The motion check's bookkeeping: the kept scratch's, else this call's.
+  EdgePlan& plan() {
+    if (plan_ == nullptr) plan_ = &own_plan_.emplace();
+    return *plan_;
+  }
   // The calling thread's scratch (made on first use); another thread's own, made for it.
   ScratchHandle<S> forThisThread() {
     ScratchHandle<S> h;
@@ -230,6 +269,8 @@ class CallerScratch {
   const int exceptions_ = std::uncaught_exceptions();
   ScratchSlots* slots_ = nullptr;
   std::unique_ptr<MotionScratch<S>> held_;
+  std::optional<EdgePlan> own_plan_;  // made only by a motion check without a kept scratch
+  EdgePlan* plan_ = nullptr;
 };
 
 namespace {
@@ -272,38 +313,46 @@ struct NoRaise {};
 
 // checkMotions over `states` states whose poses pose_at(scratch, state, j) gives (a pointer to
 // the links' poses, the j-th state of a run placed together; j = kGroupStates and the next for
-// a neighbour of a state that its run does not hold), edges as edge_starts says (checked by the
-// caller). A continuous check: raise_at(state, edge begin, edge end, raise, bad, poses_of)
-// writes the links' margin raises of a state to raise[0 .. links), or sets `bad` to the index of
-// a pose it read with a NaN or infinite entry; poses_of(k) gives the poses of the state or of a
-// neighbour in its edge.
+// a neighbour of a state that its run does not hold), `edges` edges starting at edge_starts[0 ..
+// edges) (checked by the caller), each edge's first colliding state (kNoIndex: none) into
+// first[0 .. edges). A continuous check: raise_at(state, edge begin, edge end, raise, bad,
+// poses_of) writes the links' margin raises of a state to raise[0 .. links), or sets `bad` to
+// the index of a pose it read with a NaN or infinite entry; poses_of(k) gives the poses of the
+// state or of a neighbour in its edge.
 template <typename S, class PoseAt, class RaiseAt = NoRaise>
-std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<S>& links,
-                                         std::size_t states,
-                                         const std::vector<std::size_t>& edge_starts,
-                                         MotionOrder order, const BatchOptions& options,
-                                         bool on_demand, const PoseAt& pose_at,
-                                         const RaiseAt& raise_at = RaiseAt()) {
+void firstCollisions(const Broadphase<S>& core, const Links<S>& links, std::size_t states,
+                     const std::size_t* edge_starts, std::size_t edges, MotionOrder order,
+                     const BatchOptions& options, bool on_demand, const PoseAt& pose_at,
+                     std::size_t* first, const RaiseAt& raise_at = RaiseAt()) {
   constexpr bool continuous = !std::is_same<RaiseAt, NoRaise>::value;
-  const std::size_t edges = edge_starts.size();
-  std::vector<std::size_t> first(edges, kNoIndex);
-  if (edges == 0) return first;
+  std::fill(first, first + edges, kNoIndex);
+  if (edges == 0) return;
   core.table().wantVolumes();
+  const auto edge_end = [&](std::size_t e) { return e + 1 < edges ? edge_starts[e + 1] : states; };
+  constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
+  std::size_t longest = 0;  // the most states of an edge
+  for (std::size_t e = 0; e < edges; ++e) longest = std::max(longest, edge_end(e) - edge_starts[e]);
+  // Room for a run's states, and with raises from the poses, for its neighbour before and two
+  // rooms in turn for the one after (MotionScratch::ahead).
+  const std::size_t run_states = !on_demand   ? 0
+                                 : continuous ? kRun + 3
+                                              : std::min(longest, StateChecker<S>::kGroupStates);
+  CallerScratch<S> caller(options, core, links, run_states, continuous, "checkMotions");
+  EdgePlan& plan = caller.plan();
   // Items in edge order, each edge's states in visiting order: edge e's take the places of
   // its states, edge_starts[e] ...
-  struct Item {
-    std::uint32_t edge;
-    std::uint32_t rank;
-    std::size_t state;
-  };
-  std::vector<Item> items(states);
-  std::vector<std::size_t> visit;
+  using Item = EdgePlan::Item;
+  std::vector<Item>& items = plan.items;
+  items.resize(states);
   for (std::size_t e = 0, item = 0; e < edges; ++e) {
     const std::size_t begin = edge_starts[e];
-    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
-    visitOrder(end - begin, order, visit);
-    for (std::size_t r = 0; r < visit.size(); ++r, ++item)
-      items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + visit[r]};
+    if (edge_end(e) - begin != plan.visit_states || order != plan.visit_order) {
+      visitOrder(edge_end(e) - begin, order, plan.visit, plan.open);
+      plan.visit_states = edge_end(e) - begin;
+      plan.visit_order = order;
+    }
+    for (std::size_t r = 0; r < plan.visit.size(); ++r, ++item)
+      items[item] = Item{std::uint32_t(e), std::uint32_t(r), begin + plan.visit[r]};
   }
   // Runs of items placed together (StateChecker::placeGroup): per edge runs of consecutive ranks
   // of 5, 8, 16 states and then kGroupStates in path order (states consecutive along an edge lie
@@ -312,37 +361,24 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
   // without reading more). A run's states are read before any is checked: a run starting at
   // rank s holds at most s + 3 states (5 from the first), so an answer at rank r reads at most
   // max(5, 2 r + 3) states.
-  constexpr std::size_t kRun = StateChecker<S>::kGroupStates;
-  struct Run {
-    std::size_t first;  // item
-    std::size_t count;
-  };
-  std::vector<Run> runs;
-  runs.reserve(5 * edges + states / kRun);  // at most 5 per edge and one per kRun states past them
+  using Run = EdgePlan::Run;
+  std::vector<Run>& runs = plan.runs;
+  runs.clear();
   for (std::size_t e = 0; e < edges; ++e) {
     const std::size_t begin = edge_starts[e];
-    const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
-    const std::size_t first = order == MotionOrder::path ? 5 : 1;
-    for (std::size_t i = begin, size = first; i < end;) {
+    const std::size_t end = edge_end(e);
+    const std::size_t size0 = order == MotionOrder::path ? 5 : 1;
+    for (std::size_t i = begin, size = size0; i < end;) {
       runs.push_back(Run{i, std::min(size, end - i)});
       i += size;
       size = size == 1 ? 4 : size == 5 ? 8 : std::min(kRun, 2 * size);
     }
   }
   // Per edge: the lowest rank known to collide (or to hold a bad pose).
-  std::vector<std::atomic<std::size_t>> best(edges);
-  for (auto& b : best) b.store(kNoIndex, std::memory_order_relaxed);
+  plan.resetBest(edges);
+  std::vector<std::atomic<std::size_t>>& best = plan.best;
   std::vector<std::pair<std::size_t, std::size_t>> bad;  // (item, pose index): rare
   const std::size_t n = links.size();
-  std::size_t longest = 0;  // the most states of an edge
-  for (std::size_t e = 0; e < edges; ++e)
-    longest = std::max(longest, (e + 1 < edges ? edge_starts[e + 1] : states) - edge_starts[e]);
-  // Room for a run's states, and with raises from the poses, for its neighbour before and two
-  // rooms in turn for the one after (MotionScratch::ahead).
-  const std::size_t run_states = !on_demand   ? 0
-                                 : continuous ? kRun + 3
-                                              : std::min(longest, StateChecker<S>::kGroupStates);
-  CallerScratch<S> caller(options, core, links, run_states, continuous, "checkMotions");
   // The states of run r in rank order, up to the edge's first collision; the number checked.
   const auto check = [&](auto& scratch, std::size_t r) -> std::size_t {
     const Run& run = runs[r];
@@ -382,7 +418,7 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     if constexpr (continuous) {
       const std::uint32_t e = items[run.first].edge;
       const std::size_t begin = edge_starts[e];
-      const std::size_t end = e + 1 < edges ? edge_starts[e + 1] : states;
+      const std::size_t end = edge_end(e);
       for (std::size_t j = 0; j < count; ++j) {
         S* raise = scratch->raise.data() + j * n;
         const std::size_t k = items[run.first + j].state;
@@ -471,7 +507,6 @@ std::vector<std::size_t> firstCollisions(const Broadphase<S>& core, const Links<
     const std::size_t r = best[e].load(std::memory_order_relaxed);
     if (r != kNoIndex) first[e] = items[edge_starts[e] + r].state - edge_starts[e];
   }
-  return first;
 }
 
 }  // namespace
@@ -540,12 +575,15 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
   const auto pose_at = [&](auto&, std::size_t state, std::size_t) {
     return poses.data() + state * n;
   };
+  std::vector<std::size_t> first(edge_starts.size());
   if (options.continuous)
-    return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
-                                   options, false, pose_at,
-                                   detail::Se3Raise<S>{detail::linkReach<S>(links)});
-  return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
-                                 false, pose_at);
+    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
+                            edge_starts.size(), order, options, false, pose_at, first.data(),
+                            detail::Se3Raise<S>{detail::linkReach<S>(links)});
+  else
+    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
+                            edge_starts.size(), order, options, false, pose_at, first.data());
+  return first;
 }
 
 template <typename S>
@@ -558,10 +596,12 @@ std::vector<std::size_t> checkMotions(
   const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
   detail::checkMotionBounds(motion_bounds, poses.size(), "checkMotions");
   const std::size_t n = links.size();
-  return detail::firstCollisions(
-      detail::coreOf(world), links, states, edge_starts, order, options, false,
-      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; },
-      detail::GivenRaise<S>{motion_bounds, n});
+  std::vector<std::size_t> first(edge_starts.size());
+  detail::firstCollisions(
+      detail::coreOf(world), links, states, edge_starts.data(), edge_starts.size(), order, options,
+      false, [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; },
+      first.data(), detail::GivenRaise<S>{motion_bounds, n});
+  return first;
 }
 
 template <typename S>
@@ -569,21 +609,39 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
                         const std::vector<fcl::Transform3<S>>& poses,
                         const typename detail::NoDeduce<MotionBounds<S>>::type& motion_bounds,
                         MotionOrder order, const BatchOptions& options) {
-  const std::vector<std::size_t> starts =
-      poses.empty() ? std::vector<std::size_t>{} : std::vector<std::size_t>{0};
-  const std::vector<std::size_t> first =
-      checkMotions(world, body, poses, starts, motion_bounds, order, options);
-  return first.empty() ? kNoIndex : first[0];
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
+  detail::checkMotionBounds(motion_bounds, poses.size(), "checkMotions");
+  const std::size_t n = links.size();
+  const std::size_t start = 0;
+  std::size_t first = kNoIndex;
+  detail::firstCollisions(
+      detail::coreOf(world), links, states, &start, states == 0 ? 0 : 1, order, options, false,
+      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; }, &first,
+      detail::GivenRaise<S>{motion_bounds, n});
+  return first;
 }
 
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         const std::vector<fcl::Transform3<S>>& poses, MotionOrder order,
                         const BatchOptions& options) {
-  const std::vector<std::size_t> starts =
-      poses.empty() ? std::vector<std::size_t>{} : std::vector<std::size_t>{0};
-  const std::vector<std::size_t> first = checkMotions(world, body, poses, starts, order, options);
-  return first.empty() ? kNoIndex : first[0];
+  const auto& links = detail::BodyAccess::links(body);
+  const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
+  const std::size_t n = links.size();
+  const auto pose_at = [&](auto&, std::size_t state, std::size_t) {
+    return poses.data() + state * n;
+  };
+  const std::size_t start = 0, edges = states == 0 ? 0 : 1;
+  std::size_t first = kNoIndex;
+  if (options.continuous)
+    detail::firstCollisions(detail::coreOf(world), links, states, &start, edges, order, options,
+                            false, pose_at, &first,
+                            detail::Se3Raise<S>{detail::linkReach<S>(links)});
+  else
+    detail::firstCollisions(detail::coreOf(world), links, states, &start, edges, order, options,
+                            false, pose_at, &first);
+  return first;
 }
 
 template <typename S>
@@ -595,7 +653,20 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (links.size() == 0) batchError("checkMotion", "the body set has no link");
   if (!pose_of) batchError("checkMotion", "null pose function");
   if (states == 0) return kNoIndex;
-  return checkMotions(world, body, states, std::vector<std::size_t>{0}, pose_of, order, options)[0];
+  const std::size_t start = 0;
+  std::size_t first = kNoIndex;
+  const auto pose_at = [&](auto& scratch, std::size_t state, std::size_t j) {
+    fcl::Transform3<S>* at = scratch.room(j, links.size());
+    pose_of(state, at);
+    return at;
+  };
+  if (options.continuous)
+    detail::firstCollisions(detail::coreOf(world), links, states, &start, 1, order, options, true,
+                            pose_at, &first, detail::Se3Raise<S>{detail::linkReach<S>(links)});
+  else
+    detail::firstCollisions(detail::coreOf(world), links, states, &start, 1, order, options, true,
+                            pose_at, &first);
+  return first;
 }
 
 template <typename S>
@@ -633,12 +704,15 @@ std::vector<std::size_t> checkMotions(
     pose_of(state, at);
     return at;
   };
+  std::vector<std::size_t> first(edge_starts.size());
   if (options.continuous)
-    return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order,
-                                   options, true, pose_at,
-                                   detail::Se3Raise<S>{detail::linkReach<S>(links)});
-  return detail::firstCollisions(detail::coreOf(world), links, states, edge_starts, order, options,
-                                 true, pose_at);
+    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
+                            edge_starts.size(), order, options, true, pose_at, first.data(),
+                            detail::Se3Raise<S>{detail::linkReach<S>(links)});
+  else
+    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
+                            edge_starts.size(), order, options, true, pose_at, first.data());
+  return first;
 }
 
 template <typename S>
@@ -651,14 +725,17 @@ std::vector<std::size_t> checkMotions(
   const auto& links = detail::BodyAccess::links(body);
   detail::checkPoseEdges(links, states, edge_starts, pose_of);
   detail::checkMotionBounds(motion_bounds, states * links.size(), "checkMotions");
-  return detail::firstCollisions(
-      detail::coreOf(world), links, states, edge_starts, order, options, true,
+  std::vector<std::size_t> first(edge_starts.size());
+  detail::firstCollisions(
+      detail::coreOf(world), links, states, edge_starts.data(), edge_starts.size(), order, options,
+      true,
       [&](auto& scratch, std::size_t state, std::size_t j) {
         fcl::Transform3<S>* at = scratch.room(j, links.size());
         pose_of(state, at);
         return at;
       },
-      detail::GivenRaise<S>{motion_bounds, links.size()});
+      first.data(), detail::GivenRaise<S>{motion_bounds, links.size()});
+  return first;
 }
 
 template <typename S>
@@ -672,15 +749,17 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (!pose_of) batchError("checkMotion", "null pose function");
   detail::checkMotionBounds(motion_bounds, states * links.size(), "checkMotion");
   if (states == 0) return kNoIndex;
-  const std::vector<std::size_t> starts{0};
-  return detail::firstCollisions(
-      detail::coreOf(world), links, states, starts, order, options, true,
+  const std::size_t start = 0;
+  std::size_t first = kNoIndex;
+  detail::firstCollisions(
+      detail::coreOf(world), links, states, &start, 1, order, options, true,
       [&](auto& scratch, std::size_t state, std::size_t j) {
         fcl::Transform3<S>* at = scratch.room(j, links.size());
         pose_of(state, at);
         return at;
       },
-      detail::GivenRaise<S>{motion_bounds, links.size()})[0];
+      &first, detail::GivenRaise<S>{motion_bounds, links.size()});
+  return first;
 }
 
 BatchScratch::BatchScratch() = default;
@@ -693,6 +772,7 @@ void BatchScratch::release() {
     throw std::logic_error("cube::BatchScratch::release: in use by a call");
   slots_->for_float = {};
   slots_->for_double = {};
+  slots_->plan = {};
   slots_->busy.store(false, std::memory_order_release);
 }
 
