@@ -93,6 +93,43 @@ TEST(BatchScratch, StatesCheckedOneByOneWithAKeptScratchEqualBruteForce) {
   }
 }
 
+// A check for any contact walks first the groups of links that touched most often before
+// (counted by the kept checker); a check for the first pair walks in link order whatever came
+// before. A chain of 12 links (three groups of four): first its far links alone sit on world
+// objects, state after state, then its near links alone, then none, then both; the other links
+// lie beyond the world. Each state alone through one scratch, as brute force, for any contact
+// and for the first pair.
+TEST(BatchScratch, ChecksAfterContactsOfOtherLinksAnswerAsBruteForce) {
+  World w;
+  fillWorld(w, 300, 71, false, false);
+  const cube::BodySet<S> body = randomBody(12, 72, false);
+  const std::size_t n = body.size();
+  std::mt19937 rng(73);
+  std::uniform_int_distribution<std::size_t> pick(0, w.objects.size() - 1);
+  std::vector<fcl::Transform3d> poses;
+  const auto state = [&](bool near, bool far) {
+    for (std::size_t l = 0; l < n; ++l) {
+      fcl::Transform3d tf = randomPose(rng, 1);
+      const bool on = (l < 4 && near) || (l >= 8 && far);
+      // A shape holds its own centre: on an object's centre, a link meets that object.
+      tf.translation() =
+          on ? w.objects[pick(rng)]->getTranslation() : fcl::Vector3d(40.0 + 4.0 * double(l), 0, 0);
+      poses.push_back(tf);
+    }
+  };
+  for (int k = 0; k < 40; ++k) state(false, true);
+  for (int k = 0; k < 20; ++k) state(true, false);
+  for (int k = 0; k < 20; ++k) state(false, false);
+  for (int k = 0; k < 20; ++k) state(true, true);
+  cube::BatchScratch scratch;
+  for (const bool first : {false, true, false}) {
+    cube::BatchOptions o;
+    o.first_pair = first;
+    o.threads = 1;
+    EXPECT_EQ(statesOneByOne(w, body, poses, o, scratch), 80u) << "first_pair " << first;
+  }
+}
+
 // One scratch across two worlds, a world whose objects move, join, change rules and get a
 // predicate, a body that grows and excludes a pair, and a world and a body made anew where the
 // old ones were.

@@ -263,13 +263,14 @@ using PoseFunction = std::function<void(std::size_t state, fcl::Transform3<S>* p
 /// max(5, 2 r + 3) states are checked, and only those are computed but for the neighbours
 /// BatchOptions::continuous reads (with `threads` > 1, a few more may be, and their answers
 /// dropped). The same answer as checkMotion over all the poses, whatever the thread count. No
-/// pose array is made: the call's memory is the visiting order, 24 bytes a state (40 while it
-/// is made), and room for the poses of one run (32 states, 35 with BatchOptions::continuous) per
-/// thread. With BatchOptions::continuous, the SE(3) bounds as checkMotion over all the poses
-/// computes them, each checked state's neighbours written too (PoseFunction). Throws
-/// std::invalid_argument for an empty body set or a null function (before any work), and as
-/// checkMotion for a NaN or infinite pose; an exception from pose_of is passed on (possibly one
-/// from a state after the answer in its run, or with `threads` > 1 in a later one).
+/// pose array is made: the call's memory is the visiting order, about 40 bytes a state (kept in
+/// BatchOptions::scratch for the next call if one is given), and room for the poses of one run
+/// (32 states, 35 with BatchOptions::continuous) per thread. With BatchOptions::continuous, the
+/// SE(3) bounds as checkMotion over all the poses computes them, each checked state's neighbours
+/// written too (PoseFunction). Throws std::invalid_argument for an empty body set or a null
+/// function (before any work), and as checkMotion for a NaN or infinite pose; an exception from
+/// pose_of is passed on (possibly one from a state after the answer in its run, or with `threads` >
+/// 1 in a later one).
 template <typename S>
 std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& body,
                         std::size_t states,

@@ -62,7 +62,9 @@ class StateChecker {
     const std::size_t object_at = roundUp(slot_at + n * sizeof(Slot), alignof(ObjectStorage));
     const std::size_t number_at = roundUp(object_at + n * sizeof(ObjectStorage), alignof(S));
     const std::size_t flag_at = number_at + 20 * n * sizeof(S);
-    block_.reset(new Chunk[(flag_at + leaves + n + sizeof(Chunk) - 1) / sizeof(Chunk)]);
+    const std::size_t order_at = roundUp(flag_at + leaves + n, alignof(std::uint32_t));
+    const std::size_t end_at = order_at + 2 * leaves * sizeof(std::uint32_t);
+    block_.reset(new Chunk[(end_at + sizeof(Chunk) - 1) / sizeof(Chunk)]);
     unsigned char* base = block_[0].bytes;
     slots_ = reinterpret_cast<Slot*>(base + slot_at);
     for (std::size_t l = 0; l < n; ++l) {
@@ -75,6 +77,12 @@ class StateChecker {
     objects_ = reinterpret_cast<ObjectStorage*>(base + object_at);  // constructed on first use
     close_ = base + flag_at;
     need_ = close_ + leaves;
+    leaf_order_ = reinterpret_cast<std::uint32_t*>(base + order_at);
+    leaf_hits_ = leaf_order_ + leaves;
+    for (std::size_t k = 0; k < leaves; ++k) {
+      leaf_order_[k] = std::uint32_t(k);
+      leaf_hits_[k] = 0;
+    }
     std::fill(close_, need_ + n, std::uint8_t(0));
     S* next = reinterpret_cast<S*>(base + number_at);  // written before read
     for (int d = 0; d < 3; ++d) {
@@ -249,14 +257,21 @@ class StateChecker {
     C& hits = this->hits<C>();
     hits.reset();
     if (shared_) return searchShared<C>(self);
-    // The world leaf by leaf of the links' tree, in link order: a state in contact stops at
-    // the first group of links that touches (as a link-by-link check does), and a free one
-    // walks little more than the whole tree at once would.
-    for (std::size_t k = 0; k < body_.leafCount() && world_.size() != 0 && !hits.found(); ++k) {
+    // The world leaf by leaf of the links' tree: a state in contact stops at the first group of
+    // links that touches, and a free one walks little more than the whole tree at once would.
+    // In link order where the first pair in that order is asked for; otherwise the groups that
+    // touched most often first (a planner's states in contact mostly touch with the same links,
+    // and each group checked first for nothing costs a whole walk).
+    const std::size_t leaves = body_.leafCount();
+    for (std::size_t i = 0; i < leaves && world_.size() != 0 && !hits.found(); ++i) {
+      const std::size_t k = C::kOrdered ? i : leaf_order_[i];
       pending_.clear();
       world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
                      CollideFn<S>(&StateChecker::onWorld<C>), nullptr);
-      if (hits.complete() || decidePending(hits)) return true;
+      if (hits.complete() || decidePending(hits)) {
+        if (!C::kOrdered) countHit(i);
+        return true;
+      }
     }
     if (self) {
       pending_.clear();
@@ -264,6 +279,17 @@ class StateChecker {
       decidePending(hits);
     }
     return hits.found();
+  }
+
+  // A contact found by the leaf at place i of leaf_order_: counted, and the leaf moved ahead of
+  // those with fewer (counts halved before they overflow, keeping their order).
+  void countHit(std::size_t i) {
+    const std::uint32_t k = leaf_order_[i];
+    if (++leaf_hits_[k] == UINT32_MAX)
+      for (std::size_t j = 0; j < body_.leafCount(); ++j) leaf_hits_[j] /= 2;
+    for (; i > 0 && leaf_hits_[leaf_order_[i - 1]] < leaf_hits_[k]; --i)
+      leaf_order_[i] = leaf_order_[i - 1];
+    leaf_order_[i] = k;
   }
 
   // The links' self pairs over the whole links' tree into collector C; whether its answer is
@@ -581,7 +607,11 @@ class StateChecker {
   bool raised_ = false;            // the run's margins are raised
   std::uint8_t* close_ = nullptr;  // per leaf of the links' tree: its links took part (block)
   std::uint8_t* need_ = nullptr;   // per link: placed in each state (block)
-  S* at_lo_[3];                    // per link and coordinate: its positions' box over the run
+  // The leaves in the order a check for any contact walks them, and per leaf the contacts its
+  // walk found (block): kept with the checker (BatchScratch) from call to call.
+  std::uint32_t* leaf_order_ = nullptr;
+  std::uint32_t* leaf_hits_ = nullptr;
+  S* at_lo_[3];  // per link and coordinate: its positions' box over the run
   S* at_hi_[3];
   S* far_;  // per link: its positions' largest coordinate
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;
@@ -607,6 +637,7 @@ class StateChecker {
   VolumeSphere built_sphere_{};
   VolumeShape built_shape_{};
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
+  std::size_t hit_leaf_ = 0;    // the leaf of links whose walk found the last contact
   std::size_t bad_link_ = 0;
   GrownShapes<S> grown_;            // a mesh against a primitive grown by a raised margin
   AnyHit<Candidate> any_;           // a check for any contact
