@@ -127,7 +127,13 @@ template <class C>
 bool StateChecker<S>::searchShared(bool self) {
   C& hits = this->hits<C>();
   const std::size_t n = links_.size();
-  for (std::size_t k = 0; k < body_.leafCount() && !hits.found(); ++k) {
+  // The leaves in search()'s order: a hit is counted for the leaf that found it.
+  const auto world_hit = [&](std::size_t i) {
+    if (!C::kOrdered) countHit(i);
+    return true;
+  };
+  for (std::size_t i = 0; i < body_.leafCount() && !hits.found(); ++i) {
+    const std::size_t k = C::kOrdered ? i : leaf_order_[i];
     const std::uint32_t first = body_.leafFirst(k), end = first + body_.leafSize(k);
     if (close_[k] && leaf_at_[k] == leaf_at_[k + 1]) continue;  // its links met nothing
     pending_.clear();
@@ -135,10 +141,10 @@ bool StateChecker<S>::searchShared(bool self) {
       for (std::uint32_t at = leaf_at_[k]; at < leaf_at_[k + 1]; ++at) {
         const std::uint32_t l = pair_links_[at];
         const Box<S> box = walkedBox(l);
-        for (std::uint32_t i = world_at_[l]; i < world_at_[l + 1]; ++i) {
-          const WorldPair& w = world_pairs_[i];
+        for (std::uint32_t p = world_at_[l]; p < world_at_[l + 1]; ++p) {
+          const WorldPair& w = world_pairs_[p];
           if (!overlap(box, w.box)) continue;
-          if (onWorld<C>(world_.table().object(w.id), w.id, nullptr, l, this)) return true;
+          if (onWorld<C>(world_.table().object(w.id), w.id, nullptr, l, this)) return world_hit(i);
         }
       }
     } else if (world_.size() != 0) {
@@ -146,9 +152,9 @@ bool StateChecker<S>::searchShared(bool self) {
       body_.refitLeaf(k);
       world_.collide(body_.leafView(k), links_.any_bits ? links_.bits.data() : nullptr, this,
                      CollideFn<S>(&StateChecker::onWorld<C>), nullptr);
-      if (hits.complete()) return true;
+      if (hits.complete()) return world_hit(i);
     }
-    if (decidePending(hits)) return true;
+    if (decidePending(hits)) return world_hit(i);
   }
   if (self) {
     pending_.clear();
