@@ -637,7 +637,6 @@ class StateChecker {
   VolumeSphere built_sphere_{};
   VolumeShape built_shape_{};
   bool eager_objects_ = false;  // the world has a pair predicate: objects placed every state
-  std::size_t hit_leaf_ = 0;    // the leaf of links whose walk found the last contact
   std::size_t bad_link_ = 0;
   GrownShapes<S> grown_;            // a mesh against a primitive grown by a raised margin
   AnyHit<Candidate> any_;           // a check for any contact
