@@ -509,6 +509,21 @@ void firstCollisions(const Broadphase<S>& core, const Links<S>& links, std::size
   }
 }
 
+// firstCollisions with the raises options.continuous asks for: the SE(3) bounds from the poses,
+// or none.
+template <typename S, class PoseAt>
+void firstCollisionsAsAsked(const Broadphase<S>& core, const Links<S>& links, std::size_t states,
+                            const std::size_t* edge_starts, std::size_t edges, MotionOrder order,
+                            const BatchOptions& options, bool on_demand, const PoseAt& pose_at,
+                            std::size_t* first) {
+  if (options.continuous)
+    firstCollisions(core, links, states, edge_starts, edges, order, options, on_demand, pose_at,
+                    first, Se3Raise<S>{linkReach<S>(links)});
+  else
+    firstCollisions(core, links, states, edge_starts, edges, order, options, on_demand, pose_at,
+                    first);
+}
+
 }  // namespace
 }  // namespace detail
 
@@ -576,13 +591,8 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
     return poses.data() + state * n;
   };
   std::vector<std::size_t> first(edge_starts.size());
-  if (options.continuous)
-    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
-                            edge_starts.size(), order, options, false, pose_at, first.data(),
-                            detail::Se3Raise<S>{detail::linkReach<S>(links)});
-  else
-    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
-                            edge_starts.size(), order, options, false, pose_at, first.data());
+  detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, edge_starts.data(),
+                                 edge_starts.size(), order, options, false, pose_at, first.data());
   return first;
 }
 
@@ -634,13 +644,8 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   };
   const std::size_t start = 0, edges = states == 0 ? 0 : 1;
   std::size_t first = kNoIndex;
-  if (options.continuous)
-    detail::firstCollisions(detail::coreOf(world), links, states, &start, edges, order, options,
-                            false, pose_at, &first,
-                            detail::Se3Raise<S>{detail::linkReach<S>(links)});
-  else
-    detail::firstCollisions(detail::coreOf(world), links, states, &start, edges, order, options,
-                            false, pose_at, &first);
+  detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, &start, edges, order,
+                                 options, false, pose_at, &first);
   return first;
 }
 
@@ -660,12 +665,8 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
     pose_of(state, at);
     return at;
   };
-  if (options.continuous)
-    detail::firstCollisions(detail::coreOf(world), links, states, &start, 1, order, options, true,
-                            pose_at, &first, detail::Se3Raise<S>{detail::linkReach<S>(links)});
-  else
-    detail::firstCollisions(detail::coreOf(world), links, states, &start, 1, order, options, true,
-                            pose_at, &first);
+  detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, &start, 1, order, options,
+                                 true, pose_at, &first);
   return first;
 }
 
@@ -705,13 +706,8 @@ std::vector<std::size_t> checkMotions(
     return at;
   };
   std::vector<std::size_t> first(edge_starts.size());
-  if (options.continuous)
-    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
-                            edge_starts.size(), order, options, true, pose_at, first.data(),
-                            detail::Se3Raise<S>{detail::linkReach<S>(links)});
-  else
-    detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
-                            edge_starts.size(), order, options, true, pose_at, first.data());
+  detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, edge_starts.data(),
+                                 edge_starts.size(), order, options, true, pose_at, first.data());
   return first;
 }
 
