@@ -7,7 +7,6 @@
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
-#include <fcl/math/constants.h>
 
 #include <cmath>
 #include <memory>
