@@ -85,10 +85,10 @@ void pairListRun(std::size_t n, bool keep, std::uint32_t seed) {
         what = "registerObject";
       }
     } else if (op < 17) {
-      const std::size_t builds = ::cube::detail::coreOf(cube).tree().buildCount();
       cube.setup();
-      // A setup() that does not rebuild leaves the list as it was.
-      expect_listed = listed_before && ::cube::detail::coreOf(cube).tree().buildCount() == builds;
+      // setup() leaves the list as it was, whether it rebuilds the cubes (a stale tree) or not:
+      // the list holds pairs of ids, which a rebuild does not change.
+      expect_listed = listed_before;
       what = "setup()";
     } else if (op < 18) {  // a third of the objects move: update() drops the list
       for (std::size_t k = 0; k < reg.live.size() / 3 + 1; ++k) {

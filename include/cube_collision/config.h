@@ -57,7 +57,7 @@ struct Config {
   /// With UpdatePolicy::automatic: the tree quality (total surface area of the cubes per object
   /// over its value right after the last build) past which the cubes may be rebuilt (must be
   /// > 1). Insertions and removals rebuild as soon as the quality exceeds it; updates, once it
-  /// exceeds it and `rebuild_budget` (0 by default) is spent too. Trade-off: a low value rebuilds
+  /// exceeds it and `rebuild_budget` is spent too. Trade-off: a low value rebuilds
   /// often (a build costs many refits); a high value lets queries slow down on a stale tree. The
   /// default is where the drift benchmark (benchmarks/bench_drift.cpp, its figures in
   /// docs/tuning.md) found update + queries fastest. With keep_pairs, a self-collide
@@ -65,18 +65,19 @@ struct Config {
   /// for update + self-collide, at the cost of object queries on a looser tree.
   double rebuild_threshold = 1.25;
 
-  /// With UpdatePolicy::automatic: an update rebuilds only once the quality minus 1, summed over
-  /// the updates since the last build (each update(), update(obj) and update(objects) call
-  /// adds the quality it leaves), exceeds this (>= 0), and the quality exceeds
-  /// `rebuild_threshold`: rent or buy, a stale tree costing every walk more and a rebuild
-  /// costing a few walks once. 0 (the default) rebuilds as soon as the quality exceeds
-  /// rebuild_threshold. Trade-off: a budget refits a single large motion (every object moved
-  /// far, once) as FCL's managers do, its update costing a refit instead of a build, and
-  /// rebuilds a steady drift where 0 does; but the walks until the rebuild run on the stretched
-  /// tree (up to a quality of 1 + budget after one update), whose cost grows faster than its
-  /// quality where objects crowd: worth it on sparse scenes, not on dense ones
-  /// (docs/tuning.md).
-  double rebuild_budget = 0.0;
+  /// With UpdatePolicy::automatic: an update rebuilds only once the quality exceeds
+  /// `rebuild_threshold` and the stale tree's predicted cost, summed over the updates since the
+  /// last build (each update(), update(obj) and update(objects) call counts as one walk),
+  /// exceeds this many builds (>= 0): rent or buy. A walk's predicted loss is the quality minus
+  /// 1 times the cost of a walk in builds, which the last build estimated from how crowded its
+  /// leaves are (about a build where objects crowd, a tenth of one where they are sparse). 1
+  /// (the default) rebuilds when the loss predicted since the build equals one build; 0
+  /// rebuilds as soon as the quality exceeds rebuild_threshold. Trade-off: a large budget keeps
+  /// refitting (cheap updates) while every walk runs on the stretched tree; a small one
+  /// rebuilds sooner, which costs more when several updates come between walks. The prediction
+  /// is for one self-collide per update: with many queries between updates, a lower budget
+  /// pays; with several updates per query, a higher one (docs/tuning.md).
+  double rebuild_budget = 1.0;
 
   /// Objects whose AABB has a coordinate beyond +-unbounded_limit (or infinite: planes,
   /// halfspaces) are kept out of the cubes in a separate list that every query tests. Trade-off:

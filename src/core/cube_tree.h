@@ -89,6 +89,10 @@ class CubeTree {
   double builtArea() const { return built_area_; }
   /// Objects in the cubes right after the last build.
   std::size_t builtSize() const { return built_live_; }
+  /// Right after the last build: the leaves' surface area over their objects' (exact boxes),
+  /// the room the leaves leave around their objects; small where objects crowd. 1 if the
+  /// objects have no area.
+  double builtRoom() const { return built_room_; }
   /// Tree quality: cube area per object now over the same right after the last build (1 after
   /// a build; grows as objects wander or land badly).
   double quality() const;
@@ -138,6 +142,7 @@ class CubeTree {
   std::size_t area_steps_ = 0;  // changes added since then
   double built_area_ = 0;
   std::size_t built_live_ = 0;
+  double built_room_ = 1.0;
   std::size_t changes_ = 0;
   std::size_t builds_ = 0;
   bool built_ = false;

@@ -189,18 +189,23 @@ void CubeTree<S>::rebuild(IdArrays ids) {
       items_.swap(sorted);
     }
     order = {};
+    double leaf_area = 0, object_area = 0;
     for (std::uint32_t i = 0; i < nodes_.size(); ++i) {
       const Node& node = nodes_[i];
-      if (node.isLeaf())
-        for (std::uint32_t p = node.first; p < node.first + node.count; ++p) {
-          items_[p].leaf = i;
-          ids.loc[items_[p].id] = p;
-        }
+      if (!node.isLeaf()) continue;
+      leaf_area += surfaceArea(node);
+      for (std::uint32_t p = node.first; p < node.first + node.count; ++p) {
+        items_[p].leaf = i;
+        ids.loc[items_[p].id] = p;
+        object_area += surfaceArea(items_[p].box);
+      }
     }
+    built_room_ = object_area > 0 ? leaf_area / object_area : 1.0;
     for (const Node& node : nodes_) area_ += surfaceArea(node);
     if (ids.group != nullptr) setGroups(ids.group);
   } else {
     items_.clear();
+    built_room_ = 1.0;
   }
   items_.shrink_to_fit();
   nodes_.shrink_to_fit();
@@ -255,6 +260,7 @@ void CubeTree<S>::clear() {
   live_ = dead_items_ = dead_nodes_ = 0;
   area_ = area_churn_ = built_area_ = 0;
   area_steps_ = 0;
+  built_room_ = 1.0;
   built_live_ = 0;
   changes_ = 0;
   built_ = false;

@@ -117,6 +117,15 @@ inline double surfaceArea(const Node& n) {
   return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
+/// Surface area of an object's box in double.
+template <typename S>
+double surfaceArea(const Box<S>& b) {
+  const double dx = double(b.hi[0]) - b.lo[0];
+  const double dy = double(b.hi[1]) - b.lo[1];
+  const double dz = double(b.hi[2]) - b.lo[2];
+  return 2.0 * (dx * dy + dy * dz + dz * dx);
+}
+
 /// Location bit of an object kept in the unbounded list rather than in the cubes.
 inline constexpr std::uint32_t kUnboundedBit = 0x80000000u;
 
