@@ -559,6 +559,31 @@ void checkPoseEdges(const Links<S>& links, std::size_t states,
   checkEdgeStarts(states, edge_starts);
 }
 
+// The runs' pose sources (pose_at(scratch, state, j) above): the caller's array, n poses a
+// state, read in place.
+template <typename S>
+struct ArrayPoses {
+  const fcl::Transform3<S>* poses;
+  std::size_t n;
+  template <class Scratch>
+  const fcl::Transform3<S>* operator()(Scratch&, std::size_t state, std::size_t) const {
+    return poses + state * n;
+  }
+};
+
+// The caller's pose function, writing a state's n poses into the thread's room j.
+template <typename S>
+struct FunctionPoses {
+  const PoseFunction<S>& pose_of;
+  std::size_t n;
+  template <class Scratch>
+  const fcl::Transform3<S>* operator()(Scratch& scratch, std::size_t state, std::size_t j) const {
+    fcl::Transform3<S>* at = scratch.room(j, n);
+    pose_of(state, at);
+    return at;
+  }
+};
+
 }  // namespace
 }  // namespace detail
 
@@ -573,9 +598,8 @@ std::vector<StateResult<S>> checkStates(const CubeCollisionManager<S>& world,
   const detail::Broadphase<S>& core = detail::coreOf(world);
   core.table().wantVolumes();
   const std::size_t n = links.size();
-  detail::checkStateRuns(
-      core, links, states, options, 0, out,
-      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; });
+  detail::checkStateRuns(core, links, states, options, 0, out,
+                         detail::ArrayPoses<S>{poses.data(), n});
   return out;
 }
 
@@ -587,9 +611,7 @@ std::vector<std::size_t> checkMotions(const CubeCollisionManager<S>& world, cons
   const auto& links = detail::BodyAccess::links(body);
   const std::size_t states = detail::checkedEdges(links, poses, edge_starts);
   const std::size_t n = links.size();
-  const auto pose_at = [&](auto&, std::size_t state, std::size_t) {
-    return poses.data() + state * n;
-  };
+  const detail::ArrayPoses<S> pose_at{poses.data(), n};
   std::vector<std::size_t> first(edge_starts.size());
   detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, edge_starts.data(),
                                  edge_starts.size(), order, options, false, pose_at, first.data());
@@ -607,10 +629,10 @@ std::vector<std::size_t> checkMotions(
   detail::checkMotionBounds(motion_bounds, poses.size(), "checkMotions");
   const std::size_t n = links.size();
   std::vector<std::size_t> first(edge_starts.size());
-  detail::firstCollisions(
-      detail::coreOf(world), links, states, edge_starts.data(), edge_starts.size(), order, options,
-      false, [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; },
-      first.data(), detail::GivenRaise<S>{motion_bounds, n});
+  detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
+                          edge_starts.size(), order, options, false,
+                          detail::ArrayPoses<S>{poses.data(), n}, first.data(),
+                          detail::GivenRaise<S>{motion_bounds, n});
   return first;
 }
 
@@ -625,10 +647,9 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const std::size_t n = links.size();
   const std::size_t start = 0;
   std::size_t first = kNoIndex;
-  detail::firstCollisions(
-      detail::coreOf(world), links, states, &start, states == 0 ? 0 : 1, order, options, false,
-      [&](auto&, std::size_t state, std::size_t) { return poses.data() + state * n; }, &first,
-      detail::GivenRaise<S>{motion_bounds, n});
+  detail::firstCollisions(detail::coreOf(world), links, states, &start, states == 0 ? 0 : 1, order,
+                          options, false, detail::ArrayPoses<S>{poses.data(), n}, &first,
+                          detail::GivenRaise<S>{motion_bounds, n});
   return first;
 }
 
@@ -639,9 +660,7 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   const auto& links = detail::BodyAccess::links(body);
   const std::size_t states = detail::checkedStates(links, poses, "checkMotions");
   const std::size_t n = links.size();
-  const auto pose_at = [&](auto&, std::size_t state, std::size_t) {
-    return poses.data() + state * n;
-  };
+  const detail::ArrayPoses<S> pose_at{poses.data(), n};
   const std::size_t start = 0, edges = states == 0 ? 0 : 1;
   std::size_t first = kNoIndex;
   detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, &start, edges, order,
@@ -660,11 +679,7 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (states == 0) return kNoIndex;
   const std::size_t start = 0;
   std::size_t first = kNoIndex;
-  const auto pose_at = [&](auto& scratch, std::size_t state, std::size_t j) {
-    fcl::Transform3<S>* at = scratch.room(j, links.size());
-    pose_of(state, at);
-    return at;
-  };
+  const detail::FunctionPoses<S> pose_at{pose_of, links.size()};
   detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, &start, 1, order, options,
                                  true, pose_at, &first);
   return first;
@@ -684,11 +699,7 @@ std::vector<StateResult<S>> checkStates(
   // Each run's poses written into the thread's room for a run.
   detail::checkStateRuns(core, links, states, options,
                          std::min(detail::StateChecker<S>::kGroupStates, states), out,
-                         [&](auto& scratch, std::size_t state, std::size_t j) {
-                           fcl::Transform3<S>* room = scratch.room(j, n);
-                           pose_of(state, room);
-                           return room;
-                         });
+                         detail::FunctionPoses<S>{pose_of, n});
   return out;
 }
 
@@ -700,11 +711,7 @@ std::vector<std::size_t> checkMotions(
     const BatchOptions& options) {
   const auto& links = detail::BodyAccess::links(body);
   detail::checkPoseEdges(links, states, edge_starts, pose_of);
-  const auto pose_at = [&](auto& scratch, std::size_t state, std::size_t j) {
-    fcl::Transform3<S>* at = scratch.room(j, links.size());
-    pose_of(state, at);
-    return at;
-  };
+  const detail::FunctionPoses<S> pose_at{pose_of, links.size()};
   std::vector<std::size_t> first(edge_starts.size());
   detail::firstCollisionsAsAsked(detail::coreOf(world), links, states, edge_starts.data(),
                                  edge_starts.size(), order, options, true, pose_at, first.data());
@@ -722,15 +729,10 @@ std::vector<std::size_t> checkMotions(
   detail::checkPoseEdges(links, states, edge_starts, pose_of);
   detail::checkMotionBounds(motion_bounds, states * links.size(), "checkMotions");
   std::vector<std::size_t> first(edge_starts.size());
-  detail::firstCollisions(
-      detail::coreOf(world), links, states, edge_starts.data(), edge_starts.size(), order, options,
-      true,
-      [&](auto& scratch, std::size_t state, std::size_t j) {
-        fcl::Transform3<S>* at = scratch.room(j, links.size());
-        pose_of(state, at);
-        return at;
-      },
-      first.data(), detail::GivenRaise<S>{motion_bounds, links.size()});
+  detail::firstCollisions(detail::coreOf(world), links, states, edge_starts.data(),
+                          edge_starts.size(), order, options, true,
+                          detail::FunctionPoses<S>{pose_of, links.size()}, first.data(),
+                          detail::GivenRaise<S>{motion_bounds, links.size()});
   return first;
 }
 
@@ -747,14 +749,9 @@ std::size_t checkMotion(const CubeCollisionManager<S>& world, const BodySet<S>& 
   if (states == 0) return kNoIndex;
   const std::size_t start = 0;
   std::size_t first = kNoIndex;
-  detail::firstCollisions(
-      detail::coreOf(world), links, states, &start, 1, order, options, true,
-      [&](auto& scratch, std::size_t state, std::size_t j) {
-        fcl::Transform3<S>* at = scratch.room(j, links.size());
-        pose_of(state, at);
-        return at;
-      },
-      &first, detail::GivenRaise<S>{motion_bounds, links.size()});
+  detail::firstCollisions(detail::coreOf(world), links, states, &start, 1, order, options, true,
+                          detail::FunctionPoses<S>{pose_of, links.size()}, &first,
+                          detail::GivenRaise<S>{motion_bounds, links.size()});
   return first;
 }
 
