@@ -70,7 +70,7 @@ struct Config {
   /// last build (each update(), update(obj) and update(objects) call counts as one walk),
   /// exceeds this many builds (>= 0): rent or buy. A walk's predicted loss is the quality minus
   /// 1 times the cost of a walk in builds, which the last build estimated from how crowded its
-  /// leaves are (about a build where objects crowd, a tenth of one where they are sparse). 1
+  /// leaves are (up to two builds where objects crowd, a sixth of one where they are sparse). 1
   /// (the default) rebuilds when the loss predicted since the build equals one build; 0
   /// rebuilds as soon as the quality exceeds rebuild_threshold. Trade-off: a large budget keeps
   /// refitting (cheap updates) while every walk runs on the stretched tree; a small one

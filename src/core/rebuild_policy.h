@@ -49,13 +49,14 @@ class RebuildPolicy {
   /// What one self-collide walk of a tree at quality `q` is predicted to cost more than on a
   /// fresh build, in builds: the quality lost (q - 1, which tracks the walk's slowdown) times a
   /// walk's cost in builds, which falls as the leaves' room around their objects
-  /// (CubeTree::builtRoom) grows: a walk of a crowded scene costs about a build, of a sparse one
-  /// a tenth. Fitted on uniform, clustered and thin scenes of 3,000 to 100,000 objects, each
-  /// object moved once by up to its size or turned about the centre (docs/tuning.md).
+  /// (CubeTree::builtRoom) grows: a walk of a crowded scene costs up to two builds, of a sparse
+  /// one a sixth. Fitted on cube_rebuild_probe's scenes (uniform, clustered and thin, 10,000 and
+  /// 100,000 objects, each object moved once by up to its size or turned about the centre),
+  /// builds timed on memory the process already holds (docs/tuning.md).
   static double staleCost(double q, double room) {
     if (!(q > 1.0)) return 0.0;
     if (!(room > 0.05)) room = room > 0 ? 0.05 : 1.0;  // NaN and none: a plain scene
-    return (q - 1.0) * 0.45 * std::pow(std::min(room, 1e6), -1.3);
+    return (q - 1.0) * 0.8 * std::pow(std::min(room, 1e6), -1.2);
   }
   /// At setup(): the first one (`first`) gives the canonical tree if anything changed since the
   /// last build; later ones keep the incremental work, as FCL's tree manager does, and rebuild
